@@ -1,0 +1,28 @@
+# phonglab: `make demo` (set-up included) renders the demo; `make test` runs the tests.
+VENV  := .venv
+BIN   := $(VENV)/bin
+STAMP := $(VENV)/.phonglab-installed
+PYTEST_ARGS ?=
+
+.PHONY: setup demo test test-slow test-all bench check clean
+
+$(STAMP): pyproject.toml constraints.txt scripts/setup.sh
+	bash scripts/setup.sh
+	@touch $(STAMP)
+
+setup: $(STAMP)
+
+demo: setup
+	$(BIN)/phonglab render cornell_phong --spp 256 -o out/demo.exr
+
+test: setup
+	$(BIN)/python -m pytest -m "not slow" $(PYTEST_ARGS)
+
+test-slow: setup
+	$(BIN)/python -m pytest -m slow $(PYTEST_ARGS)
+
+test-all: setup
+	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+clean:
+	rm -rf out .pytest_cache build src/*.egg-info

@@ -1,0 +1,20 @@
+"""phonglab: Lambert and modified-Phong BSDFs for Mitsuba 3, and the checks that ground them in physics.
+
+Importing phonglab sets no Mitsuba variant; :func:`register` does that work::
+
+    import mitsuba as mi, phonglab
+    phonglab.register()                 # llvm_ad_rgb unless a variant is already set
+    scene = mi.load_file("scenes_xml/cornell_phong.xml")
+
+It pins ``DRJIT_LIBLLVM_PATH`` to a libLLVM Dr.Jit 1.5 can use (see
+:mod:`phonglab.llvm`) before Dr.Jit loads one.
+"""
+
+from . import llvm as _llvm
+
+_llvm.configure()
+
+from .registration import register, registered_variants  # noqa: E402
+
+__version__ = "0.1.0"
+__all__ = ["register", "registered_variants", "__version__"]

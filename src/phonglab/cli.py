@@ -1,0 +1,74 @@
+"""The ``phonglab`` command line.
+
+Each subcommand lives in its own module ``phonglab.cmd_<name>`` exposing
+``add_parser(subparsers)`` (which sets ``func``); :data:`SUBCOMMANDS` lists
+them.  Errors meant for the user are one sentence and exit code 2; ``--debug``
+shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
+SUBCOMMANDS = ["render", "doctor"]
+
+EPILOG = """examples:
+  phonglab render cornell_phong --spp 64 -o out/cornell.exr
+  phonglab doctor
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="phonglab",
+        description="Lambert and modified-Phong BSDFs for Mitsuba 3, and the checks that "
+                    "ground them in physics.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback on errors")
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"phonglab {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        importlib.import_module(f"phonglab.cmd_{name.replace('-', '_')}").add_parser(sub)
+    return parser
+
+
+def user_errors() -> tuple[type[BaseException], ...]:
+    """Exception types whose message is written for the user (no traceback needed)."""
+    from .render import PhonglabError
+
+    errors: list[type[BaseException]] = [PhonglabError, FileNotFoundError, ValueError]
+    try:
+        from phonglab.plugins._common import MaterialError
+
+        errors.append(MaterialError)
+    except Exception:  # pragma: no cover - plugins need mitsuba
+        pass
+    return tuple(errors)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("phonglab: interrupted; files already written are complete.", file=sys.stderr)
+        return 130
+    except user_errors() as exc:
+        if args.debug:
+            raise
+        print(f"phonglab: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

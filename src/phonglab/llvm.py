@@ -1,0 +1,189 @@
+"""Choosing a libLLVM that Dr.Jit 1.5 can use, and the variant that follows from it.
+
+Dr.Jit's LLVM backend loads ``libLLVM`` lazily, the first time an ``llvm_*``
+variant is used, from ``DRJIT_LIBLLVM_PATH`` or from the system's default
+search.  Two facts decide what phonglab does here:
+
+* Dr.Jit 1.5 aborts the whole process with libLLVM 15 and 16 (``LLVM ERROR:
+  Cannot select: fmaximum/fminimum``); no Python exception can catch that.
+  libLLVM 14 and older is refused by Dr.Jit itself ("could not be found").
+  Debian's ``libllvm19`` works.
+* Python BSDFs are traced once into the kernel in ``llvm_*`` variants and cost
+  nothing extra there, but are ~150x slower in ``scalar_*`` variants.
+
+So :func:`configure` pins ``DRJIT_LIBLLVM_PATH`` to the newest usable library
+it finds (never 15 or 16) before Dr.Jit needs it, and :func:`default_variant`
+falls back to ``scalar_rgb`` with a loud warning when none is usable.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Major versions Dr.Jit 1.5 crashes with (process abort, not an exception).
+BROKEN_MAJORS = frozenset({15, 16})
+#: Dr.Jit 1.5 refuses anything older than this.
+MIN_MAJOR = 17
+
+ENV = "DRJIT_LIBLLVM_PATH"
+
+_SEARCH_GLOBS = (
+    "/usr/lib/x86_64-linux-gnu/libLLVM*.so*",
+    "/usr/lib/aarch64-linux-gnu/libLLVM*.so*",
+    "/usr/lib/llvm-*/lib/libLLVM*.so*",
+    "/usr/lib64/libLLVM*.so*",
+    "/usr/local/lib/libLLVM*.so*",
+    "/opt/homebrew/opt/llvm/lib/libLLVM.dylib",
+    "/usr/local/opt/llvm/lib/libLLVM.dylib",
+)
+
+
+class SlowFallbackWarning(UserWarning):
+    """No usable libLLVM: phonglab runs in a ``scalar_*`` variant (~150x slower)."""
+
+
+@dataclass(frozen=True)
+class LLVMChoice:
+    """The outcome of :func:`configure`."""
+
+    path: str | None      #: library pinned in DRJIT_LIBLLVM_PATH, or None
+    major: int | None     #: its major version when it could be read
+    source: str           #: "environment", "search" or "none"
+    reason: str           #: one sentence for the user
+
+    @property
+    def usable(self) -> bool:
+        return self.path is not None and (self.major is None or _major_ok(self.major))
+
+
+def _major_ok(major: int) -> bool:
+    return major >= MIN_MAJOR and major not in BROKEN_MAJORS
+
+
+def library_major(path: str | os.PathLike) -> int | None:
+    """Major version of a libLLVM file, read from its (resolved) file name.
+
+    ``libLLVM-19.so``, ``libLLVM.so.19.1``, ``libLLVM-15.so.1`` and
+    ``/usr/lib/llvm-18/lib/libLLVM.so`` all carry it.
+    """
+    names = [Path(path).name]
+    try:
+        names.append(Path(path).resolve().name)
+    except OSError:
+        pass
+    names.append(str(path))
+    for name in names:
+        m = re.search(r"libLLVM[-.](?:so\.)?(\d+)", name) or re.search(r"llvm-(\d+)", name)
+        if m:
+            return int(m.group(1))
+    return None
+
+
+def candidates() -> list[tuple[int, str]]:
+    """Usable libLLVM files on this machine, newest first, as (major, path)."""
+    found: dict[str, tuple[int, str]] = {}
+    for pattern in _SEARCH_GLOBS:
+        for p in glob.glob(pattern):
+            major = library_major(p)
+            if major is None or not _major_ok(major) or not os.path.isfile(p):
+                continue
+            real = os.path.realpath(p)
+            # Prefer the shortest name of one real file (the .so link a user would type).
+            if real not in found or len(p) < len(found[real][1]):
+                found[real] = (major, p)
+    return sorted(found.values(), key=lambda mp: (-mp[0], mp[1]))
+
+
+_choice: LLVMChoice | None = None
+
+
+def configure(force: bool = False) -> LLVMChoice:
+    """Pin ``DRJIT_LIBLLVM_PATH`` to a usable libLLVM, once per process.
+
+    A path the user set is respected (with a warning when its version is one
+    Dr.Jit 1.5 crashes with); otherwise the newest usable library found is
+    pinned, so that an older libLLVM on the machine is never picked.
+    """
+    global _choice
+    if _choice is not None and not force:
+        return _choice
+    user = os.environ.get(ENV)
+    if user:
+        major = library_major(user)
+        if not os.path.exists(user):
+            _choice = LLVMChoice(None, major, "environment",
+                                 f"{ENV}={user} does not exist; install Debian's libllvm19 "
+                                 f"(apt-get install -y libllvm19) or unset {ENV}")
+        elif major is not None and not _major_ok(major):
+            _choice = LLVMChoice(None, major, "environment",
+                                 f"{ENV}={user} is libLLVM {major}, which Dr.Jit 1.5 cannot use "
+                                 f"(it aborts with 15 and 16, refuses < {MIN_MAJOR}); install "
+                                 f"libllvm19 and point {ENV} at it")
+        else:
+            _choice = LLVMChoice(user, major, "environment", f"using {user} from {ENV}")
+        return _choice
+    found = candidates()
+    if found:
+        major, path = found[0]
+        os.environ[ENV] = path
+        _choice = LLVMChoice(path, major, "search", f"pinned {ENV}={path} (libLLVM {major})")
+    else:
+        _choice = LLVMChoice(None, None, "none",
+                             "no usable libLLVM (>= 17, not 15/16) found; install it with "
+                             "`apt-get install -y libllvm19` (Debian/Ubuntu) or run `make setup`")
+    return _choice
+
+
+def jit_backend_available(backend: str) -> bool:
+    """Whether Mitsuba ships variants for a backend ('cuda', 'llvm', 'scalar')."""
+    import mitsuba as mi
+
+    return any(v.startswith(backend + "_") for v in mi.variants())
+
+
+def default_variant(color: str = "rgb") -> str:
+    """The variant phonglab uses when none is set: ``llvm_ad_<color>``.
+
+    Falls back to ``scalar_<color>`` with a :class:`SlowFallbackWarning` when no
+    usable libLLVM exists; never silently.
+    """
+    choice = configure()
+    if choice.usable:
+        return f"llvm_ad_{color}"
+    warnings.warn(
+        f"phonglab: the LLVM backend is unusable ({choice.reason}). Falling back to "
+        f"scalar_{color}: Python plugins run about 150x slower there.",
+        SlowFallbackWarning, stacklevel=2)
+    return f"scalar_{color}"
+
+
+def set_variant(variant: str | None = None) -> str:
+    """Set a Mitsuba variant, the default one when ``variant`` is None.
+
+    An ``llvm_*`` variant that fails to start (Dr.Jit cannot load libLLVM)
+    turns into the matching ``scalar_*`` variant with a warning.
+    """
+    import mitsuba as mi
+
+    configure()
+    variant = variant or default_variant()
+    if variant not in mi.variants():
+        raise ValueError(
+            f"unknown Mitsuba variant {variant!r}; choose one of {', '.join(mi.variants())}")
+    try:
+        mi.set_variant(variant)
+    except ImportError as exc:
+        if not variant.startswith(("llvm_", "cuda_")):
+            raise
+        fallback = "scalar_" + variant.split("_", 2)[-1]
+        warnings.warn(f"phonglab: {variant} is unusable ({exc}). Falling back to {fallback}: "
+                      f"Python plugins run about 150x slower there.",
+                      SlowFallbackWarning, stacklevel=2)
+        mi.set_variant(fallback)
+        variant = fallback
+    return variant

@@ -1,0 +1,96 @@
+"""Registering phonglab's Mitsuba plugins for the active variant, and keeping them registered.
+
+Mitsuba keeps one plugin table per variant, and a Python plugin class derives
+from the variant's ``mi.BSDF``/``mi.SamplingIntegrator``.  :func:`register`
+therefore (re)builds each plugin module for the active variant and registers
+it; a variant callback repeats this after every later ``mi.set_variant``
+(the pattern of Mitsuba's own ``python/ad/integrators``).
+"""
+
+from __future__ import annotations
+
+import importlib
+import threading
+
+from . import llvm
+
+#: (module of phonglab.plugins, name in scene files, kind)
+PLUGINS: list[tuple[str, str, str]] = [
+    ("lambert", "lambert", "bsdf"),
+    ("phong", "phong", "bsdf"),
+]
+
+_lock = threading.Lock()
+_registered: set[str] = set()          # variants in which every plugin is registered
+_classes: dict[tuple[str, str], type] = {}   # (module, variant) -> plugin class
+_callback_installed = False
+
+
+def plugin_class(name: str, variant: str) -> type:
+    """The class of plugin module ``name`` built against ``variant`` (cached)."""
+    key = (name, variant)
+    if key not in _classes:
+        module = importlib.import_module(f"phonglab.plugins.{name}")
+        if getattr(module, "_built_for_variant", variant) != variant:
+            module = importlib.reload(module)
+        module._built_for_variant = variant
+        _classes[key] = module.PLUGIN_CLASS
+    return _classes[key]
+
+
+def _register_active() -> None:
+    import mitsuba as mi
+
+    variant = mi.variant()
+    if variant is None:
+        return
+    # Registration is cheap, so it is repeated on every switch rather than trusted to persist.
+    for module_name, plugin_name, kind in PLUGINS:
+        factory = plugin_class(module_name, variant)
+        if kind == "bsdf":
+            mi.register_bsdf(plugin_name, lambda props, cls=factory: cls(props))
+        elif kind == "integrator":
+            mi.register_integrator(plugin_name, lambda props, cls=factory: cls(props))
+        else:  # pragma: no cover - guarded by the PLUGINS table
+            raise AssertionError(kind)
+    _registered.add(variant)
+
+
+def _on_variant_change(old, new) -> None:
+    if new is not None:
+        with _lock:
+            _register_active()
+
+
+def register(variant: str | None = None) -> str:
+    """Register every phonglab plugin for the active Mitsuba variant.
+
+    Args:
+        variant: a Mitsuba variant to set first. When neither this nor an active
+            variant exists, ``llvm_ad_rgb`` is set (``scalar_rgb`` with a loud
+            :class:`phonglab.llvm.SlowFallbackWarning` when LLVM is unusable).
+
+    Returns:
+        the active variant.
+
+    Idempotent; plugins follow every later ``mi.set_variant`` automatically.
+    """
+    global _callback_installed
+    import mitsuba as mi
+
+    llvm.configure()
+    if variant is not None and variant != mi.variant():
+        llvm.set_variant(variant)
+    elif mi.variant() is None:
+        llvm.set_variant(None)
+    with _lock:
+        if not _callback_installed:
+            mi.detail.add_variant_callback(_on_variant_change)
+            _callback_installed = True
+        _register_active()
+    return mi.variant()
+
+
+def registered_variants() -> frozenset[str]:
+    """Variants in which phonglab's plugins are registered (for diagnostics)."""
+    return frozenset(_registered)
