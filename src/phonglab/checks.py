@@ -195,7 +195,7 @@ class Config:
     (the tests register deliberately broken variants under other names).
     """
 
-    spp: int = 64
+    spp: int = 256
     seed: int = 0
     samples: int | None = None
     chi2_samples: int | None = None

@@ -13,11 +13,12 @@ import importlib
 import sys
 
 #: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "doctor"]
+SUBCOMMANDS = ["render", "doctor", "check"]
 
 EPILOG = """examples:
   phonglab render cornell_phong --spp 64 -o out/cornell.exr
   phonglab doctor
+  phonglab check --json out/checks.json
 """
 
 

@@ -1,0 +1,104 @@
+"""``phonglab check``: run the physics checks and print what holds, by how much, with what error.
+
+Exit status: 0 when every row passes (rows marked KNOWN, documented discrepancies outside
+phonglab, do not count), 1 when a row fails, 2 on bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+import time
+
+
+def add_parser(sub) -> None:
+    from .checks import CHECK_NAMES
+
+    p = sub.add_parser(
+        "check", help="prove the plugins against physics and Mitsuba's built-ins (table)",
+        description="Run phonglab's physics checks (white furnace, reflection equation, "
+                    "lambert vs diffuse, radiance constancy, Snell, plugin sanity) and print "
+                    "one row per comparison: measured, expected (and its source), standard "
+                    "error, tolerance, verdict. Exits 1 if any row fails.",
+        epilog="examples:\n  phonglab check\n  phonglab check --only snell --only sanity\n"
+               "  phonglab check --spp 256 --json out/checks.json",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--only", action="append", metavar="NAME", choices=CHECK_NAMES,
+                   help=f"run only this check (repeatable): {', '.join(CHECK_NAMES)}")
+    p.add_argument("--json", metavar="PATH", help="also write the rows as JSON to PATH")
+    p.add_argument("--spp", type=int, default=256,
+                   help="samples per pixel of the statistical renders (default 256; BSDF-level "
+                        "estimates use 1024x this many directions, chi-square 4096x)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out-dir", default="out/checks",
+                   help="where difference images of a failing scene check go (default out/checks)")
+    p.add_argument("--details", action="store_true",
+                   help="print what each row compares, its source and details")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from . import checks
+    from .render import PhonglabError
+
+    if args.spp is not None and args.spp < 8:
+        raise PhonglabError(f"--spp must be at least 8 (renders are split into passes for their "
+                            f"standard errors), got {args.spp}; use --spp 8 or more.")
+    names = args.only or list(checks.CHECK_NAMES)
+    bar = None
+    if not args.no_progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
+    cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
+                        progress=(lambda msg: bar.set_description(msg)) if bar else None)
+    t0 = time.perf_counter()
+    done: list[str] = []
+
+    def on_check(name: str) -> None:
+        if bar is not None:
+            if done:
+                bar.update(1)
+            bar.set_description(name)
+        done.append(name)
+
+    try:
+        results = checks.run_checks(names, cfg, on_check=on_check)
+    finally:
+        if bar is not None:
+            bar.update(1)
+            bar.close()
+    seconds = time.perf_counter() - t0
+    print(checks.format_table(results))
+    if args.details:
+        print()
+        for r in results:
+            print(f"[{r.check}] {r.name}: {r.compared}; expected from: {r.source}"
+                  + (f"; known issue: {r.known_issue}" if r.known_issue and not r.passed else ""))
+    failed = [r for r in results if not r.ok]
+    known = [r for r in results if not r.passed and r.known_issue]
+    print(f"\n{len(results)} rows: {sum(r.passed for r in results)} pass, {len(known)} known "
+          f"discrepancies (documented in docs/checks.md), {len(failed)} fail "
+          f"({seconds:.1f} s, spp {cfg.spp}, seed {cfg.seed}).")
+    for issue in dict.fromkeys(r.known_issue for r in known):
+        names = ", ".join(f"{r.check}/{r.name}" for r in known if r.known_issue == issue)
+        print(f"  KNOWN {names}: {issue}")
+    for r in failed:
+        print(f"  FAIL {r.check}/{r.name}: measured {r.measured:.6g}, expected {r.expected:.6g} "
+              f"± {r.tolerance:.3g} ({r.source})"
+              + (f"; difference image {r.details['difference_image']}"
+                 if "difference_image" in r.details else ""))
+    if args.json:
+        import mitsuba as mi
+
+        from . import __version__
+
+        path = checks.write_json(args.json, results, {
+            "phonglab_version": __version__, "mitsuba_version": mi.__version__,
+            "variant": mi.variant(), "spp": cfg.spp, "seed": cfg.seed,
+            "samples": cfg.samples, "chi2_samples": cfg.chi2_samples, "alpha": checks.ALPHA,
+            "seconds": round(seconds, 2), "checks": names, "python": platform.python_version()})
+        print(f"JSON: {path}")
+    return 1 if failed else 0
