@@ -24,5 +24,8 @@ test-slow: setup
 test-all: setup
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
+check: setup
+	$(BIN)/phonglab check --json out/checks.json
+
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info

@@ -167,9 +167,21 @@ def test_cli_check_only_writes_the_same_rows_as_json(tmp_path, capsys):
     assert data["meta"]["spp"] == 16 and data["meta"]["checks"] == ["snell"]
 
 
+def test_cli_check_with_known_rows_exits_zero_and_keeps_meta(tmp_path, capsys):
+    out = tmp_path / "e.json"
+    code = main(["check", "--only", "energy", "--spp", "16", "--json", str(out), "--no-progress"])
+    printed = capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert code == 0 and "KNOWN energy/" in printed
+    assert data["meta"]["checks"] == ["energy"]
+    assert {r["status"] for r in data["results"]} == {"pass", "KNOWN"}
+
+
 def test_cli_rejects_bad_input(capsys):
     assert main(["check", "--spp", "2", "--only", "snell", "--no-progress"]) == 2
     assert "--spp must be at least 8" in capsys.readouterr().err
+    assert main(["check", "--lambert", "no_such_plugin", "--no-progress"]) == 2
+    assert "no BSDF plugin named 'no_such_plugin'" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
         main(["check", "--only", "nonsense"])
     assert exc.value.code == 2

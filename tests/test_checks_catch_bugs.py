@@ -174,3 +174,13 @@ def test_pdf_with_wrong_normalization_fails_chi2_and_monte_carlo_rows(cfg):
         assert f"phong_badpdf p={p}: sample() vs quadrature" in _failed(refl), p
     # eval is intact: the analytic normal-incidence rows still pass.
     assert "phong_badpdf p=0: normal incidence" in _passed(refl)
+
+
+def test_cli_exits_nonzero_and_names_the_failing_rows(cfg, capsys):
+    from phonglab.cli import main
+
+    code = main(["check", "--only", "reflection", "--phong", "phong_p1", "--spp", "16",
+                 "--no-progress", "--out-dir", str(cfg)])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert "FAIL reflection/phong_p1 p=0: normal incidence" in out

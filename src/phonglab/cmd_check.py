@@ -33,6 +33,10 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--out-dir", default="out/checks",
                    help="where difference images of a failing scene check go (default out/checks)")
+    p.add_argument("--lambert", default="lambert", metavar="PLUGIN",
+                   help="registered BSDF checked as the Lambertian (default lambert)")
+    p.add_argument("--phong", default="phong", metavar="PLUGIN",
+                   help="registered BSDF checked as the modified Phong (default phong)")
     p.add_argument("--details", action="store_true",
                    help="print what each row compares, its source and details")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -47,12 +51,14 @@ def run(args) -> int:
         raise PhonglabError(f"--spp must be at least 8 (renders are split into passes for their "
                             f"standard errors), got {args.spp}; use --spp 8 or more.")
     names = args.only or list(checks.CHECK_NAMES)
+    _require_plugins(args.lambert, args.phong)
     bar = None
     if not args.no_progress:
         from tqdm import tqdm
 
         bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
     cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
+                        lambert=args.lambert, phong=args.phong,
                         progress=(lambda msg: bar.set_description(msg)) if bar else None)
     t0 = time.perf_counter()
     done: list[str] = []
@@ -83,8 +89,8 @@ def run(args) -> int:
           f"discrepancies (documented in docs/checks.md), {len(failed)} fail "
           f"({seconds:.1f} s, spp {cfg.spp}, seed {cfg.seed}).")
     for issue in dict.fromkeys(r.known_issue for r in known):
-        names = ", ".join(f"{r.check}/{r.name}" for r in known if r.known_issue == issue)
-        print(f"  KNOWN {names}: {issue}")
+        which = ", ".join(f"{r.check}/{r.name}" for r in known if r.known_issue == issue)
+        print(f"  KNOWN {which}: {issue}")
     for r in failed:
         print(f"  FAIL {r.check}/{r.name}: measured {r.measured:.6g}, expected {r.expected:.6g} "
               f"± {r.tolerance:.3g} ({r.source})"
@@ -102,3 +108,22 @@ def run(args) -> int:
             "seconds": round(seconds, 2), "checks": names, "python": platform.python_version()})
         print(f"JSON: {path}")
     return 1 if failed else 0
+
+
+def _require_plugins(*names: str) -> None:
+    """A clear error when a plugin named by --lambert/--phong is not registered."""
+    import mitsuba as mi
+
+    from . import register
+    from .render import PhonglabError
+
+    register()
+    for name in names:
+        try:
+            mi.load_dict({"type": name})
+        except Exception as exc:
+            if "not found" in str(exc) or "unknown" in str(exc).lower():
+                raise PhonglabError(f"no BSDF plugin named {name!r} is registered; register it "
+                                    f"(mi.register_bsdf) before running the checks, or drop "
+                                    f"the option.") from None
+            raise
