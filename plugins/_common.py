@@ -61,21 +61,54 @@ def texture_values(textures) -> list[np.ndarray]:
         si = dr.zeros(mi.SurfaceInteraction3f, n)
         si.uv = mi.Point2f(mi.Float(uu.astype(np.float32)), mi.Float(vv.astype(np.float32)))
         if mi.is_spectral:
-            si.wavelengths = mi.Color4f(*(mi.Float(lam[:, k].astype(np.float32)) for k in range(4)))
+            si.wavelengths = mi.Spectrum(*(mi.Float(lam[:, k].astype(np.float32)) for k in range(4)))
         out = []
         for tex in textures:
-            value = tex.eval(si)
-            out.append(np.atleast_2d(np.array(value, dtype=np.float64)))
+            value = np.atleast_2d(np.array(tex.eval(si), dtype=np.float64))
+            # A constant texture may return a width-1 (literal) array: broadcast it.
+            out.append(np.broadcast_to(value, (value.shape[0], n)))
         return out
     out = [[] for _ in textures]
     for i in range(n):
         si = dr.zeros(mi.SurfaceInteraction3f)
         si.uv = mi.Point2f(float(uu[i]), float(vv[i]))
         if mi.is_spectral:
-            si.wavelengths = mi.Color4f(*(float(x) for x in lam[i]))
+            si.wavelengths = mi.Spectrum(*(float(x) for x in lam[i]))
         for k, tex in enumerate(textures):
             out[k].append(np.array(tex.eval(si), dtype=np.float64).ravel())
     return [np.array(o).T for o in out]
+
+
+def declared_value(props, name: str, default: float) -> np.ndarray | None:
+    """The value a scene wrote for ``name`` when it is a plain number or colour, as (channels, 1).
+
+    None for textures and spectra (their values are known only by evaluation).  Checking
+    the declared colour matters in spectral variants: the smooth spectrum Mitsuba
+    up-samples from an RGB colour can exceed its RGB components at some wavelengths
+    (RGB 0.6, 0.3, 0.2 reaches 0.97 near 830 nm), which is a property of the
+    up-sampling, not of the material the user described.
+    """
+    if not props.has_property(name):
+        return np.array([[default]])
+    kind = props.type(name)
+    if kind == mi.Properties.Type.Float:
+        return np.array([[float(props.get(name))]])
+    if kind == mi.Properties.Type.Color:
+        return np.array(props.get(name), dtype=np.float64).reshape(-1, 1)
+    return None
+
+
+def reflectance_values(props, names_defaults, textures) -> list[np.ndarray]:
+    """Values to validate for several reflectance parameters, on one common set of points.
+
+    The declared numbers when every parameter is a plain number or colour (broadcast to a
+    common channel count), else the textures evaluated by :func:`texture_values`.
+    """
+    declared = [declared_value(props, n, d) for n, d in names_defaults]
+    if all(d is not None for d in declared):
+        channels = max(d.shape[0] for d in declared)
+        return [np.broadcast_to(d, (channels, 1)) for d in declared]
+    return texture_values(textures)
 
 
 def _fmt(x: np.ndarray) -> str:

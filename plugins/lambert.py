@@ -43,14 +43,18 @@ class Lambert(mi.BSDF):
         flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         self.m_components = [flags]
         self.m_flags = flags
-        self.parameters_changed([])
+        (values,) = _common.reflectance_values(props, [("reflectance", 0.5)], [self.reflectance])
+        _common.check_reflectance_range("lambert", "reflectance", values)
 
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
-        (values,) = _common.texture_values([self.reflectance])
-        _common.check_reflectance_range("lambert", "reflectance", values)
+        """Re-validate the reflectance after ``params.update()`` (not in spectral variants,
+        whose textures hold up-sampled spectra: see ``_common.declared_value``)."""
+        if keys and not mi.is_spectral:
+            (values,) = _common.texture_values([self.reflectance])
+            _common.check_reflectance_range("lambert", "reflectance", values)
 
     def _active(self, ctx, si, wo, active):
         enabled = ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, DIFFUSE)

@@ -95,7 +95,11 @@ class Phong(mi.BSDF):
         glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
         self.m_components = [diffuse, glossy]   # indices DIFFUSE, GLOSSY
         self.m_flags = diffuse | glossy
-        self.parameters_changed([])
+        kd, ks = _common.reflectance_values(
+            props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)],
+            [self.diffuse_reflectance, self.specular_reflectance])
+        self._validate(kd, ks)
+        self._update_factors()
 
     def traverse(self, callback):
         callback.put("diffuse_reflectance", self.diffuse_reflectance, mi.ParamFlags.Differentiable)
@@ -103,11 +107,22 @@ class Phong(mi.BSDF):
         callback.put("exponent", self.exponent, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
-        _common.check_exponent("phong", _common.scalar_of(self.exponent))
-        kd, ks = _common.texture_values([self.diffuse_reflectance, self.specular_reflectance])
+        """Re-validate after ``params.update()`` (an optimizer step, a sweep), then re-derive."""
+        keys = keys or []
+        if any("reflectance" in k for k in keys) and not mi.is_spectral:
+            # In spectral variants textures hold up-sampled spectra: see _common.declared_value.
+            self._validate(*_common.texture_values(
+                [self.diffuse_reflectance, self.specular_reflectance]))
+        self._update_factors()
+
+    @staticmethod
+    def _validate(kd, ks):
         _common.check_reflectance_range("phong", "diffuse_reflectance", kd)
         _common.check_reflectance_range("phong", "specular_reflectance", ks)
         _common.check_energy("phong", ("diffuse_reflectance", "specular_reflectance"), [kd, ks])
+
+    def _update_factors(self):
+        _common.check_exponent("phong", _common.scalar_of(self.exponent))
         # An opaque exponent is a kernel input, not a baked literal: sweeps never recompile.
         dr.make_opaque(self.exponent)
         self.brdf_factor = (self.exponent + 2.0) * dr.inv_two_pi   # normalizes f_r's lobe
