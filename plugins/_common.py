@@ -88,7 +88,7 @@ def declared_value(props, name: str, default: float) -> np.ndarray | None:
     (RGB 0.6, 0.3, 0.2 reaches 0.97 near 830 nm), which is a property of the
     up-sampling, not of the material the user described.
     """
-    if not props.has_property(name):
+    if name not in props:
         return np.array([[default]])
     kind = props.type(name)
     if kind == mi.Properties.Type.Float:
@@ -98,17 +98,26 @@ def declared_value(props, name: str, default: float) -> np.ndarray | None:
     return None
 
 
-def reflectance_values(props, names_defaults, textures) -> list[np.ndarray]:
-    """Values to validate for several reflectance parameters, on one common set of points.
+def load_reflectances(plugin: str, props, names_defaults) -> tuple[list, list[np.ndarray]]:
+    """Read and range-check reflectance parameters: (textures, values on common points).
 
-    The declared numbers when every parameter is a plain number or colour (broadcast to a
-    common channel count), else the textures evaluated by :func:`texture_values`.
+    Plain numbers and colours are checked as the scene declared them, before Mitsuba
+    turns them into textures (so the error names the parameter); textures are
+    evaluated by :func:`texture_values` and checked the same way.
     """
     declared = [declared_value(props, n, d) for n, d in names_defaults]
-    if all(d is not None for d in declared):
+    plain = all(d is not None for d in declared)
+    if plain:
+        for (name, _), values in zip(names_defaults, declared):
+            check_reflectance_range(plugin, name, values)
+    textures = [props.get_texture(name, default) for name, default in names_defaults]
+    if plain:
         channels = max(d.shape[0] for d in declared)
-        return [np.broadcast_to(d, (channels, 1)) for d in declared]
-    return texture_values(textures)
+        return textures, [np.broadcast_to(d, (channels, 1)) for d in declared]
+    values = texture_values(textures)
+    for (name, _), v in zip(names_defaults, values):
+        check_reflectance_range(plugin, name, v)
+    return textures, values
 
 
 def _fmt(x: np.ndarray) -> str:

@@ -39,12 +39,10 @@ class Lambert(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        self.reflectance = props.get_texture("reflectance", 0.5)
+        (self.reflectance,), _ = _common.load_reflectances("lambert", props, [("reflectance", 0.5)])
         flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         self.m_components = [flags]
         self.m_flags = flags
-        (values,) = _common.reflectance_values(props, [("reflectance", 0.5)], [self.reflectance])
-        _common.check_reflectance_range("lambert", "reflectance", values)
 
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)

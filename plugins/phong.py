@@ -87,17 +87,14 @@ class Phong(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        self.diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5)
-        self.specular_reflectance = props.get_texture("specular_reflectance", 0.2)
+        (self.diffuse_reflectance, self.specular_reflectance), (kd, ks) = _common.load_reflectances(
+            "phong", props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)])
         exponent = _common.check_exponent("phong", props.get("exponent", 30.0))
         self.exponent = mi.Float(exponent)
         diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
         self.m_components = [diffuse, glossy]   # indices DIFFUSE, GLOSSY
         self.m_flags = diffuse | glossy
-        kd, ks = _common.reflectance_values(
-            props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)],
-            [self.diffuse_reflectance, self.specular_reflectance])
         self._validate(kd, ks)
         self._update_factors()
 
