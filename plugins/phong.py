@@ -139,6 +139,12 @@ class Phong(mi.BSDF):
             w_s = mi.Float(1.0 if has_glossy else 0.0)
         return has_diffuse, has_glossy, kd, ks, w_s
 
+    def eval(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[0]
+
+    def pdf(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[1]
+
     def eval_pdf(self, ctx, si, wo, active=True):
         has_diffuse, has_glossy, kd, ks, w_s = self._lobes(ctx, si, active)
         cos_theta_i = mi.Frame3f.cos_theta(si.wi)
@@ -154,12 +160,6 @@ class Phong(mi.BSDF):
             value += ks * (self.brdf_factor * lobe)
             pdf += w_s * self.pdf_factor * lobe
         return dr.select(active, value * cos_theta_o, 0.0), dr.select(active, pdf, 0.0)
-
-    def eval(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[1]
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         has_diffuse, has_glossy, _, _, w_s = self._lobes(ctx, si, active)
