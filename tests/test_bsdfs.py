@@ -351,3 +351,33 @@ def test_phong_albedo(kd, ks, exponent):
     for theta_deg in (45.0, 80.0, 89.0):
         mean, se = directional_albedo(bsdf, math.radians(theta_deg), 100_000, 14)
         assert mean[0] <= kd + ks + z * se[0] + 1e-5, (theta_deg, mean, se)
+
+
+# ---------------------------------------------------------------------------- differentiability
+def test_gradients_match_the_analytic_derivatives():
+    """traverse exposes exponent and reflectances as differentiable: AD through eval equals
+    d/dp [k_s (p+2)/(2π) c^p] = k_s c^p (1 + (p+2) ln c)/(2π) and d/dk_d = 1/π (times cos θ_o)."""
+    bsdf = mi.load_dict({"type": "phong", "diffuse_reflectance": 0.4, "specular_reflectance": 0.5,
+                         "exponent": 20.0})
+    params = mi.traverse(bsdf)
+    n = 512
+    wi, wo = random_dirs(n, 21, upper=True), random_dirs(n, 22, upper=True)
+    wo[: n // 2] = (wi * np.array([-1, -1, 1]))[: n // 2] + 0.1 * random_dirs(n // 2, 23)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    wo[:, 2] = np.abs(wo[:, 2])
+    wi32, wo32 = wi.astype(np.float32).astype(float), wo.astype(np.float32).astype(float)
+    c = np.sum(wi32 * np.array([-1, -1, 1]) * wo32, axis=1)
+    cos_o = wo32[:, 2]
+    for key, expected in (
+        ("exponent", np.where(c > 0, 0.5 * np.clip(c, 1e-30, 1) ** 20 * (1 + 22 * np.log(np.clip(c, 1e-30, 1)))
+                              / (2 * math.pi), 0.0) * cos_o),
+        ("diffuse_reflectance.value", cos_o / math.pi),
+    ):
+        dr.enable_grad(params[key])
+        params.update()
+        value = bsdf.eval(mi.BSDFContext(), make_si(wi), vec(wo))
+        dr.forward(params[key])
+        grad = np.array(dr.grad(value))[0]
+        dr.disable_grad(params[key])
+        params.update()
+        np.testing.assert_allclose(grad, expected, rtol=2e-4, atol=1e-6, err_msg=key)
