@@ -57,6 +57,28 @@ def solid_angle_disk(radius, distance):
     return 2.0 * np.pi * (1.0 - d / np.sqrt(d * d + r * r))
 
 
+def solid_angle_rectangle(width, height, distance):
+    """Ω = 4 arcsin(w h / √((w² + 4d²)(h² + 4d²))): exact solid angle of a w x h rectangle
+    seen on its axis from distance d; → w h / d² = A/R² as d grows."""
+    w, h = np.asarray(width, dtype=np.float64), np.asarray(height, dtype=np.float64)
+    d = np.asarray(distance, dtype=np.float64)
+    return 4.0 * np.arcsin(w * h / np.sqrt((w * w + 4 * d * d) * (h * h + 4 * d * d)))
+
+
+def pixel_solid_angles(width: int, height: int, fov_x_degrees: float) -> np.ndarray:
+    """Solid angle (H, W) of each pixel of a pinhole camera with horizontal field of view fov.
+
+    A pixel of size dx dy on the image plane at unit distance, at (x, y), subtends
+    dω = dx dy cos θ / r² = dx dy / (1 + x² + y²)^(3/2).
+    """
+    half = math.tan(math.radians(fov_x_degrees) / 2.0)
+    dx = 2.0 * half / width
+    x = (np.arange(width) + 0.5) * dx - half
+    y = (np.arange(height) + 0.5) * dx - height * dx / 2.0
+    xx, yy = np.meshgrid(x, y)
+    return dx * dx / (1.0 + xx * xx + yy * yy) ** 1.5
+
+
 def sphere_quadrature(n_theta: int = 32, n_phi: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """Directions (N, 3) and weights (N,) integrating over the whole sphere (Σ w = 4π)."""
     x, w = np.polynomial.legendre.leggauss(n_theta)          # μ in [−1, 1]
@@ -174,7 +196,9 @@ def direction(theta: float, phi: float = 0.0) -> np.ndarray:
 
 
 def bsdf_eval(bsdf, wi, wo) -> np.ndarray:
-    """Mitsuba's ``bsdf.eval`` = f_r(wi, wo) cos θ_o for one wi and many wo: (N, channels).
+    """Mitsuba's ``bsdf.eval`` = f_r(wi, wo) cos θ_o for N pairs: (N, channels).
+
+    ``wi`` is one direction (3,) shared by all, or one per ``wo`` (N, 3).
 
     Directions are unit vectors in the local frame (normal +z), both pointing away from
     the surface; wi is the viewer's side in Mitsuba's convention.
@@ -209,23 +233,31 @@ def reflected_radiance(bsdf, wo_view, incident: Callable[[np.ndarray], np.ndarra
 
     Args:
         bsdf: a Mitsuba BSDF (``mi.load_dict({"type": "phong", ...})``).
-        wo_view: ω_r, unit direction towards the viewer in the local frame (normal +z).
+        wo_view: ω_r, unit direction towards the viewer in the local frame (normal +z),
+            shape (3,), or several, shape (M, 3), evaluated in one kernel launch.
         incident: L_i, a number (a uniform sky) or a function of unit directions (N, 3)
             returning radiances (N,) or (N, channels).
         n_theta, n_phi: quadrature resolution (see the module docstring); sharp lobes
             (large Phong exponents) need more.
 
     Returns:
-        L_r per channel.  With ``incident=1`` this is the directional albedo.
+        L_r per channel, shape (channels,) for one view or (M, channels).  With
+        ``incident=1`` this is the directional albedo.
     """
+    views = np.asarray(wo_view, dtype=np.float64)
+    single = views.ndim == 1
+    views = views.reshape(-1, 3)
     dirs, w = hemisphere_quadrature(n_theta, n_phi)
-    f_cos = bsdf_eval(bsdf, wo_view, dirs)               # f_r cos θ_i, Mitsuba's eval
     if np.isscalar(incident):
         L = np.full((len(w), 1), float(incident))
     else:
         L = np.asarray(incident(dirs), dtype=np.float64)
         L = L[:, None] if L.ndim == 1 else L
-    return np.sum(w[:, None] * f_cos * L, axis=0)
+    m, n = len(views), len(dirs)
+    # One launch over all (view, light direction) pairs: eval = f_r cos θ_i (Mitsuba's eval).
+    f_cos = bsdf_eval(bsdf, np.repeat(views, n, axis=0), np.tile(dirs, (m, 1)))
+    out = np.sum((w[:, None] * L)[None] * f_cos.reshape(m, n, -1), axis=1)
+    return out[0] if single else out
 
 
 @dataclass
