@@ -589,3 +589,29 @@ def fig_refraction_agreement(r: RefractionAgreement):
     ax2.set_title("Fresnel reflectance: ours and dielectric's", fontsize=9)
     ax2.legend(fontsize=6)
     return fig
+
+
+# =============================================================================== docs
+def write_doc_images(folder: str | Path = "docs/img", dpi: int = 72) -> list[Path]:
+    """The one figure per notebook that docs/notebooks.md shows, as ``nb_*.png``
+    (``make notebook-figures``); the same calls, at the same default sample counts, as the
+    notebooks make."""
+    folder = Path(folder)
+    _register()
+    rows = {"plastic: red k_d, grey k_s": render_sphere_row(16, **PLASTIC),
+            "metal: k_d ≈ 0, coloured k_s": render_sphere_row(16, **METAL)}
+    figs = {
+        "nb_01_radiance_constancy.png": fig_emitter_distances(emitter_distance_series(spp=4)),
+        "nb_01_reflection_equation.png": fig_reflection_equation(),
+        "nb_02_sphere_rows.png": fig_sphere_rows(rows),
+        "nb_02_furnace.png": fig_albedo(albedo_curves(samples=20000)),
+        "nb_03_refraction.png": fig_refraction_agreement(refraction_agreement()),
+    }
+    return [save(fig, folder / name, dpi=dpi) for name, fig in figs.items()]
+
+
+if __name__ == "__main__":  # pragma: no cover - `make notebook-figures`
+    import sys
+
+    for p in write_doc_images(sys.argv[1] if len(sys.argv) > 1 else "docs/img"):
+        print(p)
