@@ -91,6 +91,13 @@ CASES = [
      [r"small\.exr is 4 x 5 x 3 but .*large\.exr is 4 x 6 x 3", r"same resolution"]),
     ("compare-one-stderr", ["compare", "{small}", "{small}", "--stderr-a", "{small}"],
      [r"--stderr-a was given without --stderr-b"]),
+    ("compare-diff-not-png", ["compare", "{small}", "{small}", "--diff", "{small}"],
+     [r"--diff writes a PNG image, but .*small\.exr does not end in \.png"]),
+    ("compare-folder", ["compare", "{tmp}", "{small}"], [r"is a folder, not an EXR file"]),
+    ("render-output-folder", ["render", "nb_emitter_distance", "-o", "{tmp}"],
+     [r"the output must be a file name ending in \.exr"]),
+    ("render-zero-spp", ["render", "nb_emitter_distance", "--spp", "0"],
+     [r"spp \(samples per pixel\) must be >= 1, got 0; ask for at least one sample"]),
 ]
 
 
@@ -98,7 +105,7 @@ def _argv(argv, files, tmp_path):
     fmt = {k: str(v) for k, v in files.items()}
     fmt["tmp"] = str(tmp_path)
     return [a.format(**fmt) for a in argv] + (["-o", str(tmp_path / "out.exr")]
-                                              if argv[0] == "render" else [])
+                                              if argv[0] == "render" and "-o" not in argv else [])
 
 
 @pytest.mark.parametrize("argv, patterns", [c[1:] for c in CASES], ids=[c[0] for c in CASES])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 
 def add_parser(sub) -> None:
@@ -43,6 +44,9 @@ def run(args) -> int:
     if args.eps is not None and not args.eps > 0:
         raise PhonglabError(f"--eps must be > 0 (it keeps dark pixels from dominating the "
                             f"relative MSE), got {args.eps}")
+    if args.diff and Path(args.diff).suffix.lower() != ".png":
+        raise PhonglabError(f"--diff writes a PNG image, but {args.diff} does not end in .png; "
+                            f"give a path like out/a_minus_b.png")
     result, img_a, img_b, meta_a, meta_b = compare.compare_files(
         args.a, args.b, args.stderr_a, args.stderr_b, auto_stderr=not args.no_stderr_files,
         eps=args.eps if args.eps is not None else compare.REL_EPS)

@@ -112,6 +112,8 @@ def read(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
         ExrError: the file is not an OpenEXR image, or is truncated or damaged.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ExrError(f"{path} is a folder, not an EXR file; give the path of an .exr file")
     if not path.is_file():
         raise FileNotFoundError(f"no such EXR file: {path}; check the path "
                                 f"(`phonglab render` writes out/<scene>.exr by default)")

@@ -179,7 +179,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     import mitsuba as mi
 
     if spp < 1:
-        raise PhonglabError(f"spp must be >= 1, got {spp}")
+        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
+                            f"least one sample (--spp 1)")
     passes = max(1, min(int(passes), int(spp)))
     per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
     iterator = range(passes)
