@@ -150,13 +150,14 @@ def test_real_subprocess(tmp_path):
 def test_compare_end_to_end(tmp_path, capsys):
     b = np.full((6, 8, 3), 0.5, np.float32)
     a = b + np.float32(0.1)
-    exr.write(tmp_path / "a.exr", a, {"spp": 4, "variant": "llvm_ad_rgb"})
-    exr.write(tmp_path / "b.exr", b)
+    exr.write(tmp_path / "a.exr", a, {"spp": 4, "variant": "llvm_ad_rgb", "scene_sha256": "1"})
+    exr.write(tmp_path / "b.exr", b, {"scene_sha256": "2"})
     rc = cli.main(["compare", str(tmp_path / "a.exr"), str(tmp_path / "b.exr"),
                    "--diff", str(tmp_path / "d.png")])
     out = capsys.readouterr().out
     assert rc == 0
     assert "RMSE        : 0.1" in out and "4 spp, llvm_ad_rgb" in out
+    assert "note: A and B were rendered from different scene files" in out
     assert (tmp_path / "d.png").read_bytes()[:4] == b"\x89PNG"
 
 

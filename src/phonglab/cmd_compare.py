@@ -56,6 +56,11 @@ def run(args) -> int:
         print(f"A: {args.a}: {compare.describe_metadata(meta_a)}")
         print(f"B: {args.b}: {compare.describe_metadata(meta_b)}")
         print(result.summary())
+        for key, what in (("scene_sha256", "scene files"), ("variant", "variants")):
+            if meta_a.get(key) is not None and meta_b.get(key) is not None \
+                    and meta_a[key] != meta_b[key]:
+                print(f"note: A and B were rendered from different {what} ({key} differs): "
+                      f"their difference is not only noise")
     if args.diff:
         compare.write_diff_png(args.diff, img_a, img_b,
                                title=f"A − B: RMSE {result.rmse:.3g}, mean {result.mean_diff:+.3g}"
