@@ -109,7 +109,7 @@ def _argv(argv, files, tmp_path):
 
 
 @pytest.mark.parametrize("argv, patterns", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
-def test_bad_input_is_one_sentence_and_exit_2(tmp_path, capsys, argv, patterns):
+def test_bad_input_is_one_sentence_and_exit_2(tmp_path, capsys, argv, patterns, variant_llvm_rgb):
     files = _files(tmp_path)
     rc = cli.main(_argv(argv, files, tmp_path))
     err = capsys.readouterr().err.strip()
@@ -124,7 +124,7 @@ def test_bad_input_is_one_sentence_and_exit_2(tmp_path, capsys, argv, patterns):
 
 
 @pytest.mark.parametrize("where", ["before", "after"])
-def test_debug_shows_the_traceback(tmp_path, where):
+def test_debug_shows_the_traceback(tmp_path, where, variant_llvm_rgb):
     bad = _files(tmp_path)["unknown_py_param"]
     argv = ["--debug", "render", str(bad)] if where == "before" else ["render", str(bad), "--debug"]
     with pytest.raises(PhonglabError, match="has no parameter 'exponant'"):
