@@ -26,3 +26,8 @@ test-all: setup
 
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info
+
+# The figures docs/notebooks.md shows (one per notebook), from phonglab.figures.
+.PHONY: notebook-figures
+notebook-figures: setup
+	$(BIN)/python -m phonglab.figures docs/img

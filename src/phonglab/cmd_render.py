@@ -27,6 +27,11 @@ def run(args) -> int:
 
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
+    if out.is_dir() or out.suffix.lower() != ".exr":
+        from .render import PhonglabError
+
+        raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
+                            f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
     result = render_file(path, out, spp=args.spp, variant=args.variant, seed=args.seed,
                          max_depth=args.max_depth)
     meta = result.metadata

@@ -47,8 +47,9 @@ def scene_defaults(path: str | Path) -> dict[str, str]:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
         line = exc.position[0] if exc.position else "?"
-        raise PhonglabError(f"{path}: malformed XML at line {line}: {exc}; "
-                            f"fix the markup there (unclosed tag or stray character).") from None
+        why = re.sub(r":\s*line \d+, column \d+$", "", str(exc))
+        raise PhonglabError(f"{path}, line {line}: malformed XML ({why}); fix the markup there "
+                            f"(an unclosed or mismatched tag, or a stray character).") from None
     return {d.get("name"): d.get("value") for d in root.iter("default") if d.get("name")}
 
 
@@ -56,32 +57,77 @@ def file_hash(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-_MI_LINE = re.compile(r"line (\d+)")
+_MI_LINE = re.compile(r"\(line (\d+)")
+_UNREFERENCED = re.compile(r'unreferenced propert(?:y|ies) in (\w+) plugin of type "([^"]+)"')
+_UNREFERENCED_NAME = re.compile(r'^\s*-\s*\w+\s+"([^"]+)"', re.MULTILINE)
+_NOT_FOUND = re.compile(r'instantiate (\w+) plugin of type "([^"]+)".*Plugin "[^"]+" not found')
+#: Scene-file names of phonglab's own plugins (whose parameters are all listed by traverse).
+_OWN_PLUGINS = ("lambert", "phong")
+
+
+def _plugin_parameters(plugin_type: str) -> list[str]:
+    """XML parameter names of one of phonglab's plugins (its ``traverse`` keys), else []."""
+    if plugin_type not in _OWN_PLUGINS:
+        return []
+    try:
+        import mitsuba as mi
+
+        return sorted({k.split(".")[0] for k in mi.traverse(mi.load_dict({"type": plugin_type})).keys()})
+    except Exception:  # the listing is a courtesy; the error message stands without it
+        return []
 
 
 def _explain_load_error(path: Path, exc: Exception) -> PhonglabError:
+    """Turn Mitsuba's loader error into one sentence naming the problem and the fix.
+
+    Mitsuba words the cases as (3.9.1, the same for Python and built-in plugins):
+    ``While loading F (line L, col C): Found 1 unreferenced property in bsdf plugin of
+    type "phong":\n  - float "exponant": 3``; ``Parsing of XML file "F" failed: <why>
+    (line L, col C)``; ``failed to instantiate bsdf plugin of type "x": [PluginManager]
+    Plugin "x" not found!``; and a Python plugin's own exception with its traceback.
+    """
+    import difflib
+
     text = str(exc).strip()
-    # Mitsuba prefixes its messages with "[xml.cpp] ..." and may nest the Python plugin's error.
-    core = text.splitlines()[-1] if text else type(exc).__name__
+    line_m = _MI_LINE.search(text)
+    where = f"{path}, line {line_m.group(1)}" if line_m else str(path)
+    # Mitsuba prefixes its messages with "[parser.cpp:444] ..." and may nest a Python traceback.
+    core = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text.splitlines()[-1] if text else type(exc).__name__)
     if "MaterialError" in text or "violates energy" in text or "must lie in" in text \
             or "'exponent'" in text:
         m = re.search(r"((?:phong|lambert): .*)", text)
         msg = m.group(1) if m else core
-        return PhonglabError(f"{path}: {msg}")
-    if "unreferenced property" in text or "Unreferenced property" in text:
-        m = re.search(r'[Uu]nreferenced property "?([\w.]+)"?', text)
-        name = m.group(1) if m else "?"
-        return PhonglabError(f"{path}: unknown parameter {name!r} in the scene "
-                             f"({core}); check its spelling against the plugin's documented "
-                             f"parameters.")
-    if "Plugin" in text and ("not found" in text or "unknown" in text.lower()):
-        return PhonglabError(f"{path}: {core}; phonglab registers 'lambert' and 'phong' "
-                             f"(call phonglab.register() before loading from Python).")
-    if "parse" in text.lower() or "XML" in text or "Error while loading" in text:
-        line = _MI_LINE.search(text)
-        where = f" at line {line.group(1)}" if line else ""
-        return PhonglabError(f"{path}: malformed scene{where}: {core}")
-    return PhonglabError(f"{path}: could not load the scene: {core}")
+        return PhonglabError(f"{where}: {msg}")
+    m = _UNREFERENCED.search(text)
+    if m:
+        kind, plugin_type = m.group(1), m.group(2)
+        names = _UNREFERENCED_NAME.findall(text) or ["?"]
+        known = _plugin_parameters(plugin_type)
+        hints = [difflib.get_close_matches(n, known, n=1) for n in names]
+        guess = "".join(f" (did you mean {h[0]!r}?)" for h in hints if h) if len(names) == 1 else ""
+        listed = (f"its parameters are {', '.join(repr(k) for k in known)}" if known else
+                  "see the Mitsuba plugin reference for its parameters")
+        kind = "" if kind == "unknown" else f"{kind} "
+        plural = "parameters" if len(names) > 1 else "parameter"
+        return PhonglabError(
+            f"{where}: the {kind}plugin {plugin_type!r} has no {plural} "
+            f"{', '.join(repr(n) for n in names)}{guess}; fix the spelling or remove it "
+            f"({listed}).")
+    m = _NOT_FOUND.search(text)
+    if m:
+        kind, plugin_type = m.group(1), m.group(2)
+        guess = difflib.get_close_matches(plugin_type, _OWN_PLUGINS, n=1)
+        hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+        return PhonglabError(
+            f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
+            f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
+            f"phonglab.register() before loading from Python.")
+    if "Parsing of XML file" in text or "parse" in text.lower():
+        why = re.sub(r'^Parsing of XML file "[^"]*" failed:\s*', "", core)
+        why = re.sub(r"\s*\(line \d+, col \d+\)", "", why)
+        return PhonglabError(f"{where}: malformed XML ({why}); fix the markup there "
+                             f"(an unclosed or mismatched tag, or a stray character).")
+    return PhonglabError(f"{where}: could not load the scene: {core}")
 
 
 def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
@@ -147,7 +193,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     import mitsuba as mi
 
     if spp < 1:
-        raise PhonglabError(f"spp must be >= 1, got {spp}")
+        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
+                            f"least one sample (--spp 1)")
     passes = max(1, min(int(passes), int(spp)))
     per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
     iterator = range(passes)
