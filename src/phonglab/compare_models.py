@@ -118,7 +118,8 @@ def _graphics_integrator(scene, dicts, max_depth):
 
 def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: int = 16,
                    path_spp: int | None = None, seed: int = 0, max_depth: int | None = None,
-                   variant: str | None = None, progress: bool = False) -> ModelComparison:
+                   variant: str | None = None, progress: bool = False,
+                   params: dict[str, Any] | None = None) -> ModelComparison:
     """Render ``scene`` three ways and compare; write images and a figure to ``out_dir``.
 
     Args:
@@ -129,6 +130,7 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
         path_spp: samples per pixel of the path tracer (default 8 × spp).
         seed, variant: as in :func:`phonglab.render.render_scene`.
         max_depth: path length for all three (default: the scene's whitted, else 5).
+        params: values for the scene's other ``<default>`` entries (width, intensity, ...).
     """
     import time
 
@@ -139,7 +141,13 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
     path = scene_path(scene)
     declared = scene_defaults(path)
     # A scene with <default name="integrator"> renders with its whitted settings here.
-    params = {"integrator": "whitted"} if "integrator" in declared else {}
+    unknown = sorted(set(params or {}) - set(declared))
+    if unknown:
+        raise PhonglabError(f"{path} has no parameter {unknown[0]!r}; its <default> entries are: "
+                            f"{', '.join(sorted(declared)) or 'none'}.")
+    params = dict(params or {})
+    if "integrator" in declared:
+        params["integrator"] = "whitted"
     if max_depth is not None and "max_depth" in declared:
         params["max_depth"] = int(max_depth)
     loaded = load_scene(path, variant, **params)
