@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
+from conftest import ALPHA, SCENES, sidak
 from phonglab import optics
 from phonglab.render import render_scene
 
@@ -381,3 +381,21 @@ def test_glass_and_metal_ray_tree_equals_path_in_expectation(variant_llvm_rgb):
     integ = {"type": "whitted", "units": "radiance", "max_depth": 3}
     paired_t_test(backdrop_scene(integ), backdrop_scene({"type": "path", "max_depth": 3}),
                   spp=16, passes=16, seed=11, what="whitted(radiance) vs path, glass + gold")
+
+
+# ----------------------------------------------------------------------------- scenes
+
+@pytest.mark.parametrize("name", ["exponent_series", "metal_vs_plastic", "attenuation_demo",
+                                  "glass_sphere"])
+def test_scenes_render_with_whitted_and_path(variant_llvm_rgb, name):
+    """Each new scene loads with its whitted integrator (and path where it declares one)."""
+    from phonglab.render import load_scene, scene_defaults
+
+    small = {"width": 24, "height": 16, "spp": 1}
+    kinds = ["whitted", "path"] if "integrator" in scene_defaults(SCENES / f"{name}.xml") \
+        else ["whitted"]
+    for kind in kinds:
+        extra = {"integrator": kind} if kind == "path" else {}
+        scene = load_scene(name, **small, **extra)
+        image = np.array(mi.render(scene))
+        assert image.shape == (16, 24, 3) and np.isfinite(image).all() and image.max() > 0

@@ -14,7 +14,8 @@ def add_parser(sub) -> None:
                     "units (whitted, radiance), and Mitsuba's path tracer. Writes the three "
                     "images (EXR + PNG), difference images (diverging colour map), figure.png and "
                     "table.txt, and prints where and by how much they differ.",
-        epilog="example:\n  phonglab compare-models exponent_series --spp 16 -o out/exponent_series",
+        epilog="examples:\n  phonglab compare-models exponent_series --spp 16 -o out/exponent_series\n"
+               "  phonglab compare-models attenuation_demo -D c=1 -D a=0",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. exponent_series)")
     p.add_argument("--spp", type=int, default=16,
@@ -25,6 +26,8 @@ def add_parser(sub) -> None:
                    help="path length for all three (default: the scene's, else 5)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
+    p.add_argument("-D", "--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="set one of the scene's <default> parameters (repeatable), e.g. -D width=240")
     p.add_argument("-o", "--output", default=None,
                    help="output folder (default: out/compare_<scene>)")
     p.set_defaults(func=run)
@@ -32,12 +35,19 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from .compare_models import compare_models, format_table
-    from .render import scene_path
+    from .render import PhonglabError, scene_path
 
+    params = {}
+    for item in args.param:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise PhonglabError(f"--param expects NAME=VALUE, got {item!r}; e.g. -D width=240.")
+        params[name] = value
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / f"compare_{path.stem}")
     result = compare_models(path, out, spp=args.spp, path_spp=args.path_spp, seed=args.seed,
-                            max_depth=args.max_depth, variant=args.variant, progress=True)
+                            max_depth=args.max_depth, variant=args.variant, progress=True,
+                            params=params)
     depth = result.integrators["path"]["max_depth"]
     print(f"compared {path} (max_depth {depth}): "
           + ", ".join(f"{k} {v:.2f} s" for k, v in result.seconds.items()))
