@@ -94,6 +94,17 @@ def _is_directional(emitter) -> bool:
     return mi.has_flag(emitter.flags(), mi.EmitterFlags.DeltaDirection)
 
 
+def _jit() -> bool:
+    return dr.is_jit_v(mi.Float)
+
+
+def _same_bsdf(ptr, bsdf):
+    """Mask of the lanes whose BSDF is ``bsdf`` (scalar variants: one object, compared by id)."""
+    if _jit():
+        return ptr == mi.BSDFPtr(bsdf)
+    return mi.Bool(ptr is not None and ptr.id() == bsdf.id() and ptr.to_string() == bsdf.to_string())
+
+
 def delta_lights(scene) -> list:
     """The scene's point, spot and directional emitters (those this model sums over)."""
     return [e for e in scene.emitters() if _is_point_like(e) or _is_directional(e)]
@@ -221,9 +232,13 @@ class Whitted(mi.SamplingIntegrator):
         """Radiance along ``ray``, the depth-th segment of the path (camera ray: 1)."""
         si = scene.ray_intersect(ray, mi.RayFlags.All, depth == 1, active)
         show = active if not (depth == 1 and self.hide_emitters) else mi.Bool(False)
-        L = dr.select(show, si.emitter(scene, show).eval(si, show), 0.0)
+        emitter = si.emitter(scene, show)
+        if _jit():
+            L = dr.select(show, emitter.eval(si, show), 0.0)
+        else:  # scalar variants: a missing emitter or BSDF is None, not a masked lane
+            L = emitter.eval(si, show) if (emitter is not None and show) else mi.Spectrum(0.0)
         hit = active & si.is_valid()
-        if depth + 1 > self.max_depth:
+        if depth + 1 > self.max_depth or (not _jit() and not hit):
             return L, hit
         bsdf = si.bsdf(ray)
         L += self._local(scene, materials, lights, si, bsdf, hit)
@@ -245,7 +260,7 @@ class Whitted(mi.SamplingIntegrator):
             amb = self.ambient_reflectance.get(b.id())
             if not is_phong and amb is None:
                 continue
-            mine = active & (ptr == mi.BSDFPtr(b))
+            mine = active & _same_bsdf(ptr, b)
             if is_phong and self.units == "graphics":
                 k_spec = dr.select(mine, b.specular_reflectance.eval(si, mine), k_spec)
                 p = dr.select(mine, b.exponent, p)
@@ -269,7 +284,8 @@ class Whitted(mi.SamplingIntegrator):
             ds, spec = emitter.sample_direction(si, mi.Point2f(0.5, 0.5), active)
             lit = active & (ds.pdf != 0.0)
             if self.shadows:
-                lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
+                occluded = scene.ray_test(si.spawn_ray_to(ds.p), lit)
+                lit = lit & (~occluded if _jit() else not occluded)   # ~True is -2 in Python
             wo = si.to_local(ds.d)
             if self.units == "radiance":
                 value, _ = bsdf.eval_pdf(ctx, si, wo, lit)
