@@ -436,3 +436,25 @@ def test_radiance_units_equal_path_in_every_variant(any_variant):
         np.testing.assert_allclose(np.array(got), seed_formula(POINTS[:2], eye,
                                                                k_amb=np.array(KD)),
                                    rtol=2e-5, atol=1e-6)
+
+
+def test_attenuation_demo_header(variant_llvm_rgb):
+    """The values attenuation_demo.xml's header derives, at each sphere's nearest point."""
+    from phonglab.render import load_scene
+
+    light, eye, radius = np.array([-0.8, 1.8, 1.5]), np.array([3.0, 2.4, 6.0]), 0.3
+    centres = np.array([[0.4 + i, 0.0, 0.0] for i in range(7)])
+    to_light = light - centres
+    r = np.linalg.norm(to_light, axis=1) - radius
+    nearest = centres + radius * 0.999 * to_light / np.linalg.norm(to_light, axis=1)[:, None]
+    d = nearest - eye
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    cases = {(): 5 * 0.35 * np.ones(7), (("a", 0), ("c", 1)): 5 * 0.35 / r ** 2,
+             (("b", 0.5),): 5 * 0.35 / (1 + 0.5 * r), (("units", "radiance"),):
+             5 * 0.35 / (np.pi * r ** 2)}
+    for params, want in cases.items():
+        scene = load_scene("attenuation_demo", **dict(params))
+        got = trace(scene, scene.integrator(), np.tile(eye, (7, 1)), d)[:, 0]
+        # The 0.999 inset and (L·R)^20 of a far-off highlight: 0.5 % at most.
+        np.testing.assert_allclose(got, want, rtol=5e-3, err_msg=str(params))
+    np.testing.assert_allclose((r[-1] / r[0]) ** 2, 9.72, rtol=1e-3)
