@@ -103,6 +103,7 @@ def test_loads_with_documented_defaults(variant_llvm_rgb):
     assert (params["attenuation_constant"], params["attenuation_linear"],
             params["attenuation_quadratic"]) == (1.0, 0.0, 0.0)
     assert "attenuation_linear" in mi.traverse(w)
+    assert w.class_name() == "Whitted" and "max_depth=5" in w.to_string()
 
 
 @pytest.mark.parametrize("props, message", [
@@ -163,6 +164,43 @@ def test_shadows_only_visible_lights(variant_llvm_rgb, shadows):
     got = trace(scene, scene.integrator(), eye, d)
     want = seed_formula(pts, eye, shadowed=[shadows, False], k_amb=np.array(KD))
     np.testing.assert_allclose(got, want, rtol=2e-5, atol=1e-6)
+
+
+def test_graphics_spot_and_directional_lights(variant_llvm_rgb):
+    """Spot: I_i times its falloff (1 inside beam_width, 0 past cutoff_angle), attenuated;
+    directional: I_i = its irradiance E, no attenuation (OpenGL), L = −direction."""
+    pts = np.array([[0.0, 0.0, 0.0], [0.3, -0.2, 0.0], [6.0, 0.0, 0.0]])
+    eye, d = camera_rays(pts, VIEW)
+    spot = {"type": "spot", "cutoff_angle": 30.0, "beam_width": 20.0,
+            "intensity": {"type": "rgb", "value": I_LIGHT.tolist()},
+            "to_world": mi.ScalarTransform4f().look_at(origin=LIGHT.tolist(), target=[0, 0, 0],
+                                                       up=[0, 0, 1])}
+    integrator = mi.load_dict({"type": "whitted", **graphics()})
+    plane = {"type": "scene",
+             "plane": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([10, 10, 1]),
+                       "bsdf": {"type": "phong",
+                                "diffuse_reflectance": {"type": "rgb", "value": KD},
+                                "specular_reflectance": {"type": "rgb", "value": KS},
+                                "exponent": P}}}
+    got = trace(mi.load_dict({**plane, "light": spot}), integrator, eye, d)
+    want = seed_formula(pts, eye, k_amb=np.array(KD))
+    ambient_only = np.array(KD) * I_AMB
+    # (0,0,0) and (0.3,−0.2,0) lie inside the beam (≤ 7° off its axis), (6,0,0) past the cutoff.
+    np.testing.assert_allclose(got[:2], want[:2], rtol=2e-5, atol=1e-6)
+    np.testing.assert_allclose(got[2], ambient_only, rtol=1e-6)
+
+    E = np.array([0.7, 0.8, 0.9])
+    w = np.array([0.3, 0.1, -1.0]) / np.linalg.norm([0.3, 0.1, -1.0])
+    sun = {"type": "directional", "direction": w.tolist(),
+           "irradiance": {"type": "rgb", "value": E.tolist()}}
+    got = trace(mi.load_dict({**plane, "light": sun}), integrator, eye, d)
+    n = np.array([0.0, 0.0, 1.0])
+    for i, p in enumerate(pts):
+        v = (eye[i] - p) / np.linalg.norm(eye[i] - p)
+        refl = 2 * v @ n * n - v
+        want = np.array(KD) * I_AMB + E * (np.array(KD) * (-w @ n) + np.array(KS)
+                                           * max(-w @ refl, 0.0) ** P)
+        np.testing.assert_allclose(got[i], want, rtol=2e-5, atol=1e-6)
 
 
 # ----------------------------------------------------------------------------- radiance units
