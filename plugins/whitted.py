@@ -77,6 +77,7 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from . import _optics
 from .phong import phong_lobe
@@ -205,9 +206,9 @@ class Whitted(mi.SamplingIntegrator):
         """This integrator's settings as a ``mi.load_dict`` dictionary (uniform textures only)."""
         out = {"type": "whitted", "units": self.units, "max_depth": self.max_depth,
                "shadows": self.shadows, "hide_emitters": self.hide_emitters,
-               "attenuation_constant": float(self.attenuation_constant[0]),
-               "attenuation_linear": float(self.attenuation_linear[0]),
-               "attenuation_quadratic": float(self.attenuation_quadratic[0])}
+               **{name: float(np.asarray(getattr(self, name)).ravel()[0])
+                  for name in ("attenuation_constant", "attenuation_linear",
+                               "attenuation_quadratic")}}
         return out
 
     # ------------------------------------------------------------------ rendering

@@ -312,7 +312,7 @@ def test_rendered_images_agree_within_noise_with_two_lights(variant_llvm_rgb):
     """Two lights: path samples one of them (weight 2 when chosen), whitted sums both; the
     expectations are equal, path's per-pixel variance is the emitter choice.  Power: with
     these counts a 3 % change of the spot light's intensity in whitted alone (an image-mean
-    shift of 1.3 %) was detected at t = 4.2 > 3.0 (measured once, 2026-11-22)."""
+    shift of 1.3 %) was detected at t = 4.2 > 3.0 (measured once, 2026-11-21)."""
     paired_t_test(sphere_scene("point+spot", RADIANCE), sphere_scene("point+spot", PATH2),
                   spp=16, passes=32, seed=5, what="whitted(radiance) vs path, two lights")
 
@@ -443,6 +443,7 @@ def test_radiance_units_equal_path_in_every_variant(any_variant):
     """The path equivalence (one point light, max_depth 2) in mono, spectral and scalar too,
     and the graphics formula by hand in scalar_rgb (Python BSDFs are slow there: few rays)."""
     scene = sphere_scene("point", RADIANCE)
+    assert scene.integrator().parameters()["attenuation_constant"] == 1.0
     path = mi.load_dict(PATH2)
     sensor = scene.sensors()[0]
     uv = [(0.5, 0.5), (0.2, 0.5), (0.8, 0.6), (0.5, 0.35), (0.7, 0.45)]
