@@ -192,8 +192,11 @@ def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> P
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
-                png: bool = True) -> RenderResult:
-    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it."""
+                png: bool = True, extra_metadata: dict[str, Any] | None = None) -> RenderResult:
+    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it.
+
+    ``extra_metadata`` is added to the EXR header (the planner records its plan there).
+    """
     import mitsuba as mi
 
     path = scene_path(scene)
@@ -218,6 +221,7 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
     }
+    result.metadata.update(extra_metadata or {})
     out = Path(out)
     exr.write(out, result.image, result.metadata)
     if result.stderr is not None:
