@@ -405,7 +405,7 @@ def quiet_mitsuba():
     """Silence Mitsuba's warnings (mono's "film set to luminance") inside the block."""
     import mitsuba as mi
 
-    logger = mi.Thread.thread().logger()
+    logger = mi.logger()
     old = logger.log_level()
     logger.set_log_level(mi.LogLevel.Error)
     try:
