@@ -114,6 +114,20 @@ class RenderResult:
     seconds: float                    #: wall time of the passes (the first includes JIT compile)
     pass_seconds: list[float] = field(default_factory=list)
     metadata: dict[str, Any] = field(default_factory=dict)
+    #: (passes, C) mean over all pixels of each pass: its spread gives the standard error of
+    #: the image mean without assuming independent pixels (reconstruction filters correlate them).
+    pass_means: np.ndarray | None = None
+    pass_spp: list[int] = field(default_factory=list)
+
+    def mean_and_stderr(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """Per-channel image mean and its standard error from the pass means."""
+        mean = self.image.reshape(-1, self.image.shape[-1]).mean(axis=0)
+        if self.pass_means is None or len(self.pass_means) < 2:
+            return mean, None
+        w = np.asarray(self.pass_spp, dtype=np.float64)[:, None]
+        spp = w.sum()
+        var = np.sum(w * (self.pass_means - mean) ** 2, axis=0) / (spp - spp / len(w))
+        return mean, np.sqrt(var / len(w))
 
 
 def _to_numpy(img) -> np.ndarray:
@@ -149,6 +163,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     total = None
     total_sq = None
     times = []
+    means = []
     t_start = time.perf_counter()
     for k in iterator:
         t0 = time.perf_counter()
@@ -157,6 +172,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
         dr.eval(img)
         arr = _to_numpy(img).astype(np.float64)
         times.append(time.perf_counter() - t0)
+        means.append(arr.reshape(-1, arr.shape[-1]).mean(axis=0))
         # Passes of unequal spp are weighted by their sample counts.
         w = per_pass[k]
         total = arr * w if total is None else total + arr * w
@@ -168,7 +184,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
         # Pass means are unbiased estimates with variance σ²/spp_k: weighted sample variance.
         var_pass = np.maximum(total_sq / spp - mean * mean, 0.0) * spp / (spp - spp / passes)
         stderr = np.sqrt(var_pass / passes).astype(np.float32)
-    return RenderResult(mean.astype(np.float32), stderr, seconds, times)
+    return RenderResult(mean.astype(np.float32), stderr, seconds, times,
+                        pass_means=np.array(means), pass_spp=per_pass)
 
 
 def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> Path:
