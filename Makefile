@@ -26,3 +26,7 @@ test-all: setup
 
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info
+
+# Planner: planned vs default configuration at equal error (docs/planner.md).
+bench-planner: setup
+	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7

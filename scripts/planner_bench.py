@@ -105,14 +105,18 @@ def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
                     "seconds_median": med_plan, "seconds": t_plan,
                     "pilot_seconds": plan.pilot_seconds, "reasons": plan.reasons},
         "speedup": med_def / med_plan,
+        # Monte Carlo efficiency 1/(time x error²) [Veach 1997, §2.4; PBRT 4th ed., §2.1.3]:
+        # the time ratio at exactly equal error when the error is noise-dominated.
+        "efficiency_ratio": (med_def * e_def ** 2) / (med_plan * float(np.mean(err_plan)) ** 2),
         "speedup_with_pilot": med_def / (med_plan + plan.pilot_seconds),
     }
 
 
 def table(rows: list[dict]) -> str:
     out = ["| scene | default (rgb, depth 8, scene spp): time, error | planned: variant, depth, "
-           "spp | planned: time (predicted), error (predicted) | speed-up | pilot |",
-           "|---|---|---|---|---|---|"]
+           "spp | planned: time (predicted), error (predicted) | speed-up | efficiency ratio "
+           "| pilot |",
+           "|---|---|---|---|---|---|---|"]
     for r in rows:
         d, p = r["default"], r["planned"]
         out.append(
@@ -121,6 +125,7 @@ def table(rows: list[dict]) -> str:
             f"{p['spp']} | {p['seconds_median'] * 1e3:.0f} ms "
             f"({p['predicted_seconds_one_pass'] * 1e3:.0f}), {p['error']:.4f} ± "
             f"{p['error_sd']:.4f} ({p['predicted_error']:.4f}) | {r['speedup']:.2f}x | "
+            f"{r['efficiency_ratio']:.2f}x | "
             f"{p['pilot_seconds']:.1f} s |")
     return "\n".join(out)
 
