@@ -583,8 +583,9 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
                 mean = diff.mean(axis=0)
                 se2 = diff.var(axis=0, ddof=1) / pilot_passes
                 bias2 = float(np.mean((mean * mean - se2) * weight))
+                energy = float(mean.sum()) / total_energy
                 samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
-                                         float(mean.sum()) / total_energy, noise_of(imgs))
+                                         energy if abs(energy) > 1e-9 else 0.0, noise_of(imgs))
                 timings[d] = times
         return samples[d]
 
