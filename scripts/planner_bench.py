@@ -105,7 +105,7 @@ def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
                     "seconds_median": med_plan, "seconds": t_plan,
                     "pilot_seconds": plan.pilot_seconds, "reasons": plan.reasons},
         "speedup": med_def / med_plan,
-        # Monte Carlo efficiency 1/(time x error²) [Veach 1997, §2.4; PBRT 4th ed., §2.1.3]:
+        # Monte Carlo efficiency 1/(time x error²) [Veach 1997, §2.4.3; PBRT 4th ed., §2.1.4]:
         # the time ratio at exactly equal error when the error is noise-dominated.
         "efficiency_ratio": (med_def * e_def ** 2) / (med_plan * float(np.mean(err_plan)) ** 2),
         "speedup_with_pilot": med_def / (med_plan + plan.pilot_seconds),

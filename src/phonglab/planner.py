@@ -22,7 +22,8 @@ RMSE of E, and at what cost?" in three steps, each with a reason the user can re
        b(d)² = mean_pixels[ (mean_k D_k)² − var_k(D_k)/P ] / (r + eps)²
 
    (the subtraction makes it an unbiased estimate of the squared mean, so pure noise does not
-   pass for bias; ``r`` is the full-depth pilot image).  The plan takes the smallest d with
+   pass for bias; the weights 1/(r + eps)² come from a second full-depth pilot with other seeds,
+   see :func:`_weights`).  The plan takes the smallest d with
    ``b(d) <= BIAS_FRACTION · E`` (candidates 1, 2, 3, 4, 6, 8, 12, ... then bisection, b being
    non-increasing in d).  Delta chains (glass, mirrors) need no special rule: the energy they
    carry shows in D_k, so the search follows them as deep as they carry energy; the scene's
@@ -37,9 +38,9 @@ The error is :func:`phonglab.render.relative_rmse` with ``eps = 0.01`` (:data:`E
 ``E = √mean(((x − r)/(|r| + eps))²)`` over every pixel and channel, ``r`` the converged
 full-depth image; the same definition is used when the achieved error is measured
 (:func:`achieved_error`).  Monte Carlo noise falls as ``1/√N``, so E² is the sum of the
-squared depth bias and the variance term (Pharr, Jakob & Humphreys, *Physically Based
-Rendering*, 4th ed., §2.1.3 and §13.1.1 on estimator variance and Russian roulette;
-Veach, PhD thesis, 1997, §2.4 on the bias/variance decomposition of mean squared error).
+squared depth bias and the variance term: MSE = bias² + variance (E. Veach, *Robust Monte Carlo
+Methods for Light Transport Simulation*, PhD thesis, Stanford 1997, §2.4.3; M. Pharr, W. Jakob,
+G. Humphreys, *Physically Based Rendering*, 4th ed., §2.1.4, and §2.2.4 on Russian roulette).
 
 The predicted time is steady state (JIT compile excluded): the pilot times renders of ``s`` and
 ``4s`` samples per pixel at the chosen depth, alternating, and fits ``T(spp) = a + b·spp``
