@@ -113,6 +113,28 @@ def test_non_path_integrator_is_refused(tmp_path):
         planner.plan(path, 0.05)
 
 
+def test_polarized_is_refused_for_phonglab_plugins():
+    with pytest.raises(PhonglabError, match="unpolarized"):
+        planner.plan("gray_direct", TARGET, polarized=True, params=RES)
+
+
+def test_spectral_data_is_planned_spectral(tmp_path):
+    path = _write(tmp_path, """
+        <integrator type="path"/>
+        <sensor type="perspective">
+            <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+        </sensor>
+        <shape type="sphere"><bsdf type="lambert">
+            <spectrum name="reflectance" value="400:0.2, 550:0.5, 700:0.8"/>
+        </bsdf></shape>
+        <emitter type="constant"><spectrum name="radiance" value="1"/></emitter>""")
+    p = planner.plan(path, 0.1)
+    assert p.color == "spectral" and p.variant.endswith("_spectral")
+    # Constant environment + convex sphere: everything arrives within 2 segments.
+    assert p.max_depth == 2
+
+
 # --- plans from small pilots -----------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
