@@ -276,3 +276,11 @@ def test_cli_render_explicit_settings_override_the_plan(tmp_path, capsys):
                  "--variant", "llvm_ad_rgb", "-o", str(out)]) == 0
     _, meta = exr.read(out)
     assert (meta["spp"], meta["variant"], meta["max_depth"]) == (8, "llvm_ad_rgb", 2)
+
+
+def test_pass_seeds_stay_32_bit():
+    """Regression (fix in render.py): seed·1_000_003 + k overflowed Mitsuba's 32-bit seed."""
+    assert render.pass_seed(5000, 3) == (5000 * 1_000_003 + 3) % 2**32 < 2**32
+    scene = render.load_scene("gray_direct", "llvm_ad_mono", res=8)
+    result = render.render_scene(scene, 2, seed=5000, passes=2)
+    assert np.isfinite(result.image).all()
