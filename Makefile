@@ -36,3 +36,7 @@ clean:
 .PHONY: notebook-figures
 notebook-figures: setup
 	$(BIN)/python -m phonglab.figures docs/img
+
+# Planner: planned vs default configuration at equal error (docs/planner.md).
+bench-planner: setup
+	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7

@@ -13,7 +13,7 @@ import importlib
 import sys
 
 #: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "compare", "doctor", "compare-models"]
+SUBCOMMANDS = ["render", "plan", "compare", "compare-models", "doctor"]
 
 DEBUG_HELP = "show the full traceback on errors"
 

@@ -181,11 +181,16 @@ def _to_numpy(img) -> np.ndarray:
     return a if a.ndim == 3 else a[..., None]
 
 
+def pass_seed(seed: int, k: int) -> int:
+    """Mitsuba seed of pass k: (seed·1_000_003 + k) mod 2³² (mi.render takes a 32-bit seed)."""
+    return (int(seed) * 1_000_003 + int(k)) % (1 << 32)
+
+
 def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 0,
                  progress: bool = False, integrator=None) -> RenderResult:
     """Render ``scene`` with ``spp`` samples per pixel split into ``passes`` equal passes.
 
-    Pass k uses seed ``seed * 1_000_003 + k``; the image is the mean of the passes
+    Pass k uses seed ``(seed * 1_000_003 + k) mod 2³²`` (Mitsuba's seeds are 32-bit); the image is the mean of the passes
     and, with two or more passes, ``stderr`` is the per-pixel standard error of
     that mean (sample standard deviation across passes / √passes).
     """
@@ -209,7 +214,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     t_start = time.perf_counter()
     for k in iterator:
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=per_pass[k], seed=seed * 1_000_003 + k, sensor=sensor,
+        img = mi.render(scene, spp=per_pass[k], seed=pass_seed(seed, k), sensor=sensor,
                         integrator=integrator)
         dr.eval(img)
         arr = _to_numpy(img).astype(np.float64)
@@ -251,8 +256,11 @@ def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> P
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
-                png: bool = True) -> RenderResult:
-    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it."""
+                png: bool = True, extra_metadata: dict[str, Any] | None = None) -> RenderResult:
+    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it.
+
+    ``extra_metadata`` is added to the EXR header (the planner records its plan there).
+    """
     import mitsuba as mi
 
     path = scene_path(scene)
@@ -277,6 +285,7 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
     }
+    result.metadata.update(extra_metadata or {})
     out = Path(out)
     exr.write(out, result.image, result.metadata)
     if result.stderr is not None:
