@@ -39,18 +39,20 @@ class Lambert(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        self.reflectance = props.get_texture("reflectance", 0.5)
+        (self.reflectance,), _ = _common.load_reflectances("lambert", props, [("reflectance", 0.5)])
         flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         self.m_components = [flags]
         self.m_flags = flags
-        self.parameters_changed([])
 
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
-        (values,) = _common.texture_values([self.reflectance])
-        _common.check_reflectance_range("lambert", "reflectance", values)
+        """Re-validate the reflectance after ``params.update()`` (not in spectral variants,
+        whose textures hold up-sampled spectra: see ``_common.declared_value``)."""
+        if keys and not mi.is_spectral:
+            (values,) = _common.texture_values([self.reflectance])
+            _common.check_reflectance_range("lambert", "reflectance", values)
 
     def _active(self, ctx, si, wo, active):
         enabled = ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, DIFFUSE)
