@@ -42,8 +42,16 @@ def _register_broken() -> None:
     class PhongP1(phong):
         """The specular lobe normalized with (p+1)/(2π): albedo k_d + k_s (p+1)/(p+2) at θ_i = 0."""
 
+        def __init__(self, props):
+            super().__init__(props)
+            self._break()
+
         def parameters_changed(self, keys=None):
             super().parameters_changed(keys)
+            self._break()
+
+        def _break(self):
+            # Overrides the factor however the parent derives it (at load and after updates).
             self.brdf_factor = (self.exponent + 1.0) * dr.inv_two_pi
 
     class PhongWarped(phong):
@@ -56,8 +64,15 @@ def _register_broken() -> None:
     class PhongBadPdf(phong):
         """pdf() of the specular lobe with (p+2)/(2π): no longer the density sample() draws."""
 
+        def __init__(self, props):
+            super().__init__(props)
+            self._break()
+
         def parameters_changed(self, keys=None):
             super().parameters_changed(keys)
+            self._break()
+
+        def _break(self):
             self.pdf_factor = (self.exponent + 2.0) * dr.inv_two_pi
 
     for name, cls in zip(BROKEN, (LambertNoPi, PhongP1, PhongWarped, PhongBadPdf)):
@@ -96,6 +111,9 @@ def test_broken_variants_are_really_broken(cfg):
     bad = mi.load_dict(checks.phong_dict("phong_p1", 0.0, 1.0, p))
     assert checks.bsdf_eval(bad, wi, wi)[0] == pytest.approx(
         checks.bsdf_eval(good, wi, wi)[0] * (p + 1) / (p + 2), rel=1e-6)
+    bad = mi.load_dict(checks.phong_dict("phong_badpdf", 0.0, 1.0, p))
+    assert checks.bsdf_pdf(bad, wi, wi)[0] == pytest.approx(
+        checks.bsdf_pdf(good, wi, wi)[0] * (p + 2) / (p + 1), rel=1e-6)
 
 
 def test_dropping_inv_pi_fails_energy_rows(cfg):
