@@ -150,7 +150,7 @@ class Phong(mi.BSDF):
         cos_theta_i = mi.Frame3f.cos_theta(si.wi)
         cos_theta_o = mi.Frame3f.cos_theta(wo)
         active &= (cos_theta_i > 0) & (cos_theta_o > 0) & (has_diffuse or has_glossy)
-        value = dr.zeros(mi.Spectrum)
+        value = dr.zeros(mi.UnpolarizedSpectrum)
         pdf = mi.Float(0.0)
         if has_diffuse:
             value += kd * dr.inv_pi
@@ -159,7 +159,9 @@ class Phong(mi.BSDF):
             lobe = phong_lobe(dr.dot(wo, mi.reflect(si.wi)), self.exponent)
             value += ks * (self.brdf_factor * lobe)
             pdf += w_s * self.pdf_factor * lobe
-        return dr.select(active, value * cos_theta_o, 0.0), dr.select(active, pdf, 0.0)
+        # Polarized variants: a diffuse/glossy scatterer is an ideal depolarizer (as in diffuse.cpp).
+        value = mi.depolarizer(value * cos_theta_o) if mi.is_polarized else value * cos_theta_o
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         has_diffuse, has_glossy, _, _, w_s = self._lobes(ctx, si, active)

@@ -113,9 +113,10 @@ def test_non_path_integrator_is_refused(tmp_path):
         planner.plan(path, 0.05)
 
 
-def test_polarized_is_refused_for_phonglab_plugins():
-    with pytest.raises(PhonglabError, match="unpolarized"):
-        planner.plan("gray_direct", TARGET, polarized=True, params=RES)
+def test_polarized_only_when_asked_and_then_it_plans():
+    """phonglab's plugins are ideal depolarizers (like diffuse), so a polarized plan works."""
+    plan = planner.plan("gray_direct", TARGET, polarized=True, params=RES)
+    assert plan.variant.endswith("_polarized")
 
 
 def test_spectral_data_is_planned_spectral(tmp_path):

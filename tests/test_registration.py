@@ -127,3 +127,17 @@ def test_scene_renders_in_every_variant(any_variant, scenes_dir):
                        spp=spp)
     result = render_scene(scene, spp=spp)
     assert np.all(np.isfinite(result.image)) and result.image.mean() > 0.01
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_mono_polarized", "llvm_ad_spectral_polarized"])
+def test_polarized_variants_render_like_unpolarized(variant, scenes_dir):
+    """The plugins return an ideal depolarizer (as diffuse.cpp does), so a polarized variant
+    renders the scene (no polarizing element in it) exactly as the unpolarized one, seed for seed."""
+    from phonglab.render import load_scene, render_scene
+
+    images = []
+    for v in (variant, variant.replace("_polarized", "")):
+        scene = load_scene(scenes_dir / "cornell_phong.xml", v, res=16, spp=16)
+        images.append(render_scene(scene, spp=16, seed=3).image)
+    assert images[0].mean() > 0.05
+    np.testing.assert_allclose(images[0], images[1], rtol=1e-5, atol=1e-6)

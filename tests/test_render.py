@@ -42,7 +42,7 @@ def test_render_passes_give_an_honest_standard_error(variant_llvm_rgb, scenes_di
     assert 0.8 < z.var() < 1.5, z.var()
     (ma, sa), (mb, sb) = a.mean_and_stderr(), b.mean_and_stderr()
     zmean = (ma - mb) / np.sqrt(sa ** 2 + sb ** 2)
-    assert np.all(np.abs(zmean) < stats.norm.ppf(1 - sidak(ALPHA, 3) / 2)), zmean
+    assert np.all(np.abs(zmean) < stats.t.ppf(1 - sidak(ALPHA, 3) / 2, df=2 * (16 - 1))), zmean
 
 
 def test_lambert_and_diffuse_render_statistically_equal(variant_llvm_rgb, scenes_dir):
@@ -63,7 +63,7 @@ def test_lambert_and_diffuse_render_statistically_equal(variant_llvm_rgb, scenes
     assert p.min() > sidak(ALPHA, t.size), f"min p {p.min():.3g}"
     (ma, sa), (mb, sb) = a.mean_and_stderr(), b.mean_and_stderr()
     zmean = (ma - mb) / np.sqrt(sa ** 2 + sb ** 2)
-    assert np.all(np.abs(zmean) < stats.norm.ppf(1 - sidak(ALPHA, 3) / 2)), zmean
+    assert np.all(np.abs(zmean) < stats.t.ppf(1 - sidak(ALPHA, 3) / 2, df=2 * (16 - 1))), zmean
 
 
 def test_the_same_test_detects_a_10_percent_darker_lambert(variant_llvm_rgb, scenes_dir, tmp_path):
@@ -82,4 +82,4 @@ def test_the_same_test_detects_a_10_percent_darker_lambert(variant_llvm_rgb, sce
     b = render_scene(scene_b, spp=spp, seed=21, passes=passes)
     (ma, sa), (mb, sb) = a.mean_and_stderr(), b.mean_and_stderr()
     zmean = (ma - mb) / np.sqrt(sa ** 2 + sb ** 2)
-    assert np.any(np.abs(zmean) > stats.norm.ppf(1 - sidak(ALPHA, 3) / 2)), zmean
+    assert np.any(np.abs(zmean) > stats.t.ppf(1 - sidak(ALPHA, 3) / 2, df=2 * (passes - 1))), zmean

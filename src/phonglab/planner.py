@@ -520,12 +520,6 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
         raise PhonglabError(f"{info.path}: the planner plans path-traced scenes, but this one "
                             f"uses the '{info.integrator}' integrator; use <integrator "
                             f"type=\"path\"> or render it with 'phonglab render' directly.")
-    ours = sorted(info.bsdf_types & {"lambert", "phong"})
-    if ours and (polarized or (variant is not None and "polarized" in variant)):
-        raise PhonglabError(f"{info.path}: phonglab's {' and '.join(ours)} BSDF"
-                            f"{'s are' if len(ours) > 1 else ' is'} unpolarized (its value is "
-                            f"a spectrum, not a Mueller matrix), so the scene cannot render in a "
-                            f"polarized variant; plan without polarization.")
     reasons: list[str] = []
     overrides = {k: v for k, v in (("variant", variant), ("max_depth", max_depth), ("spp", spp))
                  if v is not None}
