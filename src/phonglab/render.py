@@ -125,7 +125,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
                  progress: bool = False, integrator=None) -> RenderResult:
     """Render ``scene`` with ``spp`` samples per pixel split into ``passes`` equal passes.
 
-    Pass k uses seed ``seed * 1_000_003 + k``; the image is the mean of the passes
+    Pass k uses seed ``(seed * 1_000_003 + k) mod 2³²`` (Mitsuba seeds are 32-bit); the
+    image is the mean of the passes
     and, with two or more passes, ``stderr`` is the per-pixel standard error of
     that mean (sample standard deviation across passes / √passes).
     """
@@ -147,7 +148,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     t_start = time.perf_counter()
     for k in iterator:
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=per_pass[k], seed=seed * 1_000_003 + k, sensor=sensor,
+        img = mi.render(scene, spp=per_pass[k], seed=(seed * 1_000_003 + k) & 0xFFFFFFFF,
+                        sensor=sensor,
                         integrator=integrator)
         dr.eval(img)
         arr = _to_numpy(img).astype(np.float64)
