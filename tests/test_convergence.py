@@ -142,3 +142,64 @@ def test_zero_variance_cases_are_exact(estimators, case_id, problem, method, the
 def test_finite_variance_case_is_not_flagged_zero_variance(estimators):
     est = estimators.set(Problem(bsdf="lambert", diffuse_reflectance=0.7, light="constant"))
     assert not est.run("uniform", 1 << 12, seed=3).is_zero_variance
+
+
+# ---------------------------------------------------------------------------------------------
+# Full renders: the Cornell box against a cached high-sample reference
+# ---------------------------------------------------------------------------------------------
+
+RENDER_SPPS = [2, 4, 8, 16, 32, 64, 128]
+RENDER_SEEDS = 4
+RENDER_REF_SPP = 4096
+
+
+def _render_slope(spec, spps, seeds, ref_spp):
+    """OLS slope of log RMSE on log spp, the RMSE table, and the reference noise level."""
+    from phonglab.bench import DEFAULT_CACHE, image_errors, reference, render_image
+
+    ref, ref_err = reference(spec, ref_spp, "llvm_ad_rgb", DEFAULT_CACHE)
+    scene = spec.load("llvm_ad_rgb")
+    rmse = []
+    for spp in spps:
+        mse = [image_errors(render_image(scene, spp, seed=7919 * spp + s)[0], ref, ref_err)["mse"]
+               for s in range(seeds)]
+        rmse.append(math.sqrt(max(float(np.mean(mse)), 1e-30)))
+    slope = np.polyfit(np.log(spps), np.log(rmse), 1)[0]
+    return slope, rmse, float(np.sqrt(np.mean(ref_err ** 2)))
+
+
+RENDER_CASES = [("lambert+phong", "lambert", "phong"), ("diffuse+roughplastic", "diffuse", "roughplastic")]
+
+
+@pytest.mark.parametrize("case_id,walls,boxes", RENDER_CASES, ids=[c[0] for c in RENDER_CASES])
+def test_render_rmse_falls_as_inverse_sqrt_spp(variant_llvm_rgb, case_id, walls, boxes):
+    """Cornell box, 24 px, box filter: RMSE(spp) against a 4096-spp reference ∝ spp^−½.
+
+    The reference's own variance (per-pixel stderr² from its 16 passes) is subtracted from
+    each MSE, so only σ²/spp remains; the box filter makes every pixel a plain mean (see
+    :func:`phonglab.bench.cornell_xml`).  Each RMSE averages 24·24·3 pixel values and
+    4 seeds, so the slope's scatter is a few 10⁻³, far inside [−0.55, −0.45].
+    """
+    from phonglab.bench import CornellSpec
+
+    spec = CornellSpec(walls=walls, boxes=boxes, res=24)
+    slope, rmse, ref_noise = _render_slope(spec, RENDER_SPPS, RENDER_SEEDS, RENDER_REF_SPP)
+    table = ", ".join(f"{s}:{r:.4g}" for s, r in zip(RENDER_SPPS, rmse))
+    assert SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1], \
+        f"{case_id}: slope {slope:.4f}; RMSE by spp {table}; reference noise {ref_noise:.3g}"
+    assert rmse[-1] > 3 * ref_noise, "the reference is too noisy to measure the largest spp"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("walls,boxes", [("lambert", "lambert"), ("diffuse", "diffuse"),
+                                         ("diffuse", "phong"), ("diffuse", "plastic"),
+                                         ("diffuse", "roughplastic")])
+def test_render_rmse_slope_every_bsdf_64px(variant_llvm_rgb, walls, boxes):
+    """The same at 64 px, spp 4–512 against a 16384-spp reference, for every compared BSDF."""
+    from phonglab.bench import CornellSpec
+
+    spec = CornellSpec(walls=walls, boxes=boxes, res=64)
+    spps = [4, 8, 16, 32, 64, 128, 256, 512]
+    slope, rmse, ref_noise = _render_slope(spec, spps, 2, 16384)
+    table = ", ".join(f"{s}:{r:.4g}" for s, r in zip(spps, rmse))
+    assert SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1], f"{walls}/{boxes}: slope {slope:.4f}; {table}"

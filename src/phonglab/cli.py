@@ -13,7 +13,7 @@ import importlib
 import sys
 
 #: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "doctor"]
+SUBCOMMANDS = ["render", "doctor", "bench"]
 
 EPILOG = """examples:
   phonglab render cornell_phong --spp 64 -o out/cornell.exr
