@@ -24,5 +24,11 @@ test-slow: setup
 test-all: setup
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
+# Regenerates BENCHMARKS.md and docs/bench/ (CSV + PNG) from a fresh full run, after a timed
+# --quick run whose wall time the report quotes. About 3 minutes on 2 quiet cores.
+bench: setup
+	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
+	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
+
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info
