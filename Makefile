@@ -4,7 +4,7 @@ BIN   := $(VENV)/bin
 STAMP := $(VENV)/.phonglab-installed
 PYTEST_ARGS ?=
 
-.PHONY: setup demo test test-slow test-all bench check clean
+.PHONY: setup demo test test-slow test-all bench check clean classic-figure
 
 $(STAMP): pyproject.toml constraints.txt scripts/setup.sh
 	bash scripts/setup.sh
@@ -30,5 +30,19 @@ bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
+# docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
+classic-figure: setup
+	$(BIN)/phonglab compare-models exponent_series --spp 32 --path-spp 512 -o out/compare_exponent_series
+	cp out/compare_exponent_series/figure.png docs/img/exponent_series_compare.png
+
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info
+
+# The figures docs/notebooks.md shows (one per notebook), from phonglab.figures.
+.PHONY: notebook-figures
+notebook-figures: setup
+	$(BIN)/python -m phonglab.figures docs/img
+
+# Planner: planned vs default configuration at equal error (docs/planner.md).
+bench-planner: setup
+	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7

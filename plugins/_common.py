@@ -61,21 +61,63 @@ def texture_values(textures) -> list[np.ndarray]:
         si = dr.zeros(mi.SurfaceInteraction3f, n)
         si.uv = mi.Point2f(mi.Float(uu.astype(np.float32)), mi.Float(vv.astype(np.float32)))
         if mi.is_spectral:
-            si.wavelengths = mi.Color4f(*(mi.Float(lam[:, k].astype(np.float32)) for k in range(4)))
+            si.wavelengths = mi.Spectrum(*(mi.Float(lam[:, k].astype(np.float32)) for k in range(4)))
         out = []
         for tex in textures:
-            value = tex.eval(si)
-            out.append(np.atleast_2d(np.array(value, dtype=np.float64)))
+            value = np.atleast_2d(np.array(tex.eval(si), dtype=np.float64))
+            # A constant texture may return a width-1 (literal) array: broadcast it.
+            out.append(np.broadcast_to(value, (value.shape[0], n)))
         return out
     out = [[] for _ in textures]
     for i in range(n):
         si = dr.zeros(mi.SurfaceInteraction3f)
         si.uv = mi.Point2f(float(uu[i]), float(vv[i]))
         if mi.is_spectral:
-            si.wavelengths = mi.Color4f(*(float(x) for x in lam[i]))
+            si.wavelengths = mi.Spectrum(*(float(x) for x in lam[i]))
         for k, tex in enumerate(textures):
             out[k].append(np.array(tex.eval(si), dtype=np.float64).ravel())
     return [np.array(o).T for o in out]
+
+
+def declared_value(props, name: str, default: float) -> np.ndarray | None:
+    """The value a scene wrote for ``name`` when it is a plain number or colour, as (channels, 1).
+
+    None for textures and spectra (their values are known only by evaluation).  Checking
+    the declared colour matters in spectral variants: the smooth spectrum Mitsuba
+    up-samples from an RGB colour can exceed its RGB components at some wavelengths
+    (RGB 0.6, 0.3, 0.2 reaches 0.97 near 830 nm), which is a property of the
+    up-sampling, not of the material the user described.
+    """
+    if name not in props:
+        return np.array([[default]])
+    kind = props.type(name)
+    if kind == mi.Properties.Type.Float:
+        return np.array([[float(props.get(name))]])
+    if kind == mi.Properties.Type.Color:
+        return np.array(props.get(name), dtype=np.float64).reshape(-1, 1)
+    return None
+
+
+def load_reflectances(plugin: str, props, names_defaults) -> tuple[list, list[np.ndarray]]:
+    """Read and range-check reflectance parameters: (textures, values on common points).
+
+    Plain numbers and colours are checked as the scene declared them, before Mitsuba
+    turns them into textures (so the error names the parameter); textures are
+    evaluated by :func:`texture_values` and checked the same way.
+    """
+    declared = [declared_value(props, n, d) for n, d in names_defaults]
+    plain = all(d is not None for d in declared)
+    if plain:
+        for (name, _), values in zip(names_defaults, declared):
+            check_reflectance_range(plugin, name, values)
+    textures = [props.get_texture(name, default) for name, default in names_defaults]
+    if plain:
+        channels = max(d.shape[0] for d in declared)
+        return textures, [np.broadcast_to(d, (channels, 1)) for d in declared]
+    values = texture_values(textures)
+    for (name, _), v in zip(names_defaults, values):
+        check_reflectance_range(plugin, name, v)
+    return textures, values
 
 
 def _fmt(x: np.ndarray) -> str:

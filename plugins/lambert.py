@@ -39,18 +39,20 @@ class Lambert(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        self.reflectance = props.get_texture("reflectance", 0.5)
+        (self.reflectance,), _ = _common.load_reflectances("lambert", props, [("reflectance", 0.5)])
         flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         self.m_components = [flags]
         self.m_flags = flags
-        self.parameters_changed([])
 
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
-        (values,) = _common.texture_values([self.reflectance])
-        _common.check_reflectance_range("lambert", "reflectance", values)
+        """Re-validate the reflectance after ``params.update()`` (not in spectral variants,
+        whose textures hold up-sampled spectra: see ``_common.declared_value``)."""
+        if keys and not mi.is_spectral:
+            (values,) = _common.texture_values([self.reflectance])
+            _common.check_reflectance_range("lambert", "reflectance", values)
 
     def _active(self, ctx, si, wo, active):
         enabled = ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, DIFFUSE)
@@ -58,10 +60,14 @@ class Lambert(mi.BSDF):
         cos_theta_o = mi.Frame3f.cos_theta(wo)
         return active & enabled & (cos_theta_i > 0) & (cos_theta_o > 0), cos_theta_o
 
+    def _value(self, si, scale, active):
+        value = self.reflectance.eval(si, active) * scale
+        # Polarized variants: a diffuse scatterer is an ideal depolarizer (as in diffuse.cpp).
+        return mi.depolarizer(value) if mi.is_polarized else value
+
     def eval(self, ctx, si, wo, active=True):
         active, cos_theta_o = self._active(ctx, si, wo, active)
-        value = self.reflectance.eval(si, active) * dr.inv_pi * cos_theta_o
-        return dr.select(active, value, 0.0)
+        return dr.select(active, self._value(si, dr.inv_pi * cos_theta_o, active), 0.0)
 
     def pdf(self, ctx, si, wo, active=True):
         active, cos_theta_o = self._active(ctx, si, wo, active)
@@ -69,7 +75,7 @@ class Lambert(mi.BSDF):
 
     def eval_pdf(self, ctx, si, wo, active=True):
         active, cos_theta_o = self._active(ctx, si, wo, active)
-        value = self.reflectance.eval(si, active) * dr.inv_pi * cos_theta_o
+        value = self._value(si, dr.inv_pi * cos_theta_o, active)
         return dr.select(active, value, 0.0), dr.select(active, cos_theta_o * dr.inv_pi, 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
@@ -84,8 +90,7 @@ class Lambert(mi.BSDF):
         bs.sampled_component = mi.UInt32(DIFFUSE)
         active &= bs.pdf > 0
         # eval / pdf = (ρ/π cos θ_o) / (cos θ_o/π) = ρ: the cosines cancel exactly.
-        value = self.reflectance.eval(si, active)
-        return bs, dr.select(active, value, 0.0)
+        return bs, dr.select(active, self._value(si, 1.0, active), 0.0)
 
     def eval_diffuse_reflectance(self, si, active=True):
         return self.reflectance.eval(si, active)

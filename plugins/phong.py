@@ -87,15 +87,16 @@ class Phong(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        self.diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5)
-        self.specular_reflectance = props.get_texture("specular_reflectance", 0.2)
+        (self.diffuse_reflectance, self.specular_reflectance), (kd, ks) = _common.load_reflectances(
+            "phong", props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)])
         exponent = _common.check_exponent("phong", props.get("exponent", 30.0))
         self.exponent = mi.Float(exponent)
         diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
         self.m_components = [diffuse, glossy]   # indices DIFFUSE, GLOSSY
         self.m_flags = diffuse | glossy
-        self.parameters_changed([])
+        self._validate(kd, ks)
+        self._update_factors()
 
     def traverse(self, callback):
         callback.put("diffuse_reflectance", self.diffuse_reflectance, mi.ParamFlags.Differentiable)
@@ -103,11 +104,22 @@ class Phong(mi.BSDF):
         callback.put("exponent", self.exponent, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
-        _common.check_exponent("phong", _common.scalar_of(self.exponent))
-        kd, ks = _common.texture_values([self.diffuse_reflectance, self.specular_reflectance])
+        """Re-validate after ``params.update()`` (an optimizer step, a sweep), then re-derive."""
+        keys = keys or []
+        if any("reflectance" in k for k in keys) and not mi.is_spectral:
+            # In spectral variants textures hold up-sampled spectra: see _common.declared_value.
+            self._validate(*_common.texture_values(
+                [self.diffuse_reflectance, self.specular_reflectance]))
+        self._update_factors()
+
+    @staticmethod
+    def _validate(kd, ks):
         _common.check_reflectance_range("phong", "diffuse_reflectance", kd)
         _common.check_reflectance_range("phong", "specular_reflectance", ks)
         _common.check_energy("phong", ("diffuse_reflectance", "specular_reflectance"), [kd, ks])
+
+    def _update_factors(self):
+        _common.check_exponent("phong", _common.scalar_of(self.exponent))
         # An opaque exponent is a kernel input, not a baked literal: sweeps never recompile.
         dr.make_opaque(self.exponent)
         self.brdf_factor = (self.exponent + 2.0) * dr.inv_two_pi   # normalizes f_r's lobe
@@ -127,12 +139,18 @@ class Phong(mi.BSDF):
             w_s = mi.Float(1.0 if has_glossy else 0.0)
         return has_diffuse, has_glossy, kd, ks, w_s
 
+    def eval(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[0]
+
+    def pdf(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[1]
+
     def eval_pdf(self, ctx, si, wo, active=True):
         has_diffuse, has_glossy, kd, ks, w_s = self._lobes(ctx, si, active)
         cos_theta_i = mi.Frame3f.cos_theta(si.wi)
         cos_theta_o = mi.Frame3f.cos_theta(wo)
         active &= (cos_theta_i > 0) & (cos_theta_o > 0) & (has_diffuse or has_glossy)
-        value = dr.zeros(mi.Spectrum)
+        value = dr.zeros(mi.UnpolarizedSpectrum)
         pdf = mi.Float(0.0)
         if has_diffuse:
             value += kd * dr.inv_pi
@@ -141,13 +159,9 @@ class Phong(mi.BSDF):
             lobe = phong_lobe(dr.dot(wo, mi.reflect(si.wi)), self.exponent)
             value += ks * (self.brdf_factor * lobe)
             pdf += w_s * self.pdf_factor * lobe
-        return dr.select(active, value * cos_theta_o, 0.0), dr.select(active, pdf, 0.0)
-
-    def eval(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[1]
+        # Polarized variants: a diffuse/glossy scatterer is an ideal depolarizer (as in diffuse.cpp).
+        value = mi.depolarizer(value * cos_theta_o) if mi.is_polarized else value * cos_theta_o
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         has_diffuse, has_glossy, _, _, w_s = self._lobes(ctx, si, active)

@@ -13,12 +13,20 @@ import importlib
 import sys
 
 #: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "doctor", "bench"]
+SUBCOMMANDS = ["render", "plan", "compare", "compare-models", "doctor", "bench"]
 
-EPILOG = """examples:
-  phonglab render cornell_phong --spp 64 -o out/cornell.exr
-  phonglab doctor
-"""
+DEBUG_HELP = "show the full traceback on errors"
+
+
+def _examples(parsers) -> str:
+    """The ``phonglab ...`` example lines of every subcommand's epilog, for the top-level help."""
+    lines = []
+    for p in parsers:
+        for line in (p.epilog or "").splitlines():
+            if line.strip().startswith("phonglab "):
+                lines.append("  " + line.strip())
+    return "examples:\n" + "\n".join(lines) + \
+        "\n\nRun `phonglab COMMAND --help` for a command's options and examples.\n"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,15 +34,20 @@ def build_parser() -> argparse.ArgumentParser:
         prog="phonglab",
         description="Lambert and modified-Phong BSDFs for Mitsuba 3, and the checks that "
                     "ground them in physics.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--debug", action="store_true",
-                        help="show the full traceback on errors")
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     from . import __version__
 
     parser.add_argument("--version", action="version", version=f"phonglab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
         importlib.import_module(f"phonglab.cmd_{name.replace('-', '_')}").add_parser(sub)
+    for p in sub.choices.values():
+        # `phonglab render x --debug` works too; SUPPRESS keeps a top-level --debug when absent.
+        if "--debug" not in p._option_string_actions:
+            p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                           help=DEBUG_HELP)
+    parser.epilog = _examples(sub.choices.values())
     return parser
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser("doctor", help="show the libLLVM, variant and plugins phonglab uses",
                        description="Report the libLLVM phonglab pinned, the variants Mitsuba "
                                    "offers, and whether the plugins register.",
-                       epilog="example:\n  phonglab doctor")
+                       epilog="example:\n  phonglab doctor",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.set_defaults(func=run)
 
 

@@ -11,7 +11,8 @@ def add_parser(sub) -> None:
         "render", help="render a scene to EXR + PNG",
         description="Render a Mitsuba XML scene (phonglab's plugins registered) to a float "
                     "OpenEXR file with its provenance in the header, and a PNG preview.",
-        epilog="example:\n  phonglab render scenes_xml/cornell_phong.xml --spp 128 -o out/cornell.exr",
+        epilog="examples:\n  phonglab render scenes_xml/cornell_phong.xml --spp 128 -o out/cornell.exr\n"
+               "  phonglab render cornell_phong --target-error 0.02   (planned: see 'phonglab plan')",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
     p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
@@ -19,6 +20,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--max-depth", type=int, default=None, help="path length limit (default: the scene's)")
     p.add_argument("-o", "--output", default=None, help="output EXR (default: out/<scene>.exr)")
+    p.add_argument("--target-error", type=float, default=None, metavar="E",
+                   help="plan variant, max_depth and spp for this relative RMSE (see 'phonglab "
+                        "plan'); --spp/--variant/--max-depth given explicitly override the plan")
     p.set_defaults(func=run)
 
 
@@ -27,11 +31,60 @@ def run(args) -> int:
 
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
+    if out.is_dir() or out.suffix.lower() != ".exr":
+        from .render import PhonglabError
+
+        raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
+                            f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
+    if args.target_error is not None:
+        return run_planned(args, path, out)
     result = render_file(path, out, spp=args.spp, variant=args.variant, seed=args.seed,
                          max_depth=args.max_depth)
     meta = result.metadata
     print(f"rendered {path} with {meta['spp']} spp in {meta['variant']} "
           f"({result.seconds:.2f} s, first pass {result.pass_seconds[0]:.2f} s incl. JIT)")
+    print(f"  EXR: {out}")
+    print(f"  PNG: {out.with_suffix('.png')}")
+    return 0
+
+
+def run_planned(args, path: Path, out: Path) -> int:
+    """Plan for --target-error, render the plan, report predicted and achieved error and time."""
+    import numpy as np
+
+    from . import planner
+    from .render import render_file
+
+    plan = planner.plan(path, args.target_error, variant=args.variant,
+                        max_depth=args.max_depth, spp=args.spp)
+    print(plan.summary())
+    meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
+            "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}
+    with planner.quiet_mitsuba():
+        result = render_file(path, out, seed=args.seed, extra_metadata=meta,
+                             **plan.render_kwargs())
+    times = result.pass_seconds
+    # Steady state: the first pass may include JIT compilation; count it as a median pass.
+    steady = (float(np.median(times[1:])) * len(times)) if len(times) > 1 else result.seconds
+    print(f"rendered {path} with {plan.spp} spp, max_depth {plan.max_depth} in {plan.variant}: "
+          f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
+          f"{plan.predicted_seconds:.3g} s)")
+    ref = planner.cached_reference(path, {})
+    if ref is not None:
+        err = planner.achieved_error(result.image, ref[0], ref[1])
+        print(f"  error: achieved {err:.4g} against the cached reference ({ref[2].get('spp')} "
+              f"spp, max_depth -1); predicted {plan.predicted_error:.4g}, target "
+              f"{plan.target_error:g}")
+    elif result.stderr is not None:
+        noise = planner.noise_error(result.image, result.stderr)
+        err = float(np.hypot(noise, plan.predicted_bias))
+        print(f"  error: about {err:.4g} (noise {noise:.4g} estimated from {len(times)} passes, "
+              f"depth bias {plan.predicted_bias:.3g} from the pilot; no cached reference: make "
+              f"one with 'phonglab plan {path} --make-reference 4096'); predicted "
+              f"{plan.predicted_error:.4g}, target {plan.target_error:g}")
+    else:
+        print(f"  error: not measurable from one pass; predicted {plan.predicted_error:.4g}, "
+              f"target {plan.target_error:g}")
     print(f"  EXR: {out}")
     print(f"  PNG: {out.with_suffix('.png')}")
     return 0

@@ -35,9 +35,9 @@ def reflect(v, n):
         R, of the same kind as v.
     """
     if _is_drjit(v) or _is_drjit(n):
-        import drjit as dr
+        from phonglab.plugins import _optics
 
-        return 2.0 * dr.dot(n, v) * n - v
+        return _optics.reflect(v, n)
     v, n = np.asarray(v, dtype=np.float64), np.asarray(n, dtype=np.float64)
     return 2.0 * np.sum(n * v, axis=-1, keepdims=True) * n - v
 
@@ -57,13 +57,10 @@ def refract(v, n, eta):
         internal reflection).
     """
     if _is_drjit(v) or _is_drjit(n):
-        import drjit as dr
+        # One Dr.Jit implementation, shared with the plugins (which cannot import phonglab).
+        from phonglab.plugins import _optics
 
-        cos_v = dr.dot(v, n)
-        k = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
-        valid = k >= 0.0
-        t = -eta * v + (eta * cos_v - dr.safe_sqrt(k)) * n
-        return dr.select(valid, t, 0.0), valid
+        return _optics.refract(v, n, eta)
     v, n = np.asarray(v, dtype=np.float64), np.asarray(n, dtype=np.float64)
     eta = np.asarray(eta, dtype=np.float64)
     cos_v = np.sum(v * n, axis=-1, keepdims=True)

@@ -18,6 +18,7 @@ from . import llvm
 PLUGINS: list[tuple[str, str, str]] = [
     ("lambert", "lambert", "bsdf"),
     ("phong", "phong", "bsdf"),
+    ("whitted", "whitted", "integrator"),
 ]
 
 _lock = threading.Lock()

@@ -47,8 +47,9 @@ def scene_defaults(path: str | Path) -> dict[str, str]:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
         line = exc.position[0] if exc.position else "?"
-        raise PhonglabError(f"{path}: malformed XML at line {line}: {exc}; "
-                            f"fix the markup there (unclosed tag or stray character).") from None
+        why = re.sub(r":\s*line \d+, column \d+$", "", str(exc))
+        raise PhonglabError(f"{path}, line {line}: malformed XML ({why}); fix the markup there "
+                            f"(an unclosed or mismatched tag, or a stray character).") from None
     return {d.get("name"): d.get("value") for d in root.iter("default") if d.get("name")}
 
 
@@ -56,32 +57,77 @@ def file_hash(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-_MI_LINE = re.compile(r"line (\d+)")
+_MI_LINE = re.compile(r"\(line (\d+)")
+_UNREFERENCED = re.compile(r'unreferenced propert(?:y|ies) in (\w+) plugin of type "([^"]+)"')
+_UNREFERENCED_NAME = re.compile(r'^\s*-\s*\w+\s+"([^"]+)"', re.MULTILINE)
+_NOT_FOUND = re.compile(r'instantiate (\w+) plugin of type "([^"]+)".*Plugin "[^"]+" not found')
+#: Scene-file names of phonglab's own plugins (whose parameters are all listed by traverse).
+_OWN_PLUGINS = ("lambert", "phong")
+
+
+def _plugin_parameters(plugin_type: str) -> list[str]:
+    """XML parameter names of one of phonglab's plugins (its ``traverse`` keys), else []."""
+    if plugin_type not in _OWN_PLUGINS:
+        return []
+    try:
+        import mitsuba as mi
+
+        return sorted({k.split(".")[0] for k in mi.traverse(mi.load_dict({"type": plugin_type})).keys()})
+    except Exception:  # the listing is a courtesy; the error message stands without it
+        return []
 
 
 def _explain_load_error(path: Path, exc: Exception) -> PhonglabError:
+    """Turn Mitsuba's loader error into one sentence naming the problem and the fix.
+
+    Mitsuba words the cases as (3.9.1, the same for Python and built-in plugins):
+    ``While loading F (line L, col C): Found 1 unreferenced property in bsdf plugin of
+    type "phong":\n  - float "exponant": 3``; ``Parsing of XML file "F" failed: <why>
+    (line L, col C)``; ``failed to instantiate bsdf plugin of type "x": [PluginManager]
+    Plugin "x" not found!``; and a Python plugin's own exception with its traceback.
+    """
+    import difflib
+
     text = str(exc).strip()
-    # Mitsuba prefixes its messages with "[xml.cpp] ..." and may nest the Python plugin's error.
-    core = text.splitlines()[-1] if text else type(exc).__name__
+    line_m = _MI_LINE.search(text)
+    where = f"{path}, line {line_m.group(1)}" if line_m else str(path)
+    # Mitsuba prefixes its messages with "[parser.cpp:444] ..." and may nest a Python traceback.
+    core = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text.splitlines()[-1] if text else type(exc).__name__)
     if "MaterialError" in text or "violates energy" in text or "must lie in" in text \
             or "'exponent'" in text:
         m = re.search(r"((?:phong|lambert): .*)", text)
         msg = m.group(1) if m else core
-        return PhonglabError(f"{path}: {msg}")
-    if "unreferenced property" in text or "Unreferenced property" in text:
-        m = re.search(r'[Uu]nreferenced property "?([\w.]+)"?', text)
-        name = m.group(1) if m else "?"
-        return PhonglabError(f"{path}: unknown parameter {name!r} in the scene "
-                             f"({core}); check its spelling against the plugin's documented "
-                             f"parameters.")
-    if "Plugin" in text and ("not found" in text or "unknown" in text.lower()):
-        return PhonglabError(f"{path}: {core}; phonglab registers 'lambert' and 'phong' "
-                             f"(call phonglab.register() before loading from Python).")
-    if "parse" in text.lower() or "XML" in text or "Error while loading" in text:
-        line = _MI_LINE.search(text)
-        where = f" at line {line.group(1)}" if line else ""
-        return PhonglabError(f"{path}: malformed scene{where}: {core}")
-    return PhonglabError(f"{path}: could not load the scene: {core}")
+        return PhonglabError(f"{where}: {msg}")
+    m = _UNREFERENCED.search(text)
+    if m:
+        kind, plugin_type = m.group(1), m.group(2)
+        names = _UNREFERENCED_NAME.findall(text) or ["?"]
+        known = _plugin_parameters(plugin_type)
+        hints = [difflib.get_close_matches(n, known, n=1) for n in names]
+        guess = "".join(f" (did you mean {h[0]!r}?)" for h in hints if h) if len(names) == 1 else ""
+        listed = (f"its parameters are {', '.join(repr(k) for k in known)}" if known else
+                  "see the Mitsuba plugin reference for its parameters")
+        kind = "" if kind == "unknown" else f"{kind} "
+        plural = "parameters" if len(names) > 1 else "parameter"
+        return PhonglabError(
+            f"{where}: the {kind}plugin {plugin_type!r} has no {plural} "
+            f"{', '.join(repr(n) for n in names)}{guess}; fix the spelling or remove it "
+            f"({listed}).")
+    m = _NOT_FOUND.search(text)
+    if m:
+        kind, plugin_type = m.group(1), m.group(2)
+        guess = difflib.get_close_matches(plugin_type, _OWN_PLUGINS, n=1)
+        hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+        return PhonglabError(
+            f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
+            f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
+            f"phonglab.register() before loading from Python.")
+    if "Parsing of XML file" in text or "parse" in text.lower():
+        why = re.sub(r'^Parsing of XML file "[^"]*" failed:\s*', "", core)
+        why = re.sub(r"\s*\(line \d+, col \d+\)", "", why)
+        return PhonglabError(f"{where}: malformed XML ({why}); fix the markup there "
+                             f"(an unclosed or mismatched tag, or a stray character).")
+    return PhonglabError(f"{where}: could not load the scene: {core}")
 
 
 def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
@@ -114,6 +160,20 @@ class RenderResult:
     seconds: float                    #: wall time of the passes (the first includes JIT compile)
     pass_seconds: list[float] = field(default_factory=list)
     metadata: dict[str, Any] = field(default_factory=dict)
+    #: (passes, C) mean over all pixels of each pass: its spread gives the standard error of
+    #: the image mean without assuming independent pixels (reconstruction filters correlate them).
+    pass_means: np.ndarray | None = None
+    pass_spp: list[int] = field(default_factory=list)
+
+    def mean_and_stderr(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """Per-channel image mean and its standard error from the pass means."""
+        mean = self.image.reshape(-1, self.image.shape[-1]).mean(axis=0)
+        if self.pass_means is None or len(self.pass_means) < 2:
+            return mean, None
+        w = np.asarray(self.pass_spp, dtype=np.float64)[:, None]
+        spp = w.sum()
+        var = np.sum(w * (self.pass_means - mean) ** 2, axis=0) / (spp - spp / len(w))
+        return mean, np.sqrt(var / len(w))
 
 
 def _to_numpy(img) -> np.ndarray:
@@ -121,12 +181,16 @@ def _to_numpy(img) -> np.ndarray:
     return a if a.ndim == 3 else a[..., None]
 
 
+def pass_seed(seed: int, k: int) -> int:
+    """Mitsuba seed of pass k: (seed·1_000_003 + k) mod 2³² (mi.render takes a 32-bit seed)."""
+    return (int(seed) * 1_000_003 + int(k)) % (1 << 32)
+
+
 def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 0,
                  progress: bool = False, integrator=None) -> RenderResult:
     """Render ``scene`` with ``spp`` samples per pixel split into ``passes`` equal passes.
 
-    Pass k uses seed ``(seed * 1_000_003 + k) mod 2³²`` (Mitsuba seeds are 32-bit); the
-    image is the mean of the passes
+    Pass k uses seed ``(seed * 1_000_003 + k) mod 2³²`` (Mitsuba's seeds are 32-bit); the image is the mean of the passes
     and, with two or more passes, ``stderr`` is the per-pixel standard error of
     that mean (sample standard deviation across passes / √passes).
     """
@@ -134,7 +198,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     import mitsuba as mi
 
     if spp < 1:
-        raise PhonglabError(f"spp must be >= 1, got {spp}")
+        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
+                            f"least one sample (--spp 1)")
     passes = max(1, min(int(passes), int(spp)))
     per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
     iterator = range(passes)
@@ -145,15 +210,16 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     total = None
     total_sq = None
     times = []
+    means = []
     t_start = time.perf_counter()
     for k in iterator:
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=per_pass[k], seed=(seed * 1_000_003 + k) & 0xFFFFFFFF,
-                        sensor=sensor,
+        img = mi.render(scene, spp=per_pass[k], seed=pass_seed(seed, k), sensor=sensor,
                         integrator=integrator)
         dr.eval(img)
         arr = _to_numpy(img).astype(np.float64)
         times.append(time.perf_counter() - t0)
+        means.append(arr.reshape(-1, arr.shape[-1]).mean(axis=0))
         # Passes of unequal spp are weighted by their sample counts.
         w = per_pass[k]
         total = arr * w if total is None else total + arr * w
@@ -165,7 +231,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
         # Pass means are unbiased estimates with variance σ²/spp_k: weighted sample variance.
         var_pass = np.maximum(total_sq / spp - mean * mean, 0.0) * spp / (spp - spp / passes)
         stderr = np.sqrt(var_pass / passes).astype(np.float32)
-    return RenderResult(mean.astype(np.float32), stderr, seconds, times)
+    return RenderResult(mean.astype(np.float32), stderr, seconds, times,
+                        pass_means=np.array(means), pass_spp=per_pass)
 
 
 def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> Path:
@@ -189,8 +256,11 @@ def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> P
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
-                png: bool = True) -> RenderResult:
-    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it."""
+                png: bool = True, extra_metadata: dict[str, Any] | None = None) -> RenderResult:
+    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it.
+
+    ``extra_metadata`` is added to the EXR header (the planner records its plan there).
+    """
     import mitsuba as mi
 
     path = scene_path(scene)
@@ -215,6 +285,7 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
     }
+    result.metadata.update(extra_metadata or {})
     out = Path(out)
     exr.write(out, result.image, result.metadata)
     if result.stderr is not None:

@@ -1,0 +1,69 @@
+"""``phonglab plan``: the leanest variant, depth and sample count for a target error, with reasons."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def _param(text: str) -> tuple[str, str]:
+    name, sep, value = text.partition("=")
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE (a scene <default>), got {text!r}")
+    return name, value
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "plan", help="plan variant, max_depth and spp for a target relative error",
+        description="Inspect a scene and a short pilot render, and print the cheapest "
+                    "configuration (variant, max_depth, spp) predicted to reach a relative "
+                    "RMSE, with the predicted time and the reasons. See docs/planner.md.",
+        epilog="examples:\n"
+               "  phonglab plan cornell_phong --target-error 0.02\n"
+               "  phonglab plan scenes_xml/gray_direct.xml --target-error 0.01 --json\n"
+               "  phonglab plan glass_slab --set res=64 --make-reference 4096",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
+    p.add_argument("--target-error", type=float, default=0.01,
+                   help="relative RMSE to reach, sqrt(mean(((x-r)/(|r|+0.01))^2)) "
+                        "(default 0.01 = 1%%)")
+    p.add_argument("--json", action="store_true", help="print the plan as JSON")
+    p.add_argument("--polarized", action="store_true", help="plan a polarized variant")
+    p.add_argument("--variant", default=None, help="fix the variant (the plan follows it)")
+    p.add_argument("--max-depth", type=int, default=None, help="fix max_depth")
+    p.add_argument("--spp", type=int, default=None, help="fix spp (the error is then predicted)")
+    p.add_argument("--pilot-spp", type=int, default=None,
+                   help="pilot samples per pixel, in 8 passes (default 64)")
+    p.add_argument("--set", dest="params", type=_param, action="append", default=[],
+                   metavar="NAME=VALUE", help="a scene <default> value, e.g. res=64 (repeatable)")
+    p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
+                   help="also render a converged reference (max_depth -1, SPP samples) into "
+                        ".bench_cache/, which 'phonglab render --target-error' compares with")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from . import planner
+    from .render import PhonglabError, scene_path
+
+    path = scene_path(args.scene)
+    params = dict(args.params)
+    kwargs = {}
+    if args.pilot_spp is not None:
+        if args.pilot_spp < 8:
+            raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
+        kwargs["pilot_spp"] = args.pilot_spp
+    p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
+                     max_depth=args.max_depth, spp=args.spp, params=params, **kwargs)
+    print(p.to_json() if args.json else p.summary())
+    if args.make_reference is not None:
+        if args.make_reference < 16:
+            raise PhonglabError(f"--make-reference needs at least 16 spp (16 passes), got "
+                                f"{args.make_reference}.")
+        image, stderr, meta = planner.make_reference(path, args.make_reference, params=params,
+                                                     progress=True)
+        if not args.json:
+            print(f"reference: {meta['spp']} spp, max_depth -1, {meta['variant']}, relative "
+                  f"noise {planner.noise_error(image, stderr):.3g}, cached in "
+                  f"{planner.CACHE_DIR / 'references'}")
+    return 0

@@ -1,0 +1,256 @@
+r"""Comparing two images: error norms, the mean difference with its standard error, a difference map.
+
+With ``A`` the image under test and ``B`` the reference, per value (pixel i, channel c)
+``d_ic = A_ic − B_ic``, over n pixels and C channels:
+
+* RMSE            = √( Σ d_ic² / (nC) )
+* relative MSE    = Σ d_ic² / (B_ic² + ε) / (nC),  ε = 10⁻² guarding dark pixels (the
+  "relMSE" of the rendering literature, e.g. Rousselle, Knaus & Zwicker, "Adaptive sampling
+  and reconstruction using greedy error minimization", SIGGRAPH Asia 2011)
+* mean difference  d̄ = Σ m_i / n with m_i = Σ_c d_ic / C the pixel's channel mean.
+
+Its standard error comes from one of two sources (:attr:`Comparison.stderr_source`):
+
+* ``"stderr files"``: the per-pixel standard errors s^A, s^B of two independent renders
+  (``phonglab render`` writes them to ``<out>.stderr.exr`` from its independent passes).
+  Channels of one pixel share their paths, so the pixel mean's standard error is bounded by
+  the mean of the channel errors (perfect correlation, the conservative case):
+  SE(d̄) = √( Σ_i ((s̄^A_i)² + (s̄^B_i)²) ) / n.
+* ``"pixel differences"``: the spread of the pixel means, SE(d̄) = sd(m_i) / √n (sample
+  standard deviation, ddof = 1).  It treats the pixels as independent draws, so it also
+  counts structured differences as spread.
+
+Both assume independent pixels; a wide reconstruction filter (Mitsuba's default
+``gaussian``) correlates neighbours slightly and makes either estimate a little small.
+``z = d̄ / SE`` and the two-sided p-value ``2 (1 − Φ(|z|))`` test "same expected image".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import exr
+
+#: ε of the relative MSE: (A − B)² / (B² + ε).
+REL_EPS = 1e-2
+
+
+class CompareError(ValueError):
+    """Two images (or an image and its standard-error map) that cannot be compared."""
+
+
+@dataclass
+class Comparison:
+    """Numbers comparing image A with reference B (see the module docstring for the math)."""
+
+    shape: tuple[int, ...]          #: (H, W, C) of both images
+    rmse: float                     #: √mean((A − B)²)
+    rel_mse: float                  #: mean((A − B)² / (B² + ε))
+    mean_diff: float                #: mean(A − B)
+    mean_diff_stderr: float         #: its standard error
+    stderr_source: str              #: "stderr files" or "pixel differences"
+    z: float                        #: mean_diff / mean_diff_stderr (nan when the error is 0)
+    p_value: float                  #: two-sided, for "A and B have the same expectation"
+    max_abs_diff: float             #: max |A − B|
+    mean_a: float                   #: mean(A)
+    mean_b: float                   #: mean(B)
+    channel_mean_diff: list[float] = field(default_factory=list)  #: mean(A − B) per channel
+    eps: float = REL_EPS
+
+    def summary(self) -> str:
+        """A few lines for people."""
+        rel = (f" ({100 * self.mean_diff / self.mean_b:+.3g} % of mean(B))"
+               if self.mean_b != 0 else "")
+        lines = [
+            f"pixels      : {self.shape[0]} x {self.shape[1]}, {self.shape[2]} channel(s)",
+            f"mean A, B   : {self.mean_a:.6g}, {self.mean_b:.6g}",
+            f"RMSE        : {self.rmse:.6g}",
+            f"relMSE      : {self.rel_mse:.6g}   (eps = {self.eps:g})",
+            f"max |A - B| : {self.max_abs_diff:.6g}",
+            f"mean A - B  : {self.mean_diff:+.6g} +- {self.mean_diff_stderr:.3g} (1 s.e., from "
+            f"{self.stderr_source}){rel}",
+            f"z, p        : {self.z:+.3f}, p = {self.p_value:.3g} (two-sided, H0: same expected "
+            f"image)",
+        ]
+        return "\n".join(lines)
+
+    def as_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        d = asdict(self)
+        d["shape"] = list(self.shape)
+        return d
+
+
+def _as_hwc(image, name: str) -> np.ndarray:
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3:
+        raise CompareError(f"{name} has shape {a.shape}; give an (H, W) or (H, W, C) image")
+    return a
+
+
+def _shape_text(shape) -> str:
+    return " x ".join(str(s) for s in shape)
+
+
+def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
+                   names: tuple[str, str] = ("A", "B")) -> Comparison:
+    """Compare image ``a`` with reference ``b`` (arrays).
+
+    Args:
+        a, b: (H, W) or (H, W, C) images of the same shape.
+        stderr_a, stderr_b: per-pixel standard errors of a and b (same shape), or None.
+            The standard error of the mean difference uses them when both are given,
+            the spread of the pixel differences otherwise.
+        eps: ε of the relative MSE.
+        names: how errors name the two images (file names from :func:`compare_files`).
+
+    Raises:
+        CompareError: shapes differ, or a value is NaN/Inf.
+    """
+    a, b = _as_hwc(a, names[0]), _as_hwc(b, names[1])
+    if a.shape != b.shape:
+        raise CompareError(
+            f"{names[0]} is {_shape_text(a.shape)} but {names[1]} is {_shape_text(b.shape)} "
+            f"(height x width x channels); compare images rendered at the same resolution "
+            f"in the same colour variant")
+    for name, img in zip(names, (a, b)):
+        bad = ~np.isfinite(img)
+        if bad.any():
+            raise CompareError(f"{name} has {int(bad.sum())} NaN or infinite values; "
+                               f"fix the render that produced it before comparing")
+    d = a - b
+    n = d.shape[0] * d.shape[1]
+    pixel_mean = d.mean(axis=2).ravel()
+    mean_diff = float(pixel_mean.mean())
+    if stderr_a is not None and stderr_b is not None:
+        sa, sb = _as_hwc(stderr_a, f"{names[0]}'s stderr"), _as_hwc(stderr_b, f"{names[1]}'s stderr")
+        for which, s in ((names[0], sa), (names[1], sb)):
+            if s.shape != a.shape:
+                raise CompareError(
+                    f"the standard-error image of {which} is {_shape_text(s.shape)} but the "
+                    f"image is {_shape_text(a.shape)}; give the .stderr.exr written with it")
+            if not np.all(np.isfinite(s)) or np.any(s < 0):
+                raise CompareError(f"the standard-error image of {which} has negative or "
+                                   f"non-finite values; give the .stderr.exr written with it")
+        # Conservative pixel-mean error: channels of one pixel may be perfectly correlated.
+        var = sa.mean(axis=2) ** 2 + sb.mean(axis=2) ** 2
+        se = float(math.sqrt(var.sum()) / n)
+        source = "stderr files"
+    else:
+        se = float(pixel_mean.std(ddof=1) / math.sqrt(n)) if n > 1 else float("nan")
+        source = "pixel differences"
+    if se > 0:
+        z = mean_diff / se
+        from scipy import stats
+
+        p = float(2.0 * stats.norm.sf(abs(z)))
+    else:
+        z, p = float("nan"), float("nan")
+    return Comparison(
+        shape=tuple(int(s) for s in a.shape),
+        rmse=float(np.sqrt(np.mean(d * d))),
+        rel_mse=float(np.mean(d * d / (b * b + eps))),
+        mean_diff=mean_diff, mean_diff_stderr=se, stderr_source=source, z=float(z), p_value=p,
+        max_abs_diff=float(np.max(np.abs(d))), mean_a=float(a.mean()), mean_b=float(b.mean()),
+        channel_mean_diff=[float(x) for x in d.mean(axis=(0, 1))], eps=eps)
+
+
+def stderr_path(path: str | Path) -> Path:
+    """Where ``phonglab render`` writes the standard-error image of ``path``: ``x.stderr.exr``."""
+    path = Path(path)
+    return path.with_name(path.stem + ".stderr.exr")
+
+
+def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path | None = None,
+                  stderr_b: str | Path | None = None, auto_stderr: bool = True,
+                  eps: float = REL_EPS) -> tuple[Comparison, np.ndarray, np.ndarray, dict, dict]:
+    """Compare EXR ``path_a`` with reference ``path_b``.
+
+    Standard-error images are taken from ``stderr_a``/``stderr_b`` when given, else (with
+    ``auto_stderr``) from ``<name>.stderr.exr`` beside each image when both exist.
+
+    Returns:
+        (comparison, image A, image B, metadata A, metadata B).
+    """
+    img_a, meta_a = exr.read(path_a)
+    img_b, meta_b = exr.read(path_b)
+    if stderr_a is None and stderr_b is None and auto_stderr:
+        cand_a, cand_b = stderr_path(path_a), stderr_path(path_b)
+        if cand_a.is_file() and cand_b.is_file():
+            stderr_a, stderr_b = cand_a, cand_b
+    if (stderr_a is None) != (stderr_b is None):
+        given = "--stderr-a" if stderr_a is not None else "--stderr-b"
+        other = "--stderr-b" if stderr_a is not None else "--stderr-a"
+        raise CompareError(f"{given} was given without {other}; give the standard-error images "
+                           f"of both renders, or neither (then the pixel differences are used)")
+    sa = exr.read(stderr_a)[0] if stderr_a is not None else None
+    sb = exr.read(stderr_b)[0] if stderr_b is not None else None
+    result = compare_arrays(img_a, img_b, sa, sb, eps=eps,
+                            names=(str(path_a), str(path_b)))
+    return result, img_a, img_b, meta_a, meta_b
+
+
+def describe_metadata(meta: dict) -> str:
+    """One line of provenance from a phonglab EXR header (empty when there is none)."""
+    if not meta:
+        return "(no phonglab metadata)"
+    parts = []
+    for key, fmt in (("scene", "{}"), ("spp", "{} spp"), ("variant", "{}"), ("seed", "seed {}"),
+                     ("integrator", "{}"), ("max_depth", "max_depth {}"),
+                     ("render_seconds", "{} s")):
+        if meta.get(key) is not None:
+            parts.append(fmt.format(meta[key]))
+    return ", ".join(parts)
+
+
+def diff_figure(a, b, title: str = "A − B", robust_percentile: float = 99.0):
+    """A matplotlib Figure of the signed difference (channel mean of A − B).
+
+    Diverging colormap (``RdBu_r``: red where A is brighter, blue where B is), symmetric
+    limits at the given percentile of |A − B| so that a few fireflies do not wash it out.
+    """
+    from matplotlib.figure import Figure
+
+    d = (_as_hwc(a, "A") - _as_hwc(b, "B")).mean(axis=2)
+    lim = float(np.percentile(np.abs(d), robust_percentile)) if d.size else 0.0
+    if not lim > 0:
+        lim = float(np.max(np.abs(d))) or 1.0
+    h, w = d.shape
+    fig = Figure(figsize=(min(10.0, max(3.5, 4.0 * w / h + 1.0)), 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    im = ax.imshow(d, cmap="RdBu_r", vmin=-lim, vmax=lim, interpolation="nearest")
+    ax.set_title(title, fontsize=10)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    fig.colorbar(im, ax=ax, shrink=0.85, label=f"A − B (clipped at ±{lim:.3g}, "
+                                                 f"{robust_percentile:g}th pct of |A − B|)")
+    return fig
+
+
+def write_diff_png(path: str | Path, a, b, title: str = "A − B") -> Path:
+    """Write :func:`diff_figure` as a PNG (atomically, like the EXR files)."""
+    import os
+    import tempfile
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig = diff_figure(a, b, title)
+    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path

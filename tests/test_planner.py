@@ -1,0 +1,287 @@
+"""Tests of the planner (phonglab.planner, ``phonglab plan``, ``phonglab render --target-error``).
+
+Cheapest first: scene inspection (XML only) -> variant/backend choice -> plans from small pilots
+(res 32) -> achieved error against a converged reference -> the CLI.
+
+The error is phonglab's relative RMSE, E = sqrt(mean(((x - r)/(|r| + 0.01))^2)) over every pixel
+and channel, r the converged full-depth image (planner.EPS, planner.achieved_error).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import drjit as dr
+import numpy as np
+import pytest
+
+from phonglab import exr, llvm, planner, render
+from phonglab.cli import main
+from phonglab.render import PhonglabError
+
+RES = {"res": 32}
+TARGET = 0.05
+ALLOWED = planner.BIAS_FRACTION * TARGET
+
+
+def _write(tmp_path, body: str, defaults: str = "") -> str:
+    path = tmp_path / "scene.xml"
+    path.write_text(f'<scene version="3.0.0">{defaults}{body}</scene>')
+    return str(path)
+
+
+# --- scene inspection: no rendering -------------------------------------------------------------
+
+def test_gray_direct_is_mono_without_delta_bsdfs():
+    info = planner.inspect_scene("gray_direct")
+    assert info.colored == [] and info.spectral == [] and info.delta_bsdfs == []
+    assert info.gray_values == 4          # k_d, k_s, the light's black BSDF, its radiance
+    assert info.color == "mono"
+
+
+def test_cornell_is_rgb_and_names_the_coloured_walls():
+    info = planner.inspect_scene("cornell_phong")
+    assert info.color == "rgb"
+    assert any("'red'" in c for c in info.colored) and any("'green'" in c for c in info.colored)
+
+
+def test_glass_slab_is_rgb_with_a_dielectric():
+    info = planner.inspect_scene("glass_slab")
+    assert info.color == "rgb" and info.delta_bsdfs == ["dielectric"]
+    assert any("checkerboard" in c for c in info.colored)
+
+
+@pytest.mark.parametrize("body, color", [
+    ('<bsdf type="diffuse"><spectrum name="reflectance" value="0.5"/></bsdf>', "mono"),
+    ('<bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 700:0.9"/></bsdf>',
+     "spectral"),
+    ('<emitter type="constant"><spectrum name="radiance" type="blackbody">'
+     '<float name="temperature" value="3000"/></spectrum></emitter>', "spectral"),
+    ('<bsdf type="conductor"><string name="material" value="Au"/></bsdf>', "spectral"),
+    ('<bsdf type="conductor"/>', "mono"),
+    ('<bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.2, 0.2"/></bsdf>'
+     '<emitter type="constant"><rgb name="radiance" value="1, 0.9, 0.8"/></emitter>', "rgb"),
+], ids=["uniform-spectrum", "wavelength-list", "blackbody", "measured-conductor",
+        "perfect-mirror", "coloured-emitter"])
+def test_colour_model_follows_the_data(tmp_path, body, color):
+    assert planner.inspect_scene(_write(tmp_path, body)).color == color
+
+
+def test_defaults_and_overrides_are_substituted(tmp_path):
+    path = _write(tmp_path, '<bsdf type="diffuse"><rgb name="reflectance" value="$c"/></bsdf>',
+                  '<default name="c" value="0.2, 0.5, 0.1"/>')
+    assert planner.inspect_scene(path).color == "rgb"
+    assert planner.inspect_scene(path, c="0.3, 0.3, 0.3").color == "mono"
+
+
+def test_unresolved_substitution_is_a_user_error(tmp_path):
+    path = _write(tmp_path, '<bsdf type="diffuse"><rgb name="reflectance" value="$c"/></bsdf>')
+    with pytest.raises(PhonglabError, match=r"'\$c' is used but has no <default>"):
+        planner.inspect_scene(path)
+
+
+# --- variant and backend --------------------------------------------------------------------------
+
+def test_variant_steps_up_only_when_needed():
+    assert planner.variant_for("mono", "llvm") == ("llvm_ad_mono", [])
+    assert planner.variant_for("mono", "llvm", polarized=True)[0] == "llvm_ad_mono_polarized"
+    # Mitsuba builds no rgb_polarized and no scalar_mono: the next richer model, with a note.
+    variant, notes = planner.variant_for("rgb", "llvm", polarized=True)
+    assert variant == "llvm_ad_spectral_polarized" and notes
+    variant, notes = planner.variant_for("mono", "scalar")
+    assert variant == "scalar_rgb" and notes
+
+
+def test_backend_is_the_best_that_works_here():
+    backend, why = planner.available_backend()
+    if not dr.has_backend(dr.JitBackend.CUDA):
+        assert backend != "cuda" and "CUDA" in why
+    if llvm.configure().usable:
+        assert backend in ("cuda", "llvm")
+
+
+@pytest.mark.parametrize("target", [0, -0.01, float("nan"), 10])
+def test_bad_target_is_a_user_error(target):
+    with pytest.raises(PhonglabError, match="target error must be a relative RMSE"):
+        planner.plan("gray_direct", target, params=RES)
+
+
+def test_non_path_integrator_is_refused(tmp_path):
+    path = _write(tmp_path, '<integrator type="direct"/><shape type="sphere"/>')
+    with pytest.raises(PhonglabError, match="plans path-traced scenes"):
+        planner.plan(path, 0.05)
+
+
+def test_polarized_only_when_asked_and_then_it_plans():
+    """phonglab's plugins are ideal depolarizers (like diffuse), so a polarized plan works."""
+    plan = planner.plan("gray_direct", TARGET, polarized=True, params=RES)
+    assert plan.variant.endswith("_polarized")
+
+
+def test_spectral_data_is_planned_spectral(tmp_path):
+    path = _write(tmp_path, """
+        <integrator type="path"/>
+        <sensor type="perspective">
+            <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+        </sensor>
+        <shape type="sphere"><bsdf type="lambert">
+            <spectrum name="reflectance" value="400:0.2, 550:0.5, 700:0.8"/>
+        </bsdf></shape>
+        <emitter type="constant"><spectrum name="radiance" value="1"/></emitter>""")
+    p = planner.plan(path, 0.1)
+    assert p.color == "spectral" and p.variant.endswith("_spectral")
+    # Constant environment + convex sphere: everything arrives within 2 segments.
+    assert p.max_depth == 2
+
+
+# --- plans from small pilots -----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def plans():
+    return {name: planner.plan(name, TARGET, params=RES)
+            for name in ("gray_direct", "cornell_phong", "glass_slab")}
+
+
+def _bias(plan, depth):
+    return next(s.bias for s in plan.depths if s.depth == depth)
+
+
+def test_gray_direct_is_planned_mono_with_depth_2(plans):
+    p = plans["gray_direct"]
+    assert p.variant.endswith("_mono") and p.color == "mono"
+    assert p.max_depth == 2
+    # Header of gray_direct.xml: depth 1 renders nothing (all energy omitted), depth >= 3 adds
+    # exactly zero, so the depth-2 bias is zero up to float rounding of the sums.
+    assert _bias(p, 1) > ALLOWED and _bias(p, 2) < 1e-6
+
+
+def test_cornell_is_planned_rgb_deeper(plans):
+    p = plans["cornell_phong"]
+    assert p.variant == "llvm_ad_rgb" or p.variant.endswith("_rgb")
+    assert p.max_depth > 2
+    assert _bias(p, 2) > ALLOWED
+
+
+def test_glass_keeps_the_depth_of_its_delta_chain(plans):
+    p = plans["glass_slab"]
+    # Header of glass_slab.xml: the wall seen through the slab needs max_depth >= 4.
+    assert p.max_depth >= 4 and p.variant.endswith("_rgb")
+    assert _bias(p, 3) > ALLOWED
+    assert any("dielectric" in r for r in p.reasons)
+
+
+@pytest.mark.parametrize("name", ["gray_direct", "cornell_phong", "glass_slab"])
+def test_plan_is_the_smallest_depth_and_spp_meeting_the_target(plans, name):
+    p = plans[name]
+    assert _bias(p, p.max_depth) <= ALLOWED
+    shallower = [s for s in p.depths if 1 <= s.depth < p.max_depth]
+    assert shallower and max(s.depth for s in shallower) == p.max_depth - 1
+    assert _bias(p, p.max_depth - 1) > ALLOWED
+    noise1 = next(s.noise_per_sample for s in p.depths if s.depth == p.max_depth)
+    assert math.isclose(p.predicted_noise, noise1 / math.sqrt(p.spp), rel_tol=1e-9)
+    assert math.isclose(p.predicted_error, math.hypot(p.predicted_bias, p.predicted_noise),
+                        rel_tol=1e-9)
+    assert p.predicted_error <= TARGET
+    if p.spp > 1:  # one sample fewer would miss the target
+        assert math.hypot(p.predicted_bias, noise1 / math.sqrt(p.spp - 1)) > TARGET
+    assert p.predicted_seconds > 0 and p.seconds_per_sample > 0
+
+
+def test_plan_json_has_the_documented_fields(plans):
+    d = json.loads(plans["cornell_phong"].to_json())
+    for key in ("variant", "max_depth", "spp", "predicted_error", "predicted_seconds", "reasons"):
+        assert key in d
+    assert d["variant"] == plans["cornell_phong"].variant and isinstance(d["reasons"], list)
+
+
+def test_explicit_settings_override_the_plan():
+    p = planner.plan("gray_direct", TARGET, variant="llvm_ad_rgb", max_depth=1, spp=4,
+                     params=RES)
+    assert (p.variant, p.max_depth, p.spp) == ("llvm_ad_rgb", 1, 4)
+    # Depth 1 sees no emitter: the whole image is bias, far above the target, and it says so.
+    assert p.predicted_error > TARGET and any("misses the target" in r for r in p.reasons)
+
+
+# --- achieved error ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["gray_direct", "cornell_phong", "glass_slab"])
+def test_achieved_error_is_near_the_target(plans, name):
+    """The planned render's relative RMSE lies in [0.5, 1.5] x the target (issue 6).
+
+    The reference has 16x the planned spp (its noise, about E/4, is subtracted by
+    achieved_error); the achieved error of one render over 32 x 32 x C values scatters by a few
+    percent, so the window tests the planner's prediction, not the luck of one seed.
+    """
+    p = plans[name]
+    ref, ref_se, _ = planner.make_reference(name, max(1024, 16 * p.spp), params=RES)
+    scene = render.load_scene(name, p.variant, **RES)
+    info = planner.inspect_scene(name, **RES)
+    result = render.render_scene(scene, p.spp, seed=0, passes=p.passes,
+                                 integrator=planner._path_integrator(p.max_depth, info))
+    achieved = planner.achieved_error(result.image, ref, ref_se)
+    assert 0.5 * TARGET <= achieved <= 1.5 * TARGET, (name, achieved, p.summary())
+
+
+def test_achieved_error_subtracts_the_reference_noise():
+    rng = np.random.default_rng(1)
+    truth = np.full((64, 64, 3), 0.5)
+    se = 0.01
+    image = truth + rng.normal(0, 0.02, truth.shape)
+    reference = truth + rng.normal(0, se, truth.shape)
+    # Expected: the image's own relative noise 0.02/0.51 = 0.0392, not sqrt(0.02² + 0.01²)/0.51.
+    got = planner.achieved_error(image, reference, np.full_like(truth, se))
+    assert abs(got - 0.02 / 0.51) < 0.002
+    # A gray scene's mono render against an RGB reference: the reference's channels (and their
+    # noise) are equal, so its luminance is the same gray value with the same standard error.
+    gray_ref = np.repeat(reference[..., :1], 3, axis=2)
+    mono = image[..., :1]
+    got = planner.achieved_error(mono, gray_ref, np.full_like(truth, se))
+    assert planner.to_luminance(gray_ref).shape == (64, 64, 1)
+    assert abs(got - 0.02 / 0.51) < 0.004
+
+
+# --- CLI -----------------------------------------------------------------------------------------
+
+def test_cli_plan_json(capsys):
+    assert main(["plan", "gray_direct", "--target-error", "0.1", "--set", "res=32", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["variant"].endswith("_mono") and d["max_depth"] == 2 and d["spp"] >= 1
+
+
+def test_cli_plan_prints_reasons(capsys):
+    assert main(["plan", "cornell_phong", "--target-error", "0.2", "--set", "res=16"]) == 0
+    out = capsys.readouterr().out
+    assert "variant   llvm_ad_rgb" in out and "because:" in out and "max_depth" in out
+
+
+def test_cli_bad_target_exits_2(capsys):
+    assert main(["plan", "gray_direct", "--target-error", "-1"]) == 2
+    assert "target error must be" in capsys.readouterr().err
+
+
+def test_cli_render_with_target_error(tmp_path, capsys):
+    out = tmp_path / "gd.exr"
+    assert main(["render", "gray_direct", "--target-error", "0.1", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "predicted" in text and "error:" in text and "max_depth 2" in text
+    image, meta = exr.read(out)
+    assert meta["target_error"] == 0.1 and meta["max_depth"] == 2
+    assert image.ndim == 2                  # mono: one channel
+
+
+def test_cli_render_explicit_settings_override_the_plan(tmp_path, capsys):
+    out = tmp_path / "gd.exr"
+    assert main(["render", "gray_direct", "--target-error", "0.1", "--spp", "8",
+                 "--variant", "llvm_ad_rgb", "-o", str(out)]) == 0
+    _, meta = exr.read(out)
+    assert (meta["spp"], meta["variant"], meta["max_depth"]) == (8, "llvm_ad_rgb", 2)
+
+
+def test_pass_seeds_stay_32_bit():
+    """Regression (fix in render.py): seed·1_000_003 + k overflowed Mitsuba's 32-bit seed."""
+    assert render.pass_seed(5000, 3) == (5000 * 1_000_003 + 3) % 2**32 < 2**32
+    scene = render.load_scene("gray_direct", "llvm_ad_mono", res=8)
+    result = render.render_scene(scene, 2, seed=5000, passes=2)
+    assert np.isfinite(result.image).all()
