@@ -1266,7 +1266,7 @@ def stability_explanations(stab: list[dict]) -> str:
                  "flag it where it matters at this budget. float32 does matter for the *light*: the "
                  "kernel holds cos δ in float32, and for δ = 1° that rounding alone changes the "
                  "disk's solid angle 2π(1 − cos δ) by about 10⁻⁴ relative. Light sampling and MIS "
-                 "are precise enough here (relative standard errors ~10⁻⁶) to see it as a bias "
+                 "are precise enough here (relative standard errors 10⁻⁷–10⁻⁶) to see it as a bias "
                  "with |z| in the hundreds, so the exact values are computed for the float32 cone "
                  "(the light the kernel actually renders); a renderer that describes small lights "
                  "by cos δ in float32 carries that 10⁻⁴ error in their power.")
