@@ -1136,7 +1136,9 @@ def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> P
             "LLVM backend time of that call from its kernel history (a disk-cache hit costs only "
             "codegen); cold = the same in a fresh process with an empty kernel cache "
             "(`$HOME/.drjit`). Steady = median of repeats after warm-up, smallest size (N = 64 "
-            "samples, or 1 spp).\n")
+            "samples, or 1 spp). The render kernels were already built by the reference renders "
+            "of the same scene in this process, so their in-process first call is a cache hit; "
+            "the cold column is their compile cost.\n")
         add("| group | method | scene | variant | first call [s] | steady [s] | compile [ms] | cache hits / kernels | cold compile [ms] |")
         add("|---|---|---|---|---|---|---|---|---|")
         for r in jit:
