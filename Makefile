@@ -24,6 +24,12 @@ test-slow: setup
 test-all: setup
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
+# Regenerates BENCHMARKS.md and docs/bench/ (CSV + PNG) from a fresh full run, after a timed
+# --quick run whose wall time the report quotes. About 3 minutes on 2 quiet cores.
+bench: setup
+	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
+	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
+
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
 classic-figure: setup
 	$(BIN)/phonglab compare-models exponent_series --spp 32 --path-spp 512 -o out/compare_exponent_series

@@ -13,7 +13,7 @@ import importlib
 import sys
 
 #: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "plan", "compare", "compare-models", "check", "doctor"]
+SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor"]
 
 DEBUG_HELP = "show the full traceback on errors"
 

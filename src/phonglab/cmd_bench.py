@@ -1,0 +1,43 @@
+"""``phonglab bench``: speed against accuracy sweeps, charts, stability map, BENCHMARKS.md."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(sub) -> None:
+    from .bench import PARTS
+
+    p = sub.add_parser(
+        "bench", help="error-versus-time sweeps, stability map and charts (CSV + PNG)",
+        description="Run the estimator, stability, render, variant and render-time-ratio sweeps. "
+                    "Rows are written to CSV as they finish; a re-run resumes (skips rows already "
+                    "there) unless --fresh. Charts are PNG files beside the CSVs.",
+        epilog="examples:\n  phonglab bench --quick --out out/bench-quick\n"
+               "  phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md\n"
+               "  phonglab bench --only stability --out out/bench",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--quick", action="store_true", help="small sizes: finishes in < 3 minutes on 2 cores")
+    p.add_argument("--out", default="out/bench", help="output folder for CSV/PNG (default out/bench)")
+    p.add_argument("--fresh", action="store_true", help="delete earlier results in --out first")
+    p.add_argument("--markdown", default=None, help="also write this Markdown report (BENCHMARKS.md)")
+    p.add_argument("--only", nargs="+", choices=PARTS, default=list(PARTS), metavar="PART",
+                   help=f"run only these parts ({', '.join(PARTS)})")
+    p.add_argument("--quick-run", default=None,
+                   help="run.json of a --quick run, whose wall time the report quotes")
+    p.add_argument("--cache", default=None, help="reference-image cache (default .bench_cache/)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from .bench import run_bench
+
+    rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
+                    markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
+                    cache=Path(args.cache) if args.cache else None,
+                    progress=not args.no_progress,
+                    quick_run=Path(args.quick_run) if args.quick_run else None)
+    print(f"bench ({rec['mode']}) finished in {rec['seconds']:.1f} s; results in {args.out}/")
+    return 0

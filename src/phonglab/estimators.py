@@ -1,0 +1,498 @@
+r"""Monte Carlo estimators of the reflection equation at one surface point, and their exact values.
+
+The quantity estimated is the radiance reflected towards ω_i (Mitsuba's ``si.wi``,
+local shading frame, normal +Z) by a BSDF lit by a light of radiance L(ω_o)::
+
+    L_r(ω_i) = ∫_{H²} f_r(ω_i, ω_o) L(ω_o) cos θ_o dω_o = ∫ eval(ω_i, ω_o) L(ω_o) dω_o
+
+(Mitsuba's ``eval`` already carries cos θ_o).  Two lights are offered:
+
+* ``constant``: L ≡ L_e over the whole sphere (a white furnace); L_r = L_e · albedo(ω_i).
+* ``disk``: a distant disk light (a sun) of radiance L_e filling the cone of half-angle δ
+  around the mirror direction R(ω_i) = 2(N·ω_i)N − ω_i, so the highlight sees it;
+  solid angle Ω = 2π(1 − cos δ).
+
+Estimators, each with N independent samples ω_k and the per-sample value X_k
+(the estimate is the sample mean, its standard error s/√N with s the sample
+standard deviation)::
+
+    uniform   ω ~ uniform hemisphere, p = 1/(2π)          X = eval·L / p
+    cosine    ω ~ cos θ/π (Malley)                        X = eval·L / p
+    bsdf      ω, w = bsdf.sample(...) (the plugin's own)  X = w·L           (w = eval/pdf)
+    light     disk: ω ~ uniform in the cone, p = 1/Ω;      X = eval·L_e / p
+              constant: ω ~ uniform sphere, p = 1/(4π)    (the constant emitter's own sampling)
+    mis       N/2 pairs (one bsdf + one light sample), power heuristic β = 2 [Veach 1997, §9.2]:
+              X = f_b L_b/p_b · p_b²/(p_b²+p_l(ω_b)²) + f_l L_e/p_l · p_l²/(p_l²+p_b(ω_l)²)
+
+so every estimator draws N directions in total (MIS's N/2 pairs keep equal sample
+counts; its standard error comes from the N/2 pair values).
+
+Exact values come from deterministic quadrature in float64 (:func:`exact_value`).
+Around the lobe axis R write ω_o = cos α R + sin α (cos φ e₁ + sin φ e₂), e₁ in the
+plane of R and N, so cos θ_o = A + B cos φ with A = cos α cos θ_R, B = sin α sin θ_R.
+The φ integral of the horizon-clipped cosine has a closed form::
+
+    h(A, B) = (1/2π) ∫₀^{2π} max(0, A + B cos φ) dφ = (A φ₀ + B sin φ₀)/π,  φ₀ = arccos(clip(−A/B, −1, 1))
+
+(= max(0, A) when B = 0).  With the lobe measure substituted (u = cos^{p+1} α, so
+(p+1)/(2π) cos^p α dω = du dφ/2π) the specular part is a smooth 1-D integral::
+
+    spec = k_s L_e (p+2)/(p+1) ∫_{u_min}^1 h(A(α(u)), B(α(u))) du,   cos α(u) = u^{1/(p+1)}
+
+with u_min = 0 for the constant light and cos^{p+1} δ for the disk (the cone *is* the
+lobe's polar cap, both being centred on R).  The diffuse part is
+k_d L_e · 2 ∫_{cos δ}^1 h(c cos θ_R, √(1−c²) sin θ_R) dc (k_d L_e for the constant
+light).  Closed forms checked by the tests: normal incidence, disk: spec = k_s L_e
+(1 − cos^{p+2} δ), diffuse = k_d L_e sin² δ; constant light: spec = k_s L_e.
+
+Every parameter that a sweep changes (exponent, ω_i, light axis, cos δ, L_e, seed)
+enters the kernel as an opaque Dr.Jit value, so a sweep compiles each estimator
+once; :class:`Estimate` records the first call's JIT compile time separately.
+
+References: E. Veach, *Robust Monte Carlo Methods for Light Transport Simulation*,
+PhD thesis, Stanford 1997, ch. 9; M. Pharr, W. Jakob, G. Humphreys, *Physically
+Based Rendering*, 4th ed., §2.2 (importance sampling) and §2.2.3 (MIS).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .render import PhonglabError
+
+#: Estimator names, in the order charts and tables list them.
+METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis")
+LIGHTS: tuple[str, ...] = ("constant", "disk")
+
+#: Gauss–Legendre quadrature: panels × nodes per panel on each 1-D integral.
+QUAD_PANELS = 256
+QUAD_NODES = 32
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One reflection-equation integral: the BSDF, the incidence and the light.
+
+    Attributes:
+        bsdf: ``"phong"`` or ``"lambert"`` (phonglab's plugins, whose exact values
+            :func:`exact_value` knows), or a Mitsuba built-in (``"diffuse"``; no exact value).
+        diffuse_reflectance: k_d (ρ for ``lambert``/``diffuse``), grey.
+        specular_reflectance: k_s (``phong`` only), grey.
+        exponent: p (``phong`` only).
+        theta_i: incidence angle of ω_i in degrees, in [0, 90).
+        light: ``"constant"`` or ``"disk"``.
+        half_angle: δ of the disk light in degrees.
+        radiance: L_e.
+    """
+
+    bsdf: str = "phong"
+    diffuse_reflectance: float = 0.0
+    specular_reflectance: float = 1.0
+    exponent: float = 100.0
+    theta_i: float = 30.0
+    light: str = "disk"
+    half_angle: float = 3.0
+    radiance: float = 1.0
+
+    def __post_init__(self):
+        if self.light not in LIGHTS:
+            raise PhonglabError(f"unknown light {self.light!r}; use one of {', '.join(LIGHTS)}")
+        if not 0.0 <= self.theta_i < 90.0:
+            raise PhonglabError(f"theta_i must lie in [0, 90) degrees, got {self.theta_i}")
+        if not 0.0 < self.half_angle < 90.0:
+            raise PhonglabError(f"half_angle must lie in (0, 90) degrees, got {self.half_angle}")
+        if not (math.isfinite(self.exponent) and self.exponent >= 0):
+            raise PhonglabError(f"exponent must be finite and >= 0, got {self.exponent}")
+
+    @property
+    def label(self) -> str:
+        if self.bsdf == "phong":
+            mat = (f"phong kd={self.diffuse_reflectance:g} ks={self.specular_reflectance:g} "
+                   f"p={self.exponent:g}")
+        else:
+            mat = f"{self.bsdf} rho={self.diffuse_reflectance:g}"
+        light = "constant light" if self.light == "constant" else f"disk {self.half_angle:g}deg"
+        return f"{mat}, {light}, theta_i={self.theta_i:g}deg"
+
+
+@dataclass
+class Estimate:
+    """S independent estimates of one :class:`Problem` with N samples each.
+
+    Attributes:
+        method: estimator name.
+        n: samples per estimate (MIS: n/2 pairs).
+        values: (S,) float64 estimates (sample means).
+        stderr: (S,) float64 standard errors s/√n of each estimate.
+        nan_count / inf_count: non-finite per-sample values over all S·n samples.
+        seconds: wall time of the call (trace + kernel + transfer).
+        compile_ms: JIT compile time inside this call (codegen + backend, ms; 0 on a
+            kernel-cache hit).
+        kernels: kernels launched; cache_hits: how many of them were cached.
+        sample_variance: pooled per-sample variance s² (over all S·n samples around
+            their batch means).
+        kernel_hashes: Dr.Jit hashes of the kernels launched (equal hashes = no recompile).
+    """
+
+    method: str
+    n: int
+    values: np.ndarray
+    stderr: np.ndarray
+    nan_count: int
+    inf_count: int
+    seconds: float
+    compile_ms: float
+    kernels: int
+    cache_hits: int
+    sample_variance: float
+    kernel_hashes: list = field(default_factory=list)
+
+    @property
+    def value(self) -> float:
+        return float(self.values[0])
+
+    @property
+    def is_zero_variance(self) -> bool:
+        """Whether every sample took (up to float32 rounding) the same value."""
+        scale = float(np.nanmax(np.abs(self.values))) if self.values.size else 0.0
+        return bool(np.isfinite(self.sample_variance)
+                    and self.sample_variance <= (8 * 2.0 ** -24 * scale) ** 2)
+
+
+# --------------------------------------------------------------------------------------------
+# Exact values (float64 quadrature)
+# --------------------------------------------------------------------------------------------
+
+def _gauss_legendre(a: float, b: float, panels: int = QUAD_PANELS,
+                    nodes: int = QUAD_NODES, graded: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Composite Gauss–Legendre nodes and weights on [a, b].
+
+    ``graded`` > 0 adds panel edges a + (b − a)·2⁻ᵏ, k = 1..graded: a geometric mesh towards
+    a, where u ↦ u^{1/(p+1)} has its singular derivative (exponential convergence there).
+    """
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    edges = np.linspace(a, b, panels + 1)
+    if graded:
+        edges = np.unique(np.concatenate([edges, a + (b - a) * 2.0 ** -np.arange(1, graded + 1)]))
+    half = 0.5 * np.diff(edges)[:, None]
+    mid = 0.5 * (edges[:-1] + edges[1:])[:, None]
+    return (mid + half * x).ravel(), (half * w).ravel()
+
+
+def clipped_cosine_mean(A, B):
+    """h(A, B) = (1/2π)∫ max(0, A + B cos φ) dφ = (A φ₀ + B sin φ₀)/π, φ₀ = arccos(clip(−A/B))."""
+    A = np.asarray(A, np.float64)
+    B = np.abs(np.asarray(B, np.float64))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(B > 0, -A / np.where(B > 0, B, 1.0), np.where(A >= 0, -1.0, 1.0))
+    phi0 = np.arccos(np.clip(ratio, -1.0, 1.0))
+    return (A * phi0 + B * np.sin(phi0)) / np.pi
+
+
+def exact_value(problem: Problem, panels: int = QUAD_PANELS, nodes: int = QUAD_NODES) -> float:
+    """L_r(ω_i) of ``problem`` by float64 quadrature (closed form in φ, Gauss–Legendre in u).
+
+    Raises:
+        PhonglabError: for a BSDF other than ``phong``, ``lambert`` or ``diffuse``.
+    """
+    if problem.bsdf not in ("phong", "lambert", "diffuse"):
+        raise PhonglabError(f"no exact value for bsdf {problem.bsdf!r}; use phong, lambert or "
+                            f"diffuse")
+    theta_r = math.radians(problem.theta_i)        # the mirror direction's polar angle
+    cos_r, sin_r = math.cos(theta_r), math.sin(theta_r)
+    Le = problem.radiance
+    kd = problem.diffuse_reflectance
+    ks = problem.specular_reflectance if problem.bsdf == "phong" else 0.0
+    p = problem.exponent
+    disk = problem.light == "disk"
+    # The kernel holds cos δ as a float32 (opaque) value and its cone is exactly
+    # {ω : ω·R >= float32(cos δ)}; for δ = 1° that rounding alone changes 1 − cos δ by
+    # ~10⁻⁴ relative, so the exact value is computed for the float32 cone.
+    cos_delta = float(np.float32(math.cos(math.radians(problem.half_angle))))
+
+    # Diffuse lobe k_d/π ∫ L cos θ_o dω: k_d L_e under the constant light; over the cone
+    # around R, with c = cos γ uniform in [cos δ, 1]: k_d/π · 2π ∫ h(c cos θ_R, s sin θ_R) dc.
+    if not disk:
+        diffuse = kd * Le
+    else:
+        c, w = _gauss_legendre(cos_delta, 1.0, panels, nodes)
+        s = np.sqrt(np.maximum(0.0, 1.0 - c * c))
+        diffuse = kd * Le * 2.0 * float(np.sum(w * clipped_cosine_mean(c * cos_r, s * sin_r)))
+
+    specular = 0.0
+    if ks > 0:
+        # u = cos^{p+1} α  ⇔  cos α = exp(ln u / (p+1)); u_min = cos^{p+1} δ for the cap.
+        log_u_min = (p + 1.0) * math.log(cos_delta) if disk else -math.inf
+        u_min = math.exp(log_u_min) if disk else 0.0
+        u, w = _gauss_legendre(u_min, 1.0, panels, nodes, graded=64)
+        cos_a = np.exp(np.log(u) / (p + 1.0))
+        sin_a = np.sqrt(np.maximum(0.0, 1.0 - cos_a * cos_a))
+        integral = float(np.sum(w * clipped_cosine_mean(cos_a * cos_r, sin_a * sin_r)))
+        specular = ks * Le * (p + 2.0) / (p + 1.0) * integral
+    return diffuse + specular
+
+
+def exact_normal_incidence(problem: Problem) -> float:
+    """Closed form at θ_i = 0: disk k_d L_e sin²δ + k_s L_e (1 − cos^{p+2}δ); constant k_d + k_s."""
+    ks = problem.specular_reflectance if problem.bsdf == "phong" else 0.0
+    kd, Le = problem.diffuse_reflectance, problem.radiance
+    if problem.light == "constant":
+        return (kd + ks) * Le
+    d = math.radians(problem.half_angle)
+    return kd * Le * math.sin(d) ** 2 + ks * Le * (1.0 - math.cos(d) ** (problem.exponent + 2.0))
+
+
+# --------------------------------------------------------------------------------------------
+# The Dr.Jit estimators
+# --------------------------------------------------------------------------------------------
+
+def _kernel_stats(hashes: list | None = None) -> tuple[float, int, int]:
+    """(compile ms, kernels, cache hits) of the JIT kernels launched since the last call.
+
+    Appends each kernel's hash to ``hashes`` when given.
+    """
+    import drjit as dr
+
+    ms, count, hits = 0.0, 0, 0
+    for k in dr.kernel_history():
+        if str(k.get("type", "")).endswith("JIT"):
+            count += 1
+            hits += int(bool(k.get("cache_hit", 0)))
+            ms += float(k.get("codegen_time", 0.0)) + float(k.get("backend_time", 0.0))
+            if hashes is not None:
+                hashes.append(k.get("hash"))
+    return ms, count, hits
+
+
+class ReflectionEstimators:
+    """The five estimators of one BSDF, re-targetable to any :class:`Problem` without recompiling.
+
+    The BSDF is loaded once per (type, k_d, k_s); the exponent is changed through
+    ``mi.traverse`` + ``params.update()`` (phong keeps it opaque); ω_i, the light
+    axis, cos δ, L_e and the seed are opaque Dr.Jit values.
+
+    Example::
+
+        est = ReflectionEstimators(Problem(exponent=100, theta_i=30))
+        e = est.run("mis", n=2**14, seed=0)
+        print(e.value, e.stderr[0], est.exact())
+    """
+
+    def __init__(self, problem: Problem):
+        import mitsuba as mi
+
+        from . import registration
+
+        registration.register()
+        if not mi.variant().startswith(("llvm_", "cuda_")):
+            raise PhonglabError(f"the estimators need a JIT variant (llvm_ad_rgb), not "
+                                f"{mi.variant()}; call phonglab.register('llvm_ad_rgb') first")
+        self._mi = mi
+        self.problem = problem
+        self._material = None
+        self._load(problem)
+
+    # -- set-up --------------------------------------------------------------------------
+    def _load(self, problem: Problem) -> None:
+        import drjit as dr
+
+        mi = self._mi
+        material = (problem.bsdf, problem.diffuse_reflectance, problem.specular_reflectance)
+        if material != self._material:
+            if problem.bsdf == "phong":
+                spec = {"type": "phong", "diffuse_reflectance": problem.diffuse_reflectance,
+                        "specular_reflectance": problem.specular_reflectance,
+                        "exponent": float(problem.exponent)}
+            elif problem.bsdf in ("lambert", "diffuse"):
+                spec = {"type": problem.bsdf, "reflectance": problem.diffuse_reflectance}
+            else:
+                raise PhonglabError(f"unsupported bsdf {problem.bsdf!r} for the estimators; use "
+                                    f"phong, lambert or diffuse")
+            try:
+                self.bsdf = mi.load_dict(spec)
+            except Exception as exc:
+                raise PhonglabError(f"cannot create the {problem.bsdf} BSDF: {exc}") from exc
+            self.params = mi.traverse(self.bsdf)
+            self._material = material
+            if problem.bsdf == "phong":
+                # The first params.update() of a freshly loaded phong changes its kernel once
+                # (measured: a new kernel hash, then none for later exponents); doing it here
+                # makes every estimator compile exactly once per sweep.
+                self.params["exponent"] = mi.Float(float(problem.exponent))
+                self.params.update()
+        if problem.bsdf == "phong" and float(self.params["exponent"][0]) != problem.exponent:
+            self.params["exponent"] = mi.Float(float(problem.exponent))
+            self.params.update()
+        t = math.radians(problem.theta_i)
+        wi = (math.sin(t), 0.0, math.cos(t))
+        self.wi = dr.opaque(mi.Vector3f, wi)
+        self.axis = dr.opaque(mi.Vector3f, (-wi[0], -wi[1], wi[2]))   # R = 2(N·ω_i)N − ω_i
+        self.cos_cutoff = dr.opaque(mi.Float, math.cos(math.radians(problem.half_angle)))
+        self.radiance = dr.opaque(mi.Float, problem.radiance)
+        self.problem = problem
+
+    def set(self, problem: Problem | None = None, **changes) -> "ReflectionEstimators":
+        """Re-target to ``problem`` (or the current one with ``changes``); no recompilation."""
+        self._load(replace(problem or self.problem, **changes))
+        return self
+
+    def exact(self) -> float:
+        return exact_value(self.problem)
+
+    # -- pieces of the integrand -----------------------------------------------------------
+    def _si(self):
+        import drjit as dr
+
+        si = dr.zeros(self._mi.SurfaceInteraction3f)
+        si.wi = self.wi
+        return si
+
+    def _light(self, wo):
+        """L(ω_o): L_e inside the cone (disk) or everywhere (constant)."""
+        import drjit as dr
+
+        if self.problem.light == "constant":
+            return dr.full(self._mi.Float, 1.0, dr.width(wo)) * self.radiance
+        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
+        return dr.select(inside, self.radiance, 0.0)
+
+    def _light_sample(self, sample2):
+        """(ω, pdf) of the light's own sampling: the cone (disk) or the sphere (constant)."""
+        mi = self._mi
+        if self.problem.light == "constant":
+            wo = mi.warp.square_to_uniform_sphere(sample2)
+            return wo, mi.warp.square_to_uniform_sphere_pdf(wo)
+        local = mi.warp.square_to_uniform_cone(sample2, self.cos_cutoff)
+        return mi.Frame3f(self.axis).to_world(local), \
+            mi.warp.square_to_uniform_cone_pdf(local, self.cos_cutoff)
+
+    def _light_pdf(self, wo):
+        import drjit as dr
+
+        mi = self._mi
+        if self.problem.light == "constant":
+            return dr.full(mi.Float, dr.inv_four_pi, dr.width(wo))
+        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
+        return dr.select(inside, dr.rcp(dr.two_pi * (1.0 - self.cos_cutoff)), 0.0)
+
+    @staticmethod
+    def _scalar(spectrum):
+        """Mean over colour channels (the problems are grey, so all channels agree)."""
+        channels = [spectrum[k] for k in range(len(spectrum))]
+        return sum(channels[1:], channels[0]) * (1.0 / len(channels))
+
+    def _samples(self, method: str, n_total: int, seed: int):
+        """Per-sample values X (a Dr.Jit Float of n_total entries; MIS: of pairs)."""
+        import drjit as dr
+
+        mi = self._mi
+        ctx = mi.BSDFContext()
+        si = self._si()
+        idx = dr.arange(mi.UInt32, n_total)
+        v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
+        rng = mi.PCG32(size=n_total)
+        rng.seed(mi.UInt64(v0), mi.UInt64(v1))
+        u1 = rng.next_float32()
+        u2 = mi.Point2f(rng.next_float32(), rng.next_float32())
+        if method == "uniform":
+            wo = mi.warp.square_to_uniform_hemisphere(u2)
+            value = self.bsdf.eval(ctx, si, wo) * (self._light(wo) * dr.two_pi)
+        elif method == "cosine":
+            wo = mi.warp.square_to_cosine_hemisphere(u2)
+            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+            value = self.bsdf.eval(ctx, si, wo) * \
+                dr.select(pdf > 0, self._light(wo) / dr.select(pdf > 0, pdf, 1.0), 0.0)
+        elif method == "bsdf":
+            bs, weight = self.bsdf.sample(ctx, si, u1, u2)
+            value = weight * self._light(bs.wo)
+        elif method == "light":
+            wo, pdf = self._light_sample(u2)
+            value = self.bsdf.eval(ctx, si, wo) * \
+                dr.select(pdf > 0, self.radiance / dr.select(pdf > 0, pdf, 1.0), 0.0)
+        elif method == "mis":
+            # One BSDF sample and one light sample per pair, power heuristic (β = 2).
+            bs, weight = self.bsdf.sample(ctx, si, u1, u2)
+            p_b = bs.pdf
+            p_l = self._light_pdf(bs.wo)
+            w_b = dr.select(p_b > 0, dr.square(p_b) / (dr.square(p_b) + dr.square(p_l)), 0.0)
+            value = weight * (self._light(bs.wo) * w_b)
+            u3 = mi.Point2f(rng.next_float32(), rng.next_float32())
+            wo, p_l = self._light_sample(u3)
+            f_l, p_b = self.bsdf.eval_pdf(ctx, si, wo)
+            w_l = dr.select(p_l > 0, dr.square(p_l) / (dr.square(p_l) + dr.square(p_b)), 0.0)
+            value += f_l * dr.select(p_l > 0, self.radiance * w_l / dr.select(p_l > 0, p_l, 1.0), 0.0)
+        else:
+            raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
+        return self._scalar(value)
+
+    #: Largest number of per-sample values one launch brings back to the host.
+    CHUNK = 1 << 22
+
+    def _values(self, method: str, per: int, batches: int, seed: int) -> np.ndarray:
+        """(batches, per) float64 per-sample values, launched in chunks of <= CHUNK samples."""
+        import drjit as dr
+
+        rows = max(1, self.CHUNK // per)
+        out = []
+        for c, b0 in enumerate(range(0, batches, rows)):
+            b = min(rows, batches - b0)
+            chunk_seed = seed if c == 0 else (seed * 0x9E3779B1 + c) & 0xFFFFFFFF
+            x = self._samples(method, per * b, chunk_seed)
+            dr.eval(x)
+            out.append(np.array(x, dtype=np.float64).reshape(b, per))
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def run(self, method: str, n: int, seed: int = 0, batches: int = 1) -> Estimate:
+        """``batches`` independent estimates with ``n`` samples each, vectorized.
+
+        Args:
+            method: one of :data:`METHODS`.
+            n: samples per estimate (MIS draws n/2 pairs; n >= 2).
+            seed: the random seed (sample k of the launch uses PCG32 stream TEA(seed, k)).
+            batches: S, the number of independent estimates.
+        """
+        import drjit as dr
+
+        if method not in METHODS:
+            raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
+        if n < 2 or batches < 1:
+            raise PhonglabError(f"need n >= 2 samples and batches >= 1, got n={n}, batches={batches}")
+        per = n // 2 if method == "mis" else n          # MIS: n/2 pairs of 2 samples
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        dr.kernel_history()                              # clear
+        t0 = time.perf_counter()
+        arr = self._values(method, per, batches, seed)
+        seconds = time.perf_counter() - t0
+        hashes: list[str] = []
+        compile_ms, kernels, hits = _kernel_stats(hashes)
+        nan_count = int(np.isnan(arr).sum())
+        inf_count = int(np.isinf(arr).sum())
+        values = arr.mean(axis=1)
+        dev = arr - values[:, None]
+        var_b = np.einsum("ij,ij->i", dev, dev) / max(per - 1, 1)
+        return Estimate(method, n, values, np.sqrt(var_b / per), nan_count, inf_count, seconds,
+                        compile_ms, kernels, hits, float(var_b.mean()), hashes)
+
+    def moments(self, method: str, n: int = 1 << 22, seed: int = 0xC0FFEE) -> tuple[float, float, float]:
+        """(mean, variance σ², excess kurtosis γ₂) of the per-sample value X, from n samples.
+
+        For MIS, X is the value of one pair (two samples), so that an n-sample estimate
+        has variance σ²/(n/2).
+        """
+        per = n // 2 if method == "mis" else n
+        arr = self._values(method, per, 1, seed).ravel()
+        mean = float(arr.mean())
+        dev = arr - mean
+        m2 = float(np.mean(dev * dev))
+        m4 = float(np.mean(dev ** 4))
+        return mean, m2 * per / max(per - 1, 1), (m4 / (m2 * m2) - 3.0) if m2 > 0 else 0.0
+
+    def time_steady(self, method: str, n: int, repeats: int = 5, seed: int = 0) -> tuple[float, Estimate]:
+        """Median wall time of ``repeats`` single estimates after one warm-up call (the JIT one)."""
+        first = self.run(method, n, seed=seed)
+        times = [self.run(method, n, seed=seed + 1 + r).seconds for r in range(repeats)]
+        return float(np.median(times)), first
