@@ -124,6 +124,9 @@ class Phong(mi.BSDF):
         dr.make_opaque(self.exponent)
         self.brdf_factor = (self.exponent + 2.0) * dr.inv_two_pi   # normalizes f_r's lobe
         self.pdf_factor = (self.exponent + 1.0) * dr.inv_two_pi    # normalizes the sampling lobe
+        # Evaluated too, so that a freshly loaded BSDF and an updated one trace the same
+        # kernel (otherwise the first exponent update compiled one more kernel).
+        dr.make_opaque(self.brdf_factor, self.pdf_factor)
 
     def _lobes(self, ctx, si, active):
         """Enabled lobes, their reflectances and the specular selection weight at si."""

@@ -381,3 +381,30 @@ def test_gradients_match_the_analytic_derivatives():
         dr.disable_grad(params[key])
         params.update()
         np.testing.assert_allclose(grad, expected, rtol=2e-4, atol=1e-6, err_msg=key)
+
+
+def test_exponent_sweep_never_recompiles():
+    """The exponent is an opaque kernel input: loading a phong and updating its exponent any
+    number of times launches one and the same kernel (a baked float would recompile, ~0.4 s)."""
+    bsdf = mi.load_dict({"type": "phong", "exponent": 30.0})
+    params = mi.traverse(bsdf)
+    si = make_si(np.tile([[0.0, 0.0, 1.0]], (257, 1)))
+    wo = vec(random_dirs(257, 30, upper=True))
+    dr.eval(si, wo)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        hashes, values = [], []
+        for p in (None, 10.0, 20.0, 1e4):
+            if p is not None:
+                params["exponent"] = p
+                params.update()
+            dr.kernel_history()  # clear
+            value = bsdf.eval(mi.BSDFContext(), si, wo)
+            dr.eval(value)
+            values.append(np.array(value)[0].copy())
+            hashes.append(tuple(k["hash"] for k in dr.kernel_history()
+                                if k["type"] == dr.KernelType.JIT))
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert len(hashes[0]) >= 1 and len(set(hashes)) == 1, hashes
+    assert not np.allclose(values[1], values[2])  # the new exponent did take effect

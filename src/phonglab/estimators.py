@@ -318,12 +318,6 @@ class ReflectionEstimators:
                 raise PhonglabError(f"cannot create the {problem.bsdf} BSDF: {exc}") from exc
             self.params = mi.traverse(self.bsdf)
             self._material = material
-            if problem.bsdf == "phong":
-                # The first params.update() of a freshly loaded phong changes its kernel once
-                # (measured: a new kernel hash, then none for later exponents); doing it here
-                # makes every estimator compile exactly once per sweep.
-                self.params["exponent"] = mi.Float(float(problem.exponent))
-                self.params.update()
         if problem.bsdf == "phong" and float(self.params["exponent"][0]) != problem.exponent:
             self.params["exponent"] = mi.Float(float(problem.exponent))
             self.params.update()
