@@ -30,7 +30,7 @@ import numpy as np
 
 from phonglab import planner, render
 
-SCENES = ["gray_direct", "cornell_phong", "glass_slab"]
+SCENES = ["gray_direct", "gray_room", "cornell_phong", "glass_slab"]
 DEFAULT_VARIANT = "llvm_ad_rgb"
 DEFAULT_DEPTH = 8
 
@@ -112,24 +112,6 @@ def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
     }
 
 
-def table(rows: list[dict]) -> str:
-    out = ["| scene | default (rgb, depth 8, scene spp): time, error | planned: variant, depth, "
-           "spp | planned: time (predicted), error (predicted) | speed-up | efficiency ratio "
-           "| pilot |",
-           "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        d, p = r["default"], r["planned"]
-        out.append(
-            f"| {r['scene']} ({r['res']}²) | {d['seconds_median'] * 1e3:.0f} ms, "
-            f"{d['error']:.4f} ± {d['error_sd']:.4f} | {p['variant']}, {p['max_depth']}, "
-            f"{p['spp']} | {p['seconds_median'] * 1e3:.0f} ms "
-            f"({p['predicted_seconds_one_pass'] * 1e3:.0f}), {p['error']:.4f} ± "
-            f"{p['error_sd']:.4f} ({p['predicted_error']:.4f}) | {r['speedup']:.2f}x | "
-            f"{r['efficiency_ratio']:.2f}x | "
-            f"{p['pilot_seconds']:.1f} s |")
-    return "\n".join(out)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=SCENES)
@@ -145,7 +127,7 @@ def main(argv=None) -> int:
         print(json.dumps({k: rows[-1][k] for k in ("scene", "speedup")}), flush=True)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(rows, indent=2))
-    print(table(rows))
+    print(planner.benchmark_table(rows))
     for r in rows:
         print(f"\n{r['scene']}: reference {r['reference']['spp']} spp (noise "
               f"{r['reference']['noise']:.4f}, {r['reference']['seconds']:.1f} s); plan reasons:")

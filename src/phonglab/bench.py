@@ -1206,6 +1206,20 @@ def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> P
                     f"({worst['reason'] or 'ok'}) | {sum(int(r['nan_count']) + int(r['inf_count']) for r in cells)} |")
         add("")
         add(stability_explanations(stab))
+    planner_json = out / "planner.json"
+    if planner_json.is_file():
+        from .planner import benchmark_table
+
+        rows = json.loads(planner_json.read_text())
+        add("\n## Planner: planned against the default configuration (issue 6)\n")
+        add("`scripts/planner_bench.py` (run by `make bench`): per scene, the default configuration "
+            "(llvm_ad_rgb, max_depth 8, the scene's spp) and its relative RMSE E against a converged "
+            "reference; then `planner.plan(scene, target_error=E)`, both rendered alternately "
+            "(kernels compiled beforehand), median times. Efficiency ratio = (t·E²)_default / "
+            "(t·E²)_planned, the time ratio at exactly equal error. How the planner decides: "
+            "[docs/planner.md](docs/planner.md).\n")
+        add(benchmark_table(rows))
+        add("")
     add(f"\n## Reproduce\n\n```\nmake bench            # full run (about {_g(run.get('seconds', float('nan')) / 60, 2)} min here) + this file\n"
         f".venv/bin/phonglab bench --quick --out out/bench-quick   # the < 3 min smoke run\n```\n")
     md_path.write_text("\n".join(L) + "\n")

@@ -791,3 +791,22 @@ def make_reference(scene: str | Path, spp: int, params: dict[str, Any] | None = 
     exr.write(path, result.image, meta)
     exr.write(path.with_name(path.stem + ".stderr.exr"), result.stderr, meta)
     return result.image, result.stderr, meta
+
+
+def benchmark_table(rows: list[dict]) -> str:
+    """Markdown table of ``scripts/planner_bench.py`` rows (planned vs default at equal error)."""
+    out = ["| scene | default (rgb, depth 8, scene spp): time, error | planned: variant, depth, "
+           "spp | planned: time (predicted), error (predicted) | speed-up | efficiency ratio "
+           "| pilot |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        d, p = r["default"], r["planned"]
+        out.append(
+            f"| {r['scene']} ({r['res']}²) | {d['seconds_median'] * 1e3:.0f} ms, "
+            f"{d['error']:.4f} ± {d['error_sd']:.4f} | {p['variant']}, {p['max_depth']}, "
+            f"{p['spp']} | {p['seconds_median'] * 1e3:.0f} ms "
+            f"({p['predicted_seconds_one_pass'] * 1e3:.0f}), {p['error']:.4f} ± "
+            f"{p['error_sd']:.4f} ({p['predicted_error']:.4f}) | {r['speedup']:.2f}x | "
+            f"{r['efficiency_ratio']:.2f}x | "
+            f"{p['pilot_seconds']:.1f} s |")
+    return "\n".join(out)
