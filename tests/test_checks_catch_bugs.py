@@ -39,8 +39,8 @@ def _register_broken() -> None:
         def eval_pdf(self, ctx, si, wo, active=True):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
-    class PhongP1(phong):
-        """The specular lobe normalized with (p+1)/(2π): albedo k_d + k_s (p+1)/(p+2) at θ_i = 0."""
+    class _Rebroken(phong):
+        """Re-applies ``_break`` after every (re)derivation of the parent's factors."""
 
         def __init__(self, props):
             super().__init__(props)
@@ -49,6 +49,9 @@ def _register_broken() -> None:
         def parameters_changed(self, keys=None):
             super().parameters_changed(keys)
             self._break()
+
+    class PhongP1(_Rebroken):
+        """The specular lobe normalized with (p+1)/(2π): albedo k_d + k_s (p+1)/(p+2) at θ_i = 0."""
 
         def _break(self):
             # Overrides the factor however the parent derives it (at load and after updates).
@@ -61,16 +64,8 @@ def _register_broken() -> None:
             return super().sample(ctx, si, sample1, mi.Point2f(sample2.x * sample2.x, sample2.y),
                                   active)
 
-    class PhongBadPdf(phong):
+    class PhongBadPdf(_Rebroken):
         """pdf() of the specular lobe with (p+2)/(2π): no longer the density sample() draws."""
-
-        def __init__(self, props):
-            super().__init__(props)
-            self._break()
-
-        def parameters_changed(self, keys=None):
-            super().parameters_changed(keys)
-            self._break()
 
         def _break(self):
             self.pdf_factor = (self.exponent + 2.0) * dr.inv_two_pi

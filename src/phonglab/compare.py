@@ -237,20 +237,9 @@ def diff_figure(a, b, title: str = "A − B", robust_percentile: float = 99.0):
 
 def write_diff_png(path: str | Path, a, b, title: str = "A − B") -> Path:
     """Write :func:`diff_figure` as a PNG (atomically, like the EXR files)."""
-    import os
-    import tempfile
-
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig = diff_figure(a, b, title)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
+    with exr.atomic_path(path, ".png") as tmp:
         fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

@@ -15,6 +15,7 @@ failure, including ``KeyboardInterrupt``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import tempfile
@@ -53,6 +54,28 @@ def _umask() -> int:
     return mask
 
 
+@contextlib.contextmanager
+def atomic_path(path: Path, suffix: str):
+    """A temporary file beside ``path`` to write into; renamed over ``path`` on success.
+
+    The bytes are fsync'ed before the rename and the file gets the usual permissions
+    (mkstemp creates 0600); on any error the temporary file is removed and a previous file
+    at ``path`` stays untouched.
+    """
+    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb") as f:       # the bytes reach the disk before the rename
+            os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
 def write(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = None) -> Path:
     """Write ``image`` as a float32 EXR with ``metadata`` in its header, atomically.
 
@@ -75,18 +98,8 @@ def write(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = N
     for key, value in (metadata or {}).items():
         header[PREFIX + str(key)] = json.dumps(value, default=str)
     channels = _channels(np.asarray(image))
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path, ".tmp") as tmp:
         OpenEXR.File(header, channels).write(tmp)
-        with open(tmp, "rb") as f:       # the bytes reach the disk before the rename
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path
 
 
