@@ -44,7 +44,9 @@ def run(args) -> int:
     print(f"rendered {path} with {meta['spp']} spp in {meta['variant']} "
           f"({result.seconds:.2f} s, first pass {result.pass_seconds[0]:.2f} s incl. JIT)")
     print(f"  EXR: {out}")
-    print(f"  PNG: {out.with_suffix('.png')}")
+    ev = result.metadata.get("preview_exposure_ev", 0.0)
+    note = f" (exposure {ev:+.1f} EV: the image exceeds 1, as graphics units do)" if ev else ""
+    print(f"  PNG: {out.with_suffix('.png')}{note}")
     return 0
 
 
@@ -86,5 +88,7 @@ def run_planned(args, path: Path, out: Path) -> int:
         print(f"  error: not measurable from one pass; predicted {plan.predicted_error:.4g}, "
               f"target {plan.target_error:g}")
     print(f"  EXR: {out}")
-    print(f"  PNG: {out.with_suffix('.png')}")
+    ev = result.metadata.get("preview_exposure_ev", 0.0)
+    note = f" (exposure {ev:+.1f} EV: the image exceeds 1, as graphics units do)" if ev else ""
+    print(f"  PNG: {out.with_suffix('.png')}{note}")
     return 0

@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from . import exr
-from .render import (PhonglabError, file_hash, load_scene, preview_png, render_scene,
-                     scene_defaults, scene_path)
+from .render import (PhonglabError, auto_exposure, file_hash, load_scene, preview_png,
+                     render_scene, scene_defaults, scene_path)
 
 MODELS = ("graphics", "radiance", "path")
 #: (a, b) pairs compared, b the reference.
@@ -171,12 +171,6 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
     return comparison
 
 
-def _exposure(image: np.ndarray) -> float:
-    """Stops that put the 99th percentile of the image at 0.8 (0 for a black image)."""
-    p = float(np.percentile(image, 99))
-    return float(np.log2(0.8 / p)) if p > 0 else 0.0
-
-
 def _luminance(image: np.ndarray) -> np.ndarray:
     image = np.asarray(image, np.float64)
     if image.ndim == 3 and image.shape[2] >= 3:
@@ -201,7 +195,7 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
                 "variant": mi.variant(), "render_seconds": round(c.seconds[name], 4)}
         files.append(exr.write(out_dir / f"{name}.exr", c.images[name], meta))
         files.append(preview_png(out_dir / f"{name}.png", c.images[name],
-                                 exposure=_exposure(c.images[name])))
+                                 exposure=auto_exposure(c.images[name])))
     diffs = {}
     for st in c.stats:
         a, b = c.images[st.a], c.images[st.b]
@@ -220,7 +214,7 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
               "radiance": "whitted, radiance units\n(f_r cos θ I/r², direct only)",
               "path": f"path tracer\n(all light, {counts['path']} spp)"}
     for ax, name in zip(axes[0], MODELS):
-        ev = _exposure(c.images[name])
+        ev = auto_exposure(c.images[name])
         img = np.clip(c.images[name] * 2.0 ** ev, 0, 1)
         img = np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
         ax.imshow(img[..., :3] if img.shape[-1] >= 3 else img[..., 0], cmap="gray")

@@ -235,6 +235,19 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
                         pass_means=np.array(means), pass_spp=per_pass)
 
 
+def auto_exposure(image: np.ndarray, darken_only: bool = False) -> float:
+    """Stops that put the 99th percentile of ``image`` at 0.8 (0 for a black image).
+
+    With ``darken_only`` an image that already fits (99th percentile <= 1) keeps exposure 0,
+    so radiance renders are previewed as they are and only graphics-unit images (whose
+    values the seed's formula does not bound) are brought into range.
+    """
+    p = float(np.percentile(np.nan_to_num(np.asarray(image, np.float64)), 99))
+    if p <= 0 or (darken_only and p <= 1.0):
+        return 0.0
+    return float(np.log2(0.8 / p))
+
+
 def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> Path:
     """Write an 8-bit sRGB preview (exposure in stops, clipped) of a linear image."""
     import matplotlib
@@ -291,7 +304,9 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
     if result.stderr is not None:
         exr.write(out.with_name(out.stem + ".stderr.exr"), result.stderr, result.metadata)
     if png:
-        preview_png(out.with_suffix(".png"), result.image)
+        ev = auto_exposure(result.image, darken_only=True)
+        result.metadata["preview_exposure_ev"] = round(ev, 2)
+        preview_png(out.with_suffix(".png"), result.image, exposure=ev)
     return result
 
 
