@@ -83,3 +83,16 @@ def test_the_same_test_detects_a_10_percent_darker_lambert(variant_llvm_rgb, sce
     (ma, sa), (mb, sb) = a.mean_and_stderr(), b.mean_and_stderr()
     zmean = (ma - mb) / np.sqrt(sa ** 2 + sb ** 2)
     assert np.any(np.abs(zmean) > stats.t.ppf(1 - sidak(ALPHA, 3) / 2, df=2 * (passes - 1))), zmean
+
+
+def test_preview_exposure_only_darkens_images_beyond_one():
+    from phonglab.render import auto_exposure
+
+    rng = np.random.default_rng(0)
+    radiance = rng.random((32, 32, 3)) * 0.9           # a radiance render: previewed as is
+    assert auto_exposure(radiance, darken_only=True) == 0.0
+    graphics = radiance * 50.0                          # graphics units: 99th pct ~ 44.6
+    ev = auto_exposure(graphics, darken_only=True)
+    assert ev < 0
+    np.testing.assert_allclose(np.percentile(graphics, 99) * 2.0 ** ev, 0.8, rtol=1e-9)
+    assert auto_exposure(np.zeros((4, 4, 3))) == 0.0
