@@ -43,10 +43,7 @@ def run(args) -> int:
     meta = result.metadata
     print(f"rendered {path} with {meta['spp']} spp in {meta['variant']} "
           f"({result.seconds:.2f} s, first pass {result.pass_seconds[0]:.2f} s incl. JIT)")
-    print(f"  EXR: {out}")
-    ev = result.metadata.get("preview_exposure_ev", 0.0)
-    note = f" (exposure {ev:+.1f} EV: the image exceeds 1, as graphics units do)" if ev else ""
-    print(f"  PNG: {out.with_suffix('.png')}{note}")
+    _print_files(out, result)
     return 0
 
 
@@ -87,8 +84,13 @@ def run_planned(args, path: Path, out: Path) -> int:
     else:
         print(f"  error: not measurable from one pass; predicted {plan.predicted_error:.4g}, "
               f"target {plan.target_error:g}")
+    _print_files(out, result)
+    return 0
+
+
+def _print_files(out: Path, result) -> None:
+    """Where the EXR and its PNG preview are (and the preview's exposure when not 0)."""
     print(f"  EXR: {out}")
     ev = result.metadata.get("preview_exposure_ev", 0.0)
     note = f" (exposure {ev:+.1f} EV: the image exceeds 1, as graphics units do)" if ev else ""
     print(f"  PNG: {out.with_suffix('.png')}{note}")
-    return 0
