@@ -26,7 +26,7 @@ import numpy as np
 
 from . import exr
 from .render import (PhonglabError, auto_exposure, file_hash, load_scene, preview_png,
-                     render_scene, scene_defaults, scene_path)
+                     render_scene, scene_defaults, scene_path, to_srgb)
 
 MODELS = ("graphics", "radiance", "path")
 #: (a, b) pairs compared, b the reference.
@@ -215,9 +215,8 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
               "path": f"path tracer\n(all light, {counts['path']} spp)"}
     for ax, name in zip(axes[0], MODELS):
         ev = auto_exposure(c.images[name])
-        img = np.clip(c.images[name] * 2.0 ** ev, 0, 1)
-        img = np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
-        ax.imshow(img[..., :3] if img.shape[-1] >= 3 else img[..., 0], cmap="gray")
+        img = to_srgb(c.images[name], ev)
+        ax.imshow(img[..., :3] if img.ndim == 3 else img, cmap="gray")
         ax.set_title(f"{titles[name]}, exposure {ev:+.1f} EV", fontsize=9)
         ax.axis("off")
     for ax, st in zip(axes[1], c.stats):

@@ -29,6 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from . import optics, radiometry
+from .render import to_srgb
 
 #: The seed's exponents (D. Zorin, "Lighting": p = 0, 1, 2, 10, 25, 100).
 SEED_EXPONENTS = (0, 1, 2, 10, 25, 100)
@@ -42,15 +43,6 @@ def _figure(width: float, height: float, **kw):
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), layout="constrained", **kw)
-
-
-def to_srgb(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
-    """Linear radiance → display sRGB in [0, 1] (exposure in stops, clipped; IEC 61966-2-1)."""
-    img = np.asarray(image, dtype=np.float64) * (2.0 ** exposure)
-    if img.ndim == 3 and img.shape[2] == 1:
-        img = img[..., 0]
-    img = np.clip(np.nan_to_num(img, nan=0.0, posinf=1.0), 0.0, 1.0)
-    return np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
 
 
 def save(fig, path: str | Path, dpi: int = 80) -> Path:

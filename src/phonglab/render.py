@@ -39,6 +39,11 @@ def scene_path(name: str | Path) -> Path:
                         f"one of: {', '.join(sorted(q.stem for q in SCENES_DIR.glob('*.xml')))})")
 
 
+def _malformed(where: str, why: str) -> PhonglabError:
+    return PhonglabError(f"{where}: malformed XML ({why}); fix the markup there "
+                         f"(an unclosed or mismatched tag, or a stray character).")
+
+
 def scene_defaults(path: str | Path) -> dict[str, str]:
     """The ``<default name=... value=...>`` entries of a scene file (its tunable parameters)."""
     import xml.etree.ElementTree as ET
@@ -48,8 +53,7 @@ def scene_defaults(path: str | Path) -> dict[str, str]:
     except ET.ParseError as exc:
         line = exc.position[0] if exc.position else "?"
         why = re.sub(r":\s*line \d+, column \d+$", "", str(exc))
-        raise PhonglabError(f"{path}, line {line}: malformed XML ({why}); fix the markup there "
-                            f"(an unclosed or mismatched tag, or a stray character).") from None
+        raise _malformed(f"{path}, line {line}", why) from None
     return {d.get("name"): d.get("value") for d in root.iter("default") if d.get("name")}
 
 
@@ -125,8 +129,7 @@ def _explain_load_error(path: Path, exc: Exception) -> PhonglabError:
     if "Parsing of XML file" in text or "parse" in text.lower():
         why = re.sub(r'^Parsing of XML file "[^"]*" failed:\s*', "", core)
         why = re.sub(r"\s*\(line \d+, col \d+\)", "", why)
-        return PhonglabError(f"{where}: malformed XML ({why}); fix the markup there "
-                             f"(an unclosed or mismatched tag, or a stray character).")
+        return _malformed(where, why)
     return PhonglabError(f"{where}: could not load the scene: {core}")
 
 
@@ -248,6 +251,18 @@ def auto_exposure(image: np.ndarray, darken_only: bool = False) -> float:
     return float(np.log2(0.8 / p))
 
 
+def to_srgb(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+    """Linear radiance → display sRGB in [0, 1] (exposure in stops, clipped; IEC 61966-2-1).
+
+    A one-channel (H, W, 1) image comes back as (H, W).
+    """
+    img = np.asarray(image, dtype=np.float64) * (2.0 ** exposure)
+    if img.ndim == 3 and img.shape[2] == 1:
+        img = img[..., 0]
+    img = np.clip(np.nan_to_num(img, nan=0.0, posinf=1.0), 0.0, 1.0)
+    return np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
+
+
 def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> Path:
     """Write an 8-bit sRGB preview (exposure in stops, clipped) of a linear image."""
     import matplotlib
@@ -255,11 +270,7 @@ def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> P
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    img = np.asarray(image, dtype=np.float64) * (2.0 ** exposure)
-    if img.ndim == 3 and img.shape[2] == 1:
-        img = img[..., 0]
-    img = np.clip(np.nan_to_num(img, nan=0.0, posinf=1.0), 0.0, 1.0)
-    srgb = np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
+    srgb = to_srgb(image, exposure)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     plt.imsave(path, srgb, cmap="gray" if srgb.ndim == 2 else None, vmin=0.0, vmax=1.0)
