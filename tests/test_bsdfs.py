@@ -16,6 +16,7 @@ import pytest
 from scipy import stats
 
 from conftest import ALPHA, sidak
+from phonglab import radiometry
 
 # name -> (plugin type, parameters); parameters as numbers (gray) or RGB triples.
 CASES = {
@@ -316,13 +317,8 @@ def test_chi2_catches_a_wrong_pdf(tmp_path, monkeypatch):
 # ---------------------------------------------------------------------------- furnace / albedo
 def directional_albedo(bsdf, theta, n, seed):
     """Monte Carlo directional albedo ∫ f_r cos θ_o dω_o = E[sample weight], and its SE."""
-    rng = np.random.default_rng(seed)
-    wi = np.tile([[math.sin(theta), 0.0, math.cos(theta)]], (n, 1))
-    s1 = mi.Float(rng.random(n).astype(np.float32))
-    s2 = mi.Point2f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(2)))
-    _, weight = bsdf.sample(mi.BSDFContext(), make_si(wi), s1, s2)
-    w = np.array(weight, dtype=np.float64)
-    return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
+    a = radiometry.directional_albedo(bsdf, [math.sin(theta), 0.0, math.cos(theta)], n, seed)
+    return a.mean, a.stderr
 
 
 @pytest.mark.parametrize("theta_deg", [0.0, 30.0, 60.0, 85.0, 89.9])

@@ -322,12 +322,6 @@ def phong_dict(name, kd, ks, p) -> dict:
 # Deterministic quadrature of the reflection equation
 # --------------------------------------------------------------------------------------------
 
-def _gl(a: float, b: float, n: int) -> tuple[np.ndarray, np.ndarray]:
-    x, w = np.polynomial.legendre.leggauss(n)
-    h = 0.5 * (b - a)
-    return a + h * (x + 1.0), h * w
-
-
 def _geometric_edges(lo: float, hi: float, start: float) -> list[float]:
     edges, e = [], start
     while e < hi:
