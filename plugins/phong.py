@@ -149,7 +149,11 @@ class Phong(mi.BSDF):
         return self.eval_pdf(ctx, si, wo, active)[1]
 
     def eval_pdf(self, ctx, si, wo, active=True):
-        has_diffuse, has_glossy, kd, ks, w_s = self._lobes(ctx, si, active)
+        return self._eval_pdf(si, wo, active, self._lobes(ctx, si, active))
+
+    def _eval_pdf(self, si, wo, active, lobes):
+        """eval and pdf of the mixture at wo, from the lobes :meth:`_lobes` found at si."""
+        has_diffuse, has_glossy, kd, ks, w_s = lobes
         cos_theta_i = mi.Frame3f.cos_theta(si.wi)
         cos_theta_o = mi.Frame3f.cos_theta(wo)
         active &= (cos_theta_i > 0) & (cos_theta_o > 0) & (has_diffuse or has_glossy)
@@ -167,7 +171,8 @@ class Phong(mi.BSDF):
         return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        has_diffuse, has_glossy, _, _, w_s = self._lobes(ctx, si, active)
+        lobes = self._lobes(ctx, si, active)
+        has_diffuse, has_glossy, _, _, w_s = lobes
         bs = dr.zeros(mi.BSDFSample3f)
         active &= mi.Frame3f.cos_theta(si.wi) > 0
         if not (has_diffuse or has_glossy):
@@ -182,8 +187,9 @@ class Phong(mi.BSDF):
         bs.sampled_component = dr.select(glossy, mi.UInt32(GLOSSY), mi.UInt32(DIFFUSE))
         bs.sampled_type = dr.select(glossy, mi.UInt32(int(mi.BSDFFlags.GlossyReflection)),
                                     mi.UInt32(int(mi.BSDFFlags.DiffuseReflection)))
-        # The weight comes from the whole mixture, so sample, eval and pdf never disagree.
-        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active)
+        # The weight comes from the whole mixture, so sample, eval and pdf never disagree
+        # (the textures at si are evaluated once, for the lobe choice and the mixture).
+        value, bs.pdf = self._eval_pdf(si, bs.wo, active, lobes)
         active &= bs.pdf > 0
         return bs, dr.select(active, value / dr.select(active, bs.pdf, 1.0), 0.0)
 
