@@ -11,7 +11,7 @@ import pytest
 
 from phonglab import bench
 from phonglab.cli import main
-from phonglab.render import PhonglabError
+from phonglab.errors import PhonglabError
 
 
 def test_pareto_front_keeps_only_undominated_points():

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
-from phonglab import radiometry
+from phonglab.stats import ALPHA, sidak
+from phonglab.physics import radiometry
 
 # name -> (plugin type, parameters); parameters as numbers (gray) or RGB triples.
 CASES = {

@@ -89,9 +89,9 @@ def test_result_status_and_json_round_trip(tmp_path):
 @pytest.fixture(scope="module")
 def small(tmp_path_factory, ):
     import phonglab
-    from phonglab import llvm
+    from phonglab import runtime
 
-    phonglab.register("llvm_ad_rgb" if llvm.configure().usable else "scalar_rgb")
+    phonglab.register("llvm_ad_rgb" if runtime.configure().usable else "scalar_rgb")
     return checks.Config.small(out_dir=tmp_path_factory.mktemp("checks"))
 
 

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import phonglab
-from phonglab import checks, exr, llvm, registration
+from phonglab import checks, exr, registration, runtime
 
 BROKEN = ("lambert_nopi", "phong_p1", "phong_warped", "phong_badpdf")
 
@@ -76,7 +76,7 @@ def _register_broken() -> None:
 
 @pytest.fixture(scope="module")
 def cfg(tmp_path_factory):
-    phonglab.register("llvm_ad_rgb" if llvm.configure().usable else "scalar_rgb")
+    phonglab.register("llvm_ad_rgb" if runtime.configure().usable else "scalar_rgb")
     _register_broken()
     return tmp_path_factory.mktemp("broken")
 

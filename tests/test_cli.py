@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from phonglab import cli, exr
-from phonglab.render import PhonglabError
+from phonglab.errors import PhonglabError
 
 UNKNOWN_PY_PARAM = """<scene version="3.0.0">
   <bsdf type="phong" id="a"><float name="exponant" value="3"/></bsdf>

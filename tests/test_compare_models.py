@@ -7,7 +7,7 @@ import pytest
 
 from phonglab import cli, exr
 from phonglab.compare_models import compare_models, format_table, pair_stats
-from phonglab.render import PhonglabError
+from phonglab.errors import PhonglabError
 
 
 def test_pair_stats_by_hand():

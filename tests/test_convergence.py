@@ -40,9 +40,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
+from phonglab.stats import ALPHA, sidak
 
-from phonglab.estimators import Problem, ReflectionEstimators, exact_value
+from phonglab.physics.estimators import Problem, ReflectionEstimators, exact_value
 
 N_LIST = [2 ** k for k in range(8, 17)]
 SLOPE_RANGE = (-0.55, -0.45)

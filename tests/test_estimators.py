@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from phonglab.estimators import (METHODS, Problem, ReflectionEstimators, clipped_cosine_mean,
+from phonglab.physics.estimators import (METHODS, Problem, ReflectionEstimators, clipped_cosine_mean,
                                  exact_normal_incidence, exact_value)
-from phonglab.render import PhonglabError
+from phonglab.errors import PhonglabError
 
 
 @pytest.mark.parametrize("A,B", [(0.3, 0.0), (-0.2, 0.0), (0.5, 0.2), (0.1, 0.7), (-0.3, 0.6),

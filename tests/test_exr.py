@@ -15,8 +15,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
-from phonglab import compare, exr
+from phonglab.stats import ALPHA, sidak
+from phonglab import compare, exr, scenes
+from phonglab.errors import CompareError, ExrError
+from phonglab.metrics import REL_EPS
 
 RNG = np.random.default_rng(20261121)
 
@@ -56,7 +58,7 @@ def test_written_file_has_the_usual_permissions(tmp_path):
 
 @pytest.mark.parametrize("shape", [(4,), (2, 2, 2), (2, 2, 5), (1, 2, 2, 3)])
 def test_unwritable_shapes_are_refused(tmp_path, shape):
-    with pytest.raises(exr.ExrError, match="pass an array of shape"):
+    with pytest.raises(ExrError, match="pass an array of shape"):
         exr.write(tmp_path / "a.exr", np.zeros(shape))
     assert not list(tmp_path.iterdir())
 
@@ -106,7 +108,7 @@ def test_missing_file(tmp_path):
 def test_png_is_not_an_exr(tmp_path):
     png = tmp_path / "a.png"
     png.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 64)
-    with pytest.raises(exr.ExrError, match="not an OpenEXR file.*not its .png preview"):
+    with pytest.raises(ExrError, match="not an OpenEXR file.*not its .png preview"):
         exr.read(png)
 
 
@@ -114,7 +116,7 @@ def test_truncated_exr(tmp_path):
     path = exr.write(tmp_path / "a.exr", _image((32, 32, 3)))
     cut = tmp_path / "cut.exr"
     cut.write_bytes(path.read_bytes()[:120])
-    with pytest.raises(exr.ExrError, match="damaged or truncated.*render it again"):
+    with pytest.raises(ExrError, match="damaged or truncated.*render it again"):
         exr.read(cut)
 
 
@@ -124,19 +126,19 @@ def test_render_file_writes_its_provenance(tmp_path, variant_llvm_rgb):
 
     from phonglab import __version__, render
 
-    scene = render.scene_path("nb_emitter_distance")
+    scene = scenes.scene_path("nb_emitter_distance")
     out = tmp_path / "e.exr"
     result = render.render_file(scene, out, spp=16, progress=False)
     img, meta = exr.read(out)
     assert np.array_equal(img, result.image)
     assert meta["scene"] == str(scene)
-    assert meta["scene_sha256"] == render.file_hash(scene)
+    assert meta["scene_sha256"] == scenes.file_hash(scene)
     assert (meta["variant"], meta["spp"], meta["seed"]) == (variant_llvm_rgb, 16, 0)
     assert meta["integrator"] == "PathIntegrator" and meta["max_depth"] == 1
     assert meta["render_seconds"] > 0
     assert (meta["phonglab_version"], meta["mitsuba_version"]) == (__version__, mi.__version__)
     # 16 spp render in passes, so the standard-error image sits beside it, same shape.
-    se, se_meta = exr.read(compare.stderr_path(out))
+    se, se_meta = exr.read(exr.stderr_path(out))
     assert se.shape == img.shape and se_meta == meta
     # The emitter's interior is exactly its radiance, L = 1 (header of nb_emitter_distance.xml).
     assert np.all(img[28:36, 28:36] == 1.0)
@@ -150,7 +152,7 @@ def test_constant_offset():
     assert r.rmse == pytest.approx(c, rel=1e-12)
     assert r.max_abs_diff == pytest.approx(c, rel=1e-12)
     assert r.mean_diff == pytest.approx(c, rel=1e-12)
-    assert r.rel_mse == pytest.approx(np.mean(c * c / (b * b + compare.REL_EPS)), rel=1e-12)
+    assert r.rel_mse == pytest.approx(np.mean(c * c / (b * b + REL_EPS)), rel=1e-12)
     assert r.channel_mean_diff == pytest.approx([c] * 3, rel=1e-12)
     # Every pixel differs by exactly c: no spread, so no standard error and no test.
     assert r.mean_diff_stderr == pytest.approx(0.0, abs=1e-15)
@@ -185,9 +187,9 @@ def test_stderr_from_files():
 
 
 def test_mismatched_shapes_are_refused():
-    with pytest.raises(compare.CompareError, match=r"A is 4 x 5 x 3 but B is 4 x 6 x 3.*same resolution"):
+    with pytest.raises(CompareError, match=r"A is 4 x 5 x 3 but B is 4 x 6 x 3.*same resolution"):
         compare.compare_arrays(np.zeros((4, 5, 3)), np.zeros((4, 6, 3)))
-    with pytest.raises(compare.CompareError, match="standard-error image of A is 4 x 5 x 1"):
+    with pytest.raises(CompareError, match="standard-error image of A is 4 x 5 x 1"):
         compare.compare_arrays(np.zeros((4, 5, 3)), np.zeros((4, 5, 3)), np.zeros((4, 5)),
                                np.zeros((4, 5, 3)))
 
@@ -195,7 +197,7 @@ def test_mismatched_shapes_are_refused():
 def test_non_finite_values_are_refused():
     a = np.zeros((2, 2, 3))
     a[0, 0, 1] = np.nan
-    with pytest.raises(compare.CompareError, match="A has 1 NaN or infinite"):
+    with pytest.raises(CompareError, match="A has 1 NaN or infinite"):
         compare.compare_arrays(a, np.zeros((2, 2, 3)))
 
 
@@ -212,7 +214,7 @@ def test_compare_files_finds_the_stderr_files(tmp_path):
     assert r.stderr_source == "stderr files"
     assert r.mean_diff_stderr == pytest.approx(0.05 / 8, rel=1e-6)    # √(0.03² + 0.04²) / √64
     assert (meta_a, meta_b) == ({"spp": 4}, {"spp": 8})
-    with pytest.raises(compare.CompareError, match="without --stderr-b"):
+    with pytest.raises(CompareError, match="without --stderr-b"):
         compare.compare_files(tmp_path / "a.exr", tmp_path / "b.exr",
                               stderr_a=tmp_path / "a.stderr.exr")
 

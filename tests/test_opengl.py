@@ -15,9 +15,9 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from phonglab import opengl
-from phonglab.opengl import GLLight, GLMaterial
-from phonglab.render import PhonglabError
+from phonglab.physics import opengl
+from phonglab.physics.opengl import GLLight, GLMaterial
+from phonglab.errors import PhonglabError
 
 
 def test_gl_defaults_and_validation():

@@ -9,7 +9,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from phonglab import optics
+from phonglab.physics import optics
 
 ETAS = [1 / 1.33, 1 / 1.5, 1 / 2.4, 1.33, 1.5, 2.4]   # n1/n2: entering, then leaving
 

@@ -3,8 +3,9 @@
 Cheapest first: scene inspection (XML only) -> variant/backend choice -> plans from small pilots
 (res 32) -> achieved error against a converged reference -> the CLI.
 
-The error is phonglab's relative RMSE, E = sqrt(mean(((x - r)/(|r| + 0.01))^2)) over every pixel
-and channel, r the converged full-depth image (planner.EPS, planner.achieved_error).
+The error is phonglab's relative RMSE, E = sqrt(mean((x - r)^2/(r^2 + 0.01))) over every pixel
+and channel, r the converged full-depth image (phonglab.metrics.relative_rmse with the
+reference's noise subtracted; phonglab.references.reference).
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ import drjit as dr
 import numpy as np
 import pytest
 
-from phonglab import exr, llvm, planner, render
+from phonglab import exr, metrics, planner, references, render, runtime, scenes
 from phonglab.cli import main
-from phonglab.render import PhonglabError
+from phonglab.errors import PhonglabError
 
 RES = {"res": 32}
 TARGET = 0.05
@@ -34,20 +35,20 @@ def _write(tmp_path, body: str, defaults: str = "") -> str:
 # --- scene inspection: no rendering -------------------------------------------------------------
 
 def test_gray_direct_is_mono_without_delta_bsdfs():
-    info = planner.inspect_scene("gray_direct")
+    info = scenes.inspect_scene("gray_direct")
     assert info.colored == [] and info.spectral == [] and info.delta_bsdfs == []
     assert info.gray_values == 4          # k_d, k_s, the light's black BSDF, its radiance
     assert info.color == "mono"
 
 
 def test_cornell_is_rgb_and_names_the_coloured_walls():
-    info = planner.inspect_scene("cornell_phong")
+    info = scenes.inspect_scene("cornell_phong")
     assert info.color == "rgb"
     assert any("'red'" in c for c in info.colored) and any("'green'" in c for c in info.colored)
 
 
 def test_glass_slab_is_rgb_with_a_dielectric():
-    info = planner.inspect_scene("glass_slab")
+    info = scenes.inspect_scene("glass_slab")
     assert info.color == "rgb" and info.delta_bsdfs == ["dielectric"]
     assert any("checkerboard" in c for c in info.colored)
 
@@ -65,39 +66,39 @@ def test_glass_slab_is_rgb_with_a_dielectric():
 ], ids=["uniform-spectrum", "wavelength-list", "blackbody", "measured-conductor",
         "perfect-mirror", "coloured-emitter"])
 def test_colour_model_follows_the_data(tmp_path, body, color):
-    assert planner.inspect_scene(_write(tmp_path, body)).color == color
+    assert scenes.inspect_scene(_write(tmp_path, body)).color == color
 
 
 def test_defaults_and_overrides_are_substituted(tmp_path):
     path = _write(tmp_path, '<bsdf type="diffuse"><rgb name="reflectance" value="$c"/></bsdf>',
                   '<default name="c" value="0.2, 0.5, 0.1"/>')
-    assert planner.inspect_scene(path).color == "rgb"
-    assert planner.inspect_scene(path, c="0.3, 0.3, 0.3").color == "mono"
+    assert scenes.inspect_scene(path).color == "rgb"
+    assert scenes.inspect_scene(path, c="0.3, 0.3, 0.3").color == "mono"
 
 
 def test_unresolved_substitution_is_a_user_error(tmp_path):
     path = _write(tmp_path, '<bsdf type="diffuse"><rgb name="reflectance" value="$c"/></bsdf>')
     with pytest.raises(PhonglabError, match=r"'\$c' is used but has no <default>"):
-        planner.inspect_scene(path)
+        scenes.inspect_scene(path)
 
 
 # --- variant and backend --------------------------------------------------------------------------
 
 def test_variant_steps_up_only_when_needed():
-    assert planner.variant_for("mono", "llvm") == ("llvm_ad_mono", [])
-    assert planner.variant_for("mono", "llvm", polarized=True)[0] == "llvm_ad_mono_polarized"
+    assert runtime.variant_for("mono", "llvm") == ("llvm_ad_mono", [])
+    assert runtime.variant_for("mono", "llvm", polarized=True)[0] == "llvm_ad_mono_polarized"
     # Mitsuba builds no rgb_polarized and no scalar_mono: the next richer model, with a note.
-    variant, notes = planner.variant_for("rgb", "llvm", polarized=True)
+    variant, notes = runtime.variant_for("rgb", "llvm", polarized=True)
     assert variant == "llvm_ad_spectral_polarized" and notes
-    variant, notes = planner.variant_for("mono", "scalar")
+    variant, notes = runtime.variant_for("mono", "scalar")
     assert variant == "scalar_rgb" and notes
 
 
 def test_backend_is_the_best_that_works_here():
-    backend, why = planner.available_backend()
+    backend, why = runtime.available_backend()
     if not dr.has_backend(dr.JitBackend.CUDA):
         assert backend != "cuda" and "CUDA" in why
-    if llvm.configure().usable:
+    if runtime.configure().usable:
         assert backend in ("cuda", "llvm")
 
 
@@ -215,12 +216,12 @@ def test_achieved_error_is_near_the_target(plans, name):
     percent, so the window tests the planner's prediction, not the luck of one seed.
     """
     p = plans[name]
-    ref, ref_se, _ = planner.make_reference(name, max(1024, 16 * p.spp), params=RES)
-    scene = render.load_scene(name, p.variant, **RES)
-    info = planner.inspect_scene(name, **RES)
+    ref = references.reference(name, max(1024, 16 * p.spp), params=RES)
+    scene = scenes.load_scene(name, p.variant, **RES)
+    info = scenes.inspect_scene(name, **RES)
     result = render.render_scene(scene, p.spp, seed=0, passes=p.passes,
-                                 integrator=planner._path_integrator(p.max_depth, info))
-    achieved = planner.achieved_error(result.image, ref, ref_se)
+                                 integrator=scenes.path_integrator(p.max_depth, info))
+    achieved = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
     assert 0.5 * TARGET <= achieved <= 1.5 * TARGET, (name, achieved, p.summary())
 
 
@@ -230,16 +231,17 @@ def test_achieved_error_subtracts_the_reference_noise():
     se = 0.01
     image = truth + rng.normal(0, 0.02, truth.shape)
     reference = truth + rng.normal(0, se, truth.shape)
-    # Expected: the image's own relative noise 0.02/0.51 = 0.0392, not sqrt(0.02² + 0.01²)/0.51.
-    got = planner.achieved_error(image, reference, np.full_like(truth, se))
-    assert abs(got - 0.02 / 0.51) < 0.002
+    # Expected: the image's own relative noise 0.02/√(0.5² + ε) = 0.0392, not
+    # √(0.02² + 0.01²)/√(0.5² + ε).
+    got = metrics.relative_rmse(image, reference, ref_stderr=np.full_like(truth, se))
+    assert abs(got - 0.02 / math.sqrt(0.5 ** 2 + metrics.REL_EPS)) < 0.002
     # A gray scene's mono render against an RGB reference: the reference's channels (and their
     # noise) are equal, so its luminance is the same gray value with the same standard error.
     gray_ref = np.repeat(reference[..., :1], 3, axis=2)
     mono = image[..., :1]
-    got = planner.achieved_error(mono, gray_ref, np.full_like(truth, se))
-    assert planner.to_luminance(gray_ref).shape == (64, 64, 1)
-    assert abs(got - 0.02 / 0.51) < 0.004
+    got = metrics.relative_rmse(mono, gray_ref, ref_stderr=np.full_like(truth, se))
+    assert metrics.luminance(gray_ref, keepdims=True).shape == (64, 64, 1)
+    assert abs(got - 0.02 / math.sqrt(0.5 ** 2 + metrics.REL_EPS)) < 0.004
 
 
 # --- CLI -----------------------------------------------------------------------------------------
@@ -282,6 +284,6 @@ def test_cli_render_explicit_settings_override_the_plan(tmp_path, capsys):
 def test_pass_seeds_stay_32_bit():
     """Regression (fix in render.py): seed·1_000_003 + k overflowed Mitsuba's 32-bit seed."""
     assert render.pass_seed(5000, 3) == (5000 * 1_000_003 + 3) % 2**32 < 2**32
-    scene = render.load_scene("gray_direct", "llvm_ad_mono", res=8)
+    scene = scenes.load_scene("gray_direct", "llvm_ad_mono", res=8)
     result = render.render_scene(scene, 2, seed=5000, passes=2)
     assert np.isfinite(result.image).all()

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
-from phonglab import radiometry as R
+from phonglab.stats import ALPHA, sidak
+from phonglab.physics import radiometry as R
 
 #: Relative accuracy of a sum of float32 BSDF values (eval runs in float32): ~1e-7 per term,
 #: a few ulps after summing 3·10⁴ positive terms in float64.

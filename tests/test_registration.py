@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import warnings
 
 import drjit as dr
 import mitsuba as mi
@@ -13,7 +12,7 @@ import numpy as np
 import pytest
 
 import phonglab
-from phonglab import llvm
+from phonglab import runtime
 
 PY = sys.executable
 
@@ -25,9 +24,9 @@ def run_py(code: str, env=None) -> subprocess.CompletedProcess:
 
 def test_llvm_variant_is_usable():
     """Fails loudly (not a skip) on a machine where the default JIT variant cannot run."""
-    choice = llvm.configure()
+    choice = runtime.configure()
     assert choice.usable, f"LLVM backend unusable: {choice.reason}. Run `make setup` as root."
-    assert choice.major not in llvm.BROKEN_MAJORS
+    assert choice.major not in runtime.BROKEN_MAJORS
     assert phonglab.register("llvm_ad_rgb") == "llvm_ad_rgb"
     assert dr.detail.llvm_version()[0] == choice.major
 
@@ -60,24 +59,24 @@ def test_plugins_follow_later_set_variant_calls():
 
 
 def test_library_major_parsing():
-    assert llvm.library_major("/usr/lib/x86_64-linux-gnu/libLLVM-19.so") == 19
-    assert llvm.library_major("libLLVM.so.19.1") == 19
-    assert llvm.library_major("/usr/lib/llvm-18/lib/libLLVM.so") == 18
-    assert llvm.library_major("libLLVM-15.so.1") == 15
+    assert runtime.library_major("/usr/lib/x86_64-linux-gnu/libLLVM-19.so") == 19
+    assert runtime.library_major("libLLVM.so.19.1") == 19
+    assert runtime.library_major("/usr/lib/llvm-18/lib/libLLVM.so") == 18
+    assert runtime.library_major("libLLVM-15.so.1") == 15
 
 
 def test_broken_llvm_in_environment_is_refused_and_falls_back_loudly(monkeypatch, tmp_path):
     fake = tmp_path / "libLLVM-15.so"
     fake.write_bytes(b"")
-    monkeypatch.setenv(llvm.ENV, str(fake))
-    choice = llvm.configure(force=True)
+    monkeypatch.setenv(runtime.ENV, str(fake))
+    choice = runtime.configure(force=True)
     try:
         assert not choice.usable and "15" in choice.reason and "libllvm19" in choice.reason
-        with pytest.warns(llvm.SlowFallbackWarning, match="150x slower"):
-            assert llvm.default_variant() == "scalar_rgb"
+        with pytest.warns(runtime.SlowFallbackWarning, match="150x slower"):
+            assert runtime.default_variant() == "scalar_rgb"
     finally:
         monkeypatch.undo()
-        llvm.configure(force=True)
+        runtime.configure(force=True)
 
 
 def test_scalar_fallback_end_to_end_without_llvm():
@@ -86,7 +85,7 @@ def test_scalar_fallback_end_to_end_without_llvm():
             "warnings.simplefilter('always');"
             "v = phonglab.register(); print(v);"
             "mi.load_dict({'type': 'phong'})")
-    out = run_py(code, env={llvm.ENV: "/nonexistent/libLLVM-19.so"})
+    out = run_py(code, env={runtime.ENV: "/nonexistent/libLLVM-19.so"})
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["scalar_rgb"]
     assert "150x slower" in out.stderr
@@ -120,7 +119,8 @@ def test_plugin_in_every_variant_from_dict_xml_and_twosided(any_variant, kind):
 
 
 def test_scene_renders_in_every_variant(any_variant, scenes_dir):
-    from phonglab.render import load_scene, render_scene
+    from phonglab.render import render_scene
+    from phonglab.scenes import load_scene
 
     spp = 1 if any_variant.startswith("scalar") else 4
     scene = load_scene(scenes_dir / "cornell_phong.xml", any_variant, res=16 if spp == 1 else 32,
@@ -133,7 +133,8 @@ def test_scene_renders_in_every_variant(any_variant, scenes_dir):
 def test_polarized_variants_render_like_unpolarized(variant, scenes_dir):
     """The plugins return an ideal depolarizer (as diffuse.cpp does), so a polarized variant
     renders the scene (no polarizing element in it) exactly as the unpolarized one, seed for seed."""
-    from phonglab.render import load_scene, render_scene
+    from phonglab.render import render_scene
+    from phonglab.scenes import load_scene
 
     images = []
     for v in (variant, variant.replace("_polarized", "")):

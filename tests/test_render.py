@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from scipy import stats
 
-from conftest import ALPHA, sidak
+from phonglab.stats import ALPHA, sidak
 from phonglab import cli, exr
-from phonglab.render import load_scene, render_scene
+from phonglab.render import render_scene
+from phonglab.scenes import load_scene
 
 
 def test_render_cli_writes_exr_png_and_provenance(tmp_path, capsys, variant_llvm_rgb):
@@ -86,7 +86,7 @@ def test_the_same_test_detects_a_10_percent_darker_lambert(variant_llvm_rgb, sce
 
 
 def test_preview_exposure_only_darkens_images_beyond_one():
-    from phonglab.render import auto_exposure
+    from phonglab.tonemap import auto_exposure
 
     rng = np.random.default_rng(0)
     radiance = rng.random((32, 32, 3)) * 0.9           # a radiance render: previewed as is

@@ -7,14 +7,14 @@ Importing phonglab sets no Mitsuba variant; :func:`register` does that work::
     scene = mi.load_file("scenes_xml/cornell_phong.xml")
 
 It pins ``DRJIT_LIBLLVM_PATH`` to a libLLVM Dr.Jit 1.5 can use (see
-:mod:`phonglab.llvm`) before Dr.Jit loads one.
+:mod:`phonglab.runtime`) before Dr.Jit loads one.
 """
 
-from . import llvm as _llvm
+__version__ = "0.1.0"
 
-_llvm.configure()
+from . import runtime  # noqa: E402  (pins libLLVM before anything imports Dr.Jit)
+
+runtime.configure()
 
 from .registration import register, registered_variants  # noqa: E402
-
-__version__ = "0.1.0"
 __all__ = ["register", "registered_variants", "__version__"]

@@ -4,9 +4,8 @@ With ``A`` the image under test and ``B`` the reference, per value (pixel i, cha
 ``d_ic = A_ic − B_ic``, over n pixels and C channels:
 
 * RMSE            = √( Σ d_ic² / (nC) )
-* relative MSE    = Σ d_ic² / (B_ic² + ε) / (nC),  ε = 10⁻² guarding dark pixels (the
-  "relMSE" of the rendering literature, e.g. Rousselle, Knaus & Zwicker, "Adaptive sampling
-  and reconstruction using greedy error minimization", SIGGRAPH Asia 2011)
+* relative MSE    = Σ d_ic² / (B_ic² + ε) / (nC),  ε = 10⁻² guarding dark pixels
+  (:mod:`phonglab.metrics`, the one definition phonglab uses everywhere)
 * mean difference  d̄ = Σ m_i / n with m_i = Σ_c d_ic / C the pixel's channel mean.
 
 Its standard error comes from one of two sources (:attr:`Comparison.stderr_source`):
@@ -28,20 +27,18 @@ Both assume independent pixels; a wide reconstruction filter (Mitsuba's default
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.figure import Figure
 
-from . import exr
-
-#: ε of the relative MSE: (A − B)² / (B² + ε).
-REL_EPS = 1e-2
-
-
-class CompareError(ValueError):
-    """Two images (or an image and its standard-error map) that cannot be compared."""
+from . import exr, metrics
+from .errors import CompareError
+from .exr import stderr_path
+from .metrics import REL_EPS, as_hwc
+from .stats import two_sided_p
 
 
 @dataclass
@@ -80,20 +77,9 @@ class Comparison:
         return "\n".join(lines)
 
     def as_dict(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
         d = asdict(self)
         d["shape"] = list(self.shape)
         return d
-
-
-def _as_hwc(image, name: str) -> np.ndarray:
-    a = np.asarray(image, dtype=np.float64)
-    if a.ndim == 2:
-        a = a[..., None]
-    if a.ndim != 3:
-        raise CompareError(f"{name} has shape {a.shape}; give an (H, W) or (H, W, C) image")
-    return a
 
 
 def _shape_text(shape) -> str:
@@ -115,7 +101,7 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
     Raises:
         CompareError: shapes differ, or a value is NaN/Inf.
     """
-    a, b = _as_hwc(a, names[0]), _as_hwc(b, names[1])
+    a, b = as_hwc(a, names[0]), as_hwc(b, names[1])
     if a.shape != b.shape:
         raise CompareError(
             f"{names[0]} is {_shape_text(a.shape)} but {names[1]} is {_shape_text(b.shape)} "
@@ -131,7 +117,7 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
     pixel_mean = d.mean(axis=2).ravel()
     mean_diff = float(pixel_mean.mean())
     if stderr_a is not None and stderr_b is not None:
-        sa, sb = _as_hwc(stderr_a, f"{names[0]}'s stderr"), _as_hwc(stderr_b, f"{names[1]}'s stderr")
+        sa, sb = as_hwc(stderr_a, f"{names[0]}'s stderr"), as_hwc(stderr_b, f"{names[1]}'s stderr")
         for which, s in ((names[0], sa), (names[1], sb)):
             if s.shape != a.shape:
                 raise CompareError(
@@ -149,24 +135,16 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
         source = "pixel differences"
     if se > 0:
         z = mean_diff / se
-        from scipy import stats
-
-        p = float(2.0 * stats.norm.sf(abs(z)))
+        p = two_sided_p(z)
     else:
         z, p = float("nan"), float("nan")
     return Comparison(
         shape=tuple(int(s) for s in a.shape),
-        rmse=float(np.sqrt(np.mean(d * d))),
-        rel_mse=float(np.mean(d * d / (b * b + eps))),
+        rmse=metrics.rmse(a, b),
+        rel_mse=metrics.rel_mse(a, b, eps),
         mean_diff=mean_diff, mean_diff_stderr=se, stderr_source=source, z=float(z), p_value=p,
         max_abs_diff=float(np.max(np.abs(d))), mean_a=float(a.mean()), mean_b=float(b.mean()),
         channel_mean_diff=[float(x) for x in d.mean(axis=(0, 1))], eps=eps)
-
-
-def stderr_path(path: str | Path) -> Path:
-    """Where ``phonglab render`` writes the standard-error image of ``path``: ``x.stderr.exr``."""
-    path = Path(path)
-    return path.with_name(path.stem + ".stderr.exr")
 
 
 def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path | None = None,
@@ -217,9 +195,7 @@ def diff_figure(a, b, title: str = "A − B", robust_percentile: float = 99.0):
     Diverging colormap (``RdBu_r``: red where A is brighter, blue where B is), symmetric
     limits at the given percentile of |A − B| so that a few fireflies do not wash it out.
     """
-    from matplotlib.figure import Figure
-
-    d = (_as_hwc(a, "A") - _as_hwc(b, "B")).mean(axis=2)
+    d = (as_hwc(a, "A") - as_hwc(b, "B")).mean(axis=2)
     lim = float(np.percentile(np.abs(d), robust_percentile)) if d.size else 0.0
     if not lim > 0:
         lim = float(np.max(np.abs(d))) or 1.0

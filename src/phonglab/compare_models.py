@@ -25,8 +25,10 @@ from typing import Any
 import numpy as np
 
 from . import exr
-from .render import (PhonglabError, auto_exposure, file_hash, load_scene, preview_png,
-                     render_scene, scene_defaults, scene_path, to_srgb)
+from .errors import PhonglabError
+from .tonemap import auto_exposure, preview_png, to_srgb
+from .scenes import file_hash, load_scene, scene_defaults, scene_path
+from .render import render_scene
 
 MODELS = ("graphics", "radiance", "path")
 #: (a, b) pairs compared, b the reference.

@@ -25,13 +25,11 @@ from typing import Any, Mapping
 import numpy as np
 import OpenEXR
 
+from .errors import ExrError
+
 PREFIX = "phonglab:"
 #: The four bytes every OpenEXR file starts with (OpenEXR file layout, "magic number").
 MAGIC = b"\x76\x2f\x31\x01"
-
-
-class ExrError(ValueError):
-    """A file that is not a readable OpenEXR image, or an image EXR cannot hold."""
 
 
 def _channels(image: np.ndarray) -> dict[str, np.ndarray]:
@@ -101,6 +99,12 @@ def write(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = N
     with atomic_path(path, ".tmp") as tmp:
         OpenEXR.File(header, channels).write(tmp)
     return path
+
+
+def stderr_path(path: str | os.PathLike) -> Path:
+    """The standard-error image written beside an image: ``x.exr`` -> ``x.stderr.exr``."""
+    path = Path(path)
+    return path.with_name(path.stem + ".stderr.exr")
 
 
 def is_exr(path: str | os.PathLike) -> bool:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib
 import threading
 
-from . import llvm
+from . import runtime
 
 #: (module of phonglab.plugins, name in scene files, kind)
 PLUGINS: list[tuple[str, str, str]] = [
@@ -69,7 +69,7 @@ def register(variant: str | None = None) -> str:
     Args:
         variant: a Mitsuba variant to set first. When neither this nor an active
             variant exists, ``llvm_ad_rgb`` is set (``scalar_rgb`` with a loud
-            :class:`phonglab.llvm.SlowFallbackWarning` when LLVM is unusable).
+            :class:`phonglab.runtime.SlowFallbackWarning` when LLVM is unusable).
 
     Returns:
         the active variant.
@@ -79,11 +79,11 @@ def register(variant: str | None = None) -> str:
     global _callback_installed
     import mitsuba as mi
 
-    llvm.configure()
+    runtime.configure()
     if variant is not None and variant != mi.variant():
-        llvm.set_variant(variant)
+        runtime.set_variant(variant)
     elif mi.variant() is None:
-        llvm.set_variant(None)
+        runtime.set_variant(None)
     with _lock:
         if not _callback_installed:
             mi.detail.add_variant_callback(_on_variant_change)

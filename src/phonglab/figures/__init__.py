@@ -28,8 +28,8 @@ from typing import Sequence
 
 import numpy as np
 
-from . import optics, radiometry
-from .render import to_srgb
+from ..physics import optics, radiometry
+from ..tonemap import to_srgb
 
 #: The seed's exponents (D. Zorin, "Lighting": p = 0, 1, 2, 10, 25, 100).
 SEED_EXPONENTS = (0, 1, 2, 10, 25, 100)
@@ -54,7 +54,7 @@ def save(fig, path: str | Path, dpi: int = 80) -> Path:
 
 
 def _register(variant: str | None = None) -> str:
-    from . import registration
+    from .. import registration
 
     return registration.register(variant)
 
@@ -170,7 +170,8 @@ def emitter_distance_series(distances: Sequence[float] = (2.0, 4.0, 8.0), spp: i
     The measured solid angle sums, over pixels, (pixel value / L) × the pixel's solid angle
     (:func:`phonglab.radiometry.pixel_solid_angles`; the scene's fov is 30°).
     """
-    from .render import load_scene, render_scene
+    from ..scenes import load_scene
+    from ..render import render_scene
 
     _register()
     pix = radiometry.pixel_solid_angles(res, res, fov)
@@ -296,7 +297,8 @@ def render_sphere_row(spp: int = 16, exponents: Sequence[float] = SEED_EXPONENTS
                       **defaults) -> np.ndarray:
     """Render ``nb_sphere_row.xml`` (one sphere per exponent); ``defaults`` override its
     ``<default>`` entries (kd, ks as "r, g, b" strings, width, height, irradiance)."""
-    from .render import load_scene, render_scene
+    from ..scenes import load_scene
+    from ..render import render_scene
 
     _register()
     if len(exponents) != 6:
@@ -389,7 +391,8 @@ def fig_albedo(curves: AlbedoCurves):
 def render_furnace(spp: int = 64, passes: int = 4, seed: int = 0, **defaults):
     """Render ``nb_furnace_sphere.xml`` (phong sphere under a unit sky, BSDF sampling only);
     returns phonglab.render.RenderResult (image and per-pixel standard error)."""
-    from .render import load_scene, render_scene
+    from ..scenes import load_scene
+    from ..render import render_scene
 
     _register()
     scene = load_scene("nb_furnace_sphere", spp=str(spp), **{k: str(v) for k, v in defaults.items()})
@@ -610,7 +613,7 @@ def convergence_curves(problem=None, methods: Sequence[str] = ("uniform", "cosin
     :mod:`phonglab.estimators` (S seeds per N), the RMSE the per-sample variance predicts,
     the time of one estimate (N × the per-sample cost of the largest launch), and the fitted
     log-log slope (−½ for Monte Carlo)."""
-    from . import estimators
+    from ..physics import estimators
 
     problem = problem or estimators.Problem(diffuse_reflectance=0.2, specular_reflectance=0.7,
                                             exponent=100.0, theta_i=30.0, light="disk",
@@ -668,7 +671,7 @@ def efficiency_table(curves: ConvergenceCurves) -> list[tuple[str, float, float]
 def fig_plan_depths(plan):
     """The planner's depth evidence: relative RMS of the omitted deeper bounces b(d) for each
     pilot depth, the budget 0.25·E it must stay under, and the chosen depth."""
-    from .planner import BIAS_FRACTION
+    from ..planner import BIAS_FRACTION
 
     depths = [d for d in plan.depths if d.depth != -1]
     fig = _figure(5.5, 3.2)
@@ -704,10 +707,3 @@ def write_doc_images(folder: str | Path = "docs/img", dpi: int = 72) -> list[Pat
         "nb_04_convergence.png": fig_convergence(convergence_curves(seeds=8)),
     }
     return [save(fig, folder / name, dpi=dpi) for name, fig in figs.items()]
-
-
-if __name__ == "__main__":  # pragma: no cover - `make notebook-figures`
-    import sys
-
-    for p in write_doc_images(sys.argv[1] if len(sys.argv) > 1 else "docs/img"):
-        print(p)

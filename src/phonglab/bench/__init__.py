@@ -52,8 +52,9 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
-from .estimators import METHODS, Problem, ReflectionEstimators, exact_value
-from .render import REPO_ROOT, PhonglabError
+from ..physics.estimators import METHODS, Problem, ReflectionEstimators, exact_value
+from ..scenes import REPO_ROOT
+from ..errors import PhonglabError
 
 DEFAULT_CACHE = REPO_ROOT / ".bench_cache"
 DEFAULT_OUT = Path("out") / "bench"
@@ -208,7 +209,7 @@ def machine_info() -> dict[str, Any]:
     import drjit as dr
     import mitsuba as mi
 
-    from . import __version__
+    from .. import __version__
 
     cpu = platform.processor() or platform.machine()
     try:
@@ -268,7 +269,7 @@ def cornell_xml(boxes: str = "phong", exponent: float = 30.0, rfilter: str = "bo
     ``roughplastic`` the same coating with a Beckmann roughness :func:`beckmann_alpha`
     matching the highlight width of phong's exponent.
     """
-    from .render import scene_path
+    from ..scenes import scene_path
 
     text = scene_path("cornell_phong").read_text()
     if boxes not in BOX_TYPES:
@@ -320,7 +321,7 @@ class CornellSpec:
     def load(self, variant: str | None = None):
         import mitsuba as mi
 
-        from . import registration
+        from .. import registration
 
         registration.register(variant)
         try:
@@ -361,8 +362,8 @@ def reference(spec: CornellSpec, spp: int = 4096, variant: str = "llvm_ad_rgb",
     version; a missing cache (a clean clone) is generated here.  Passes use seeds
     far from the ones the sweeps use (seed = 10⁶ + k).
     """
-    from . import exr
-    from .render import render_scene
+    from .. import exr
+    from ..render import render_scene
 
     cache = Path(cache or DEFAULT_CACHE)
     key = spec.key(variant, spp)
@@ -402,7 +403,7 @@ def image_errors(image: np.ndarray, ref: np.ndarray, ref_err: np.ndarray) -> dic
 
 def sweep_estimators(out: Path, cfg: Config, progress: bool = True) -> None:
     """Error and steady-state time of each estimator against N, on :data:`ESTIMATOR_SCENES`."""
-    from . import registration
+    from .. import registration
 
     registration.register("llvm_ad_rgb")
     log = CsvLog(out / "results.csv", RESULT_FIELDS, ("group", "method", "scene", "variant", "samples"))
@@ -483,7 +484,7 @@ def stability_z_crit() -> float:
 
 def sweep_stability(out: Path, cfg: Config, progress: bool = True) -> None:
     """The stability map: each estimator × p × θ_i × light at N = :data:`STABILITY_N` samples."""
-    from . import registration
+    from .. import registration
 
     registration.register("llvm_ad_rgb")
     log = CsvLog(out / "stability.csv", STABILITY_FIELDS, ("light", "method", "exponent", "theta_i"))
@@ -542,7 +543,7 @@ def _render_jit(scene, spp: int, seed: int) -> tuple[float, float, int, int]:
     """(seconds, compile ms, kernels, cache hits) of one render (kernel history on)."""
     import drjit as dr
 
-    from .estimators import _kernel_stats
+    from ..physics.estimators import _kernel_stats
 
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()
@@ -553,7 +554,7 @@ def _render_jit(scene, spp: int, seed: int) -> tuple[float, float, int, int]:
 
 def sweep_renders(out: Path, cfg: Config, cache: Path, progress: bool = True) -> None:
     """RMSE against the reference and steady time against spp, per BSDF, on the Cornell box."""
-    from . import registration
+    from .. import registration
 
     variant = "llvm_ad_rgb"
     registration.register(variant)
@@ -600,7 +601,7 @@ def sweep_variants(out: Path, cfg: Config, cache: Path, progress: bool = True) -
     """
     import drjit as dr
 
-    from . import registration
+    from .. import registration
 
     notes = []
     variants = ["llvm_ad_rgb", "scalar_rgb"]
@@ -664,7 +665,7 @@ def _ratio_spec(method: str, which: str) -> CornellSpec:
 
 def sweep_ratios(out: Path, cfg: Config, progress: bool = True) -> None:
     """Alternating A/B render timings (ABBA order) for the render-time targets."""
-    from . import registration
+    from .. import registration
 
     variant = "llvm_ad_rgb"
     registration.register(variant)
@@ -689,7 +690,7 @@ def sweep_ratios(out: Path, cfg: Config, progress: bool = True) -> None:
 _COLD_PROBE = r"""
 import json, sys, phonglab, drjit as dr
 from phonglab import bench
-from phonglab.estimators import ReflectionEstimators, _kernel_stats
+from phonglab.physics.estimators import ReflectionEstimators, _kernel_stats
 phonglab.register("llvm_ad_rgb")
 out = {}
 for scene_name, methods in bench.render_setups(res=8).items():
@@ -1208,7 +1209,7 @@ def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> P
         add(stability_explanations(stab))
     planner_json = out / "planner.json"
     if planner_json.is_file():
-        from .planner import benchmark_table
+        from ..planner import benchmark_table
 
         rows = json.loads(planner_json.read_text())
         add("\n## Planner: planned against the default configuration (issue 6)\n")
@@ -1325,7 +1326,7 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
         for name in ("results.csv", "stability.csv", "ratios.csv", "jit.csv", "cost.csv", "run.json"):
             (out / name).unlink(missing_ok=True)
     cfg = Config(quick=quick)
-    from . import registration
+    from .. import registration
 
     registration.register("llvm_ad_rgb")
     load_before = round(os.getloadavg()[0], 2)

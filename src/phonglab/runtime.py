@@ -1,4 +1,4 @@
-"""Choosing a libLLVM that Dr.Jit 1.5 can use, and the variant that follows from it.
+"""The runtime: a libLLVM Dr.Jit 1.5 can use, the best JIT backend, and the Mitsuba variant.
 
 Dr.Jit's LLVM backend loads ``libLLVM`` lazily, the first time an ``llvm_*``
 variant is used, from ``DRJIT_LIBLLVM_PATH`` or from the system's default
@@ -14,10 +14,19 @@ search.  Two facts decide what phonglab does here:
 So :func:`configure` pins ``DRJIT_LIBLLVM_PATH`` to the newest usable library
 it finds (never 15 or 16) before Dr.Jit needs it, and :func:`default_variant`
 falls back to ``scalar_rgb`` with a loud warning when none is usable.
+
+The backend order is ``cuda`` (Dr.Jit finds a CUDA device) > ``llvm`` (a usable libLLVM) >
+``scalar`` (:func:`available_backend`); :func:`variant_for` names the variant of a colour
+model on a backend, stepping up (mono → rgb → spectral) where Mitsuba builds none.
+Every "unknown variant" in phonglab is reported by :func:`check_variant`.
+
+Mitsuba is imported lazily here: this module runs at ``import phonglab``, before Dr.Jit may
+load libLLVM, so it must not import Mitsuba itself.
 """
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import os
 import re
@@ -171,10 +180,7 @@ def set_variant(variant: str | None = None) -> str:
     import mitsuba as mi
 
     configure()
-    variant = variant or default_variant()
-    if variant not in mi.variants():
-        raise ValueError(
-            f"unknown Mitsuba variant {variant!r}; choose one of {', '.join(mi.variants())}")
+    variant = check_variant(variant or default_variant())
     try:
         mi.set_variant(variant)
     except ImportError as exc:
@@ -187,3 +193,86 @@ def set_variant(variant: str | None = None) -> str:
         mi.set_variant(fallback)
         variant = fallback
     return variant
+
+
+def check_variant(variant: str) -> str:
+    """``variant`` when this Mitsuba build has it, else :class:`ValueError` naming the choices."""
+    import mitsuba as mi
+
+    if variant not in mi.variants():
+        raise ValueError(
+            f"unknown Mitsuba variant {variant!r}; choose one of {', '.join(mi.variants())}")
+    return variant
+
+
+def available_backend() -> tuple[str, str]:
+    """The best JIT backend that works on this machine, and why: cuda > llvm > scalar.
+
+    ``cuda`` needs Mitsuba's ``cuda_*`` variants and a CUDA device Dr.Jit can initialise
+    (``drjit.has_backend``); ``llvm`` needs a libLLVM Dr.Jit 1.5 can use (:func:`configure`).
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    variants = set(mi.variants())
+    cuda_why = "Mitsuba has no cuda_* variants"
+    if any(v.startswith("cuda_") for v in variants):
+        try:
+            if dr.has_backend(dr.JitBackend.CUDA):
+                return "cuda", "Dr.Jit found a CUDA device (cuda > llvm > scalar)"
+            cuda_why = "no CUDA device or driver (drjit.has_backend(CUDA) is False)"
+        except Exception as exc:  # pragma: no cover - depends on the driver
+            cuda_why = f"CUDA failed to initialise ({exc})"
+    choice = configure()
+    if choice.usable and any(v.startswith("llvm_") for v in variants):
+        try:
+            if dr.has_backend(dr.JitBackend.LLVM):
+                return "llvm", f"LLVM JIT usable; {cuda_why}"
+        except Exception:  # pragma: no cover
+            pass
+    return "scalar", (f"no JIT backend: {cuda_why}; LLVM: {choice.reason} (scalar runs Python "
+                      f"BSDFs about 150x slower)")
+
+
+def variant_for(color: str, backend: str, polarized: bool = False) -> tuple[str, list[str]]:
+    """The Mitsuba variant for a colour model and backend, stepping up when one is not built.
+
+    Mitsuba builds no ``*_rgb_polarized`` and (here) no ``scalar_mono``: the next richer colour
+    model is used then (mono -> rgb -> spectral), with a note.
+
+    Returns:
+        (variant, notes); raises :class:`phonglab.errors.PlanError` when none exists.
+    """
+    import mitsuba as mi
+
+    from .errors import PlanError
+
+    available = set(mi.variants())
+    notes: list[str] = []
+    order = ["mono", "rgb", "spectral"]
+    for c in order[order.index(color):]:
+        name = f"{backend}_ad_{c}" if backend != "scalar" else f"scalar_{c}"
+        if polarized:
+            name += "_polarized"
+        if name in available:
+            if c != color:
+                notes.append(f"{color} needs {backend}_{color}{'_polarized' if polarized else ''}, "
+                             f"which this Mitsuba lacks: using {name}")
+            return name, notes
+    raise PlanError(f"no Mitsuba variant for {color} on the {backend} backend"
+                    f"{' with polarization' if polarized else ''} (have: "
+                    f"{', '.join(sorted(available))}); install a Mitsuba build with one.")
+
+
+@contextlib.contextmanager
+def quiet_mitsuba():
+    """Silence Mitsuba's warnings (mono's "film set to luminance") inside the block."""
+    import mitsuba as mi
+
+    logger = mi.logger()
+    old = logger.log_level()
+    logger.set_log_level(mi.LogLevel.Error)
+    try:
+        yield
+    finally:
+        logger.set_log_level(old)

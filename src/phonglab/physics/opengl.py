@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .render import PhonglabError
+from ..errors import PhonglabError
 
 #: GL_SHININESS must lie in [0, GL_MAX_SHININESS] (OpenGL 2.1, glMaterial).
 GL_MAX_SHININESS = 128.0

@@ -17,9 +17,9 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import mitsuba as mi
 
-    from . import llvm, register
+    from .. import runtime, register
 
-    choice = llvm.configure()
+    choice = runtime.configure()
     print(f"libLLVM : {choice.reason}")
     print(f"mitsuba : {mi.__version__}; variants: {', '.join(mi.variants())}")
     variant = register()

@@ -211,7 +211,7 @@ class Config:
     progress: Callable[[str], None] | None = None
 
     def __post_init__(self):
-        from .render import PhonglabError
+        from ..errors import PhonglabError
 
         if int(self.spp) < 8:
             raise PhonglabError(f"--spp must be at least 8 (the renders are split into passes "
@@ -241,7 +241,7 @@ class Config:
 def _mi():
     import mitsuba as mi
 
-    from . import registration
+    from .. import registration
 
     registration.register()
     return mi
@@ -402,7 +402,8 @@ def _lobe_width(p: float) -> float:
 def _render(cfg: Config, scene_name: str, stream: int, integrator=None, spp=None, passes=None,
             **params):
     """Load a scenes_xml/ scene with ``params`` and render it in passes: RenderResult."""
-    from .render import load_scene, render_scene
+    from ..scenes import load_scene
+    from ..render import render_scene
 
     scene = load_scene(scene_name, **{k: str(v) for k, v in params.items()})
     spp = int(spp or cfg.spp)
@@ -699,7 +700,7 @@ def check_scene(cfg: Config) -> list[CheckResult]:
     difference of each channel must lie within z·SE (Šidák over the 3 channels).  On failure
     the difference and t images are written to ``cfg.out_dir``.
     """
-    from . import exr
+    from .. import exr
 
     rows = _Rows("scene")
     passes = max(cfg.passes, 16)
@@ -842,7 +843,7 @@ def check_snell(cfg: Config) -> list[CheckResult]:
     critical sin θ (float32 cannot tell them apart).
     """
     mi = _mi()
-    from . import optics
+    from ..physics import optics
 
     rows = _Rows("snell")
     max_mi = max_bs = max_res = max_f = max_rt = max_w = 0.0
@@ -1057,7 +1058,7 @@ CHECKS: dict[str, Callable[[Config], list[CheckResult]]] = {
 def run_checks(names=None, cfg: Config | None = None,
                on_check: Callable[[str], None] | None = None) -> list[CheckResult]:
     """Run the named checks (all by default) in the order of :data:`CHECK_NAMES`."""
-    from .render import PhonglabError
+    from ..errors import PhonglabError
 
     cfg = cfg or Config()
     names = list(names or CHECK_NAMES)

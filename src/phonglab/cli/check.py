@@ -13,7 +13,7 @@ import time
 
 
 def add_parser(sub) -> None:
-    from .checks import CHECK_NAMES
+    from ..checks import CHECK_NAMES
 
     p = sub.add_parser(
         "check", help="prove the plugins against physics and Mitsuba's built-ins (table)",
@@ -44,8 +44,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from . import checks
-    from .render import PhonglabError
+    from .. import checks
+    from ..errors import PhonglabError
 
     if args.spp is not None and args.spp < 8:
         raise PhonglabError(f"--spp must be at least 8 (renders are split into passes for their "
@@ -99,7 +99,7 @@ def run(args) -> int:
     if args.json:
         import mitsuba as mi
 
-        from . import __version__
+        from .. import __version__
 
         path = checks.write_json(args.json, results, {
             "phonglab_version": __version__, "mitsuba_version": mi.__version__,
@@ -114,8 +114,8 @@ def _require_plugins(*names: str) -> None:
     """A clear error when a plugin named by --lambert/--phong is not registered."""
     import mitsuba as mi
 
-    from . import register
-    from .render import PhonglabError
+    from .. import register
+    from ..errors import PhonglabError
 
     register()
     for name in names:

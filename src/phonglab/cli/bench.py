@@ -7,7 +7,7 @@ from pathlib import Path
 
 
 def add_parser(sub) -> None:
-    from .bench import PARTS
+    from ..bench import PARTS
 
     p = sub.add_parser(
         "bench", help="error-versus-time sweeps, stability map and charts (CSV + PNG)",
@@ -32,7 +32,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .bench import run_bench
+    from ..bench import run_bench
 
     rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
                     markdown=Path(args.markdown) if args.markdown else None, parts=args.only,

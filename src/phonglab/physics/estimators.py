@@ -62,7 +62,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .render import PhonglabError
+from ..errors import PhonglabError
 
 #: Estimator names, in the order charts and tables list them.
 METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis")
@@ -285,7 +285,7 @@ class ReflectionEstimators:
     def __init__(self, problem: Problem):
         import mitsuba as mi
 
-        from . import registration
+        from .. import registration
 
         registration.register()
         if not mi.variant().startswith(("llvm_", "cuda_")):

@@ -27,12 +27,13 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .render import render_file, scene_path
+    from ..render import render_file
+    from ..scenes import scene_path
 
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
     if out.is_dir() or out.suffix.lower() != ".exr":
-        from .render import PhonglabError
+        from ..errors import PhonglabError
 
         raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
                             f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
@@ -51,15 +52,15 @@ def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan, report predicted and achieved error and time."""
     import numpy as np
 
-    from . import planner
-    from .render import render_file
+    from .. import metrics, planner, references, runtime
+    from ..render import render_file
 
     plan = planner.plan(path, args.target_error, variant=args.variant,
                         max_depth=args.max_depth, spp=args.spp)
     print(plan.summary())
     meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
             "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}
-    with planner.quiet_mitsuba():
+    with runtime.quiet_mitsuba():
         result = render_file(path, out, seed=args.seed, extra_metadata=meta,
                              **plan.render_kwargs())
     times = result.pass_seconds
@@ -68,14 +69,14 @@ def run_planned(args, path: Path, out: Path) -> int:
     print(f"rendered {path} with {plan.spp} spp, max_depth {plan.max_depth} in {plan.variant}: "
           f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
           f"{plan.predicted_seconds:.3g} s)")
-    ref = planner.cached_reference(path, {})
+    ref = references.cached(path)
     if ref is not None:
-        err = planner.achieved_error(result.image, ref[0], ref[1])
-        print(f"  error: achieved {err:.4g} against the cached reference ({ref[2].get('spp')} "
+        err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
+        print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} "
               f"spp, max_depth -1); predicted {plan.predicted_error:.4g}, target "
               f"{plan.target_error:g}")
     elif result.stderr is not None:
-        noise = planner.noise_error(result.image, result.stderr)
+        noise = metrics.relative_noise(result.image, result.stderr)
         err = float(np.hypot(noise, plan.predicted_bias))
         print(f"  error: about {err:.4g} (noise {noise:.4g} estimated from {len(times)} passes, "
               f"depth bias {plan.predicted_bias:.3g} from the pilot; no cached reference: make "

@@ -158,7 +158,7 @@ def _require_jit():
     import drjit as dr
     import mitsuba as mi
 
-    from .render import PhonglabError
+    from ..errors import PhonglabError
 
     if mi.variant() is None or not dr.is_jit_v(mi.Float):
         raise PhonglabError(f"radiometry's BSDF helpers evaluate many directions at once and "

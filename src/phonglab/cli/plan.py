@@ -43,8 +43,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from . import planner
-    from .render import PhonglabError, scene_path
+    from .. import metrics, planner, references
+    from ..errors import PhonglabError
+    from ..scenes import scene_path
 
     path = scene_path(args.scene)
     params = dict(args.params)
@@ -60,10 +61,9 @@ def run(args) -> int:
         if args.make_reference < 16:
             raise PhonglabError(f"--make-reference needs at least 16 spp (16 passes), got "
                                 f"{args.make_reference}.")
-        image, stderr, meta = planner.make_reference(path, args.make_reference, params=params,
-                                                     progress=True)
+        ref = references.reference(path, args.make_reference, params=params, progress=True)
         if not args.json:
-            print(f"reference: {meta['spp']} spp, max_depth -1, {meta['variant']}, relative "
-                  f"noise {planner.noise_error(image, stderr):.3g}, cached in "
-                  f"{planner.CACHE_DIR / 'references'}")
+            print(f"reference: {ref.spp} spp, max_depth -1, {ref.metadata['variant']}, relative "
+                  f"noise {metrics.relative_noise(ref.image, ref.stderr):.3g}, cached in "
+                  f"{ref.path}")
     return 0

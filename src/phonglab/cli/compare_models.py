@@ -34,8 +34,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .compare_models import compare_models, format_table
-    from .render import PhonglabError, scene_path
+    from ..compare_models import compare_models, format_table
+    from ..errors import PhonglabError
+    from ..scenes import scene_path
 
     params = {}
     for item in args.param:

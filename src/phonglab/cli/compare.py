@@ -38,8 +38,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from . import compare
-    from .render import PhonglabError
+    from .. import compare
+    from ..metrics import REL_EPS
+    from ..errors import PhonglabError
 
     if args.eps is not None and not args.eps > 0:
         raise PhonglabError(f"--eps must be > 0 (it keeps dark pixels from dominating the "
@@ -49,7 +50,7 @@ def run(args) -> int:
                             f"give a path like out/a_minus_b.png")
     result, img_a, img_b, meta_a, meta_b = compare.compare_files(
         args.a, args.b, args.stderr_a, args.stderr_b, auto_stderr=not args.no_stderr_files,
-        eps=args.eps if args.eps is not None else compare.REL_EPS)
+        eps=args.eps if args.eps is not None else REL_EPS)
     if args.json:
         print(json.dumps(result.as_dict(), indent=2))
     else:

@@ -1,6 +1,6 @@
 """The ``phonglab`` command line.
 
-Each subcommand lives in its own module ``phonglab.cmd_<name>`` exposing
+Each subcommand lives in its own module ``phonglab.cli.<name>`` exposing
 ``add_parser(subparsers)`` (which sets ``func``); :data:`SUBCOMMANDS` lists
 them.  Errors meant for the user are one sentence and exit code 2; ``--debug``
 shows the traceback instead.
@@ -12,7 +12,10 @@ import argparse
 import importlib
 import sys
 
-#: Modules ``phonglab.cmd_<name>``, in the order ``--help`` lists them.
+from .. import __version__
+from ..errors import user_errors
+
+#: Modules ``phonglab.cli.<name>``, in the order ``--help`` lists them.
 SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor"]
 
 DEBUG_HELP = "show the full traceback on errors"
@@ -36,12 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "ground them in physics.",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
-    from . import __version__
-
     parser.add_argument("--version", action="version", version=f"phonglab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
-        importlib.import_module(f"phonglab.cmd_{name.replace('-', '_')}").add_parser(sub)
+        importlib.import_module(f"phonglab.cli.{name.replace('-', '_')}").add_parser(sub)
     for p in sub.choices.values():
         # `phonglab render x --debug` works too; SUPPRESS keeps a top-level --debug when absent.
         if "--debug" not in p._option_string_actions:
@@ -49,20 +50,6 @@ def build_parser() -> argparse.ArgumentParser:
                            help=DEBUG_HELP)
     parser.epilog = _examples(sub.choices.values())
     return parser
-
-
-def user_errors() -> tuple[type[BaseException], ...]:
-    """Exception types whose message is written for the user (no traceback needed)."""
-    from .render import PhonglabError
-
-    errors: list[type[BaseException]] = [PhonglabError, FileNotFoundError, ValueError]
-    try:
-        from phonglab.plugins._common import MaterialError
-
-        errors.append(MaterialError)
-    except Exception:  # pragma: no cover - plugins need mitsuba
-        pass
-    return tuple(errors)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -81,7 +68,3 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"phonglab: error: {exc}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

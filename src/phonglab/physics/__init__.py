@@ -1,0 +1,9 @@
+"""The physics phonglab checks renders against, independent of any renderer.
+
+* :mod:`.optics`      Snell's law, total internal reflection, the Fresnel equations;
+* :mod:`.radiometry`  the reflection equation by quadrature, directional albedo, 1/r², the
+  furnace and radiance constancy (numpy, probing BSDFs through :mod:`phonglab.probe`);
+* :mod:`.estimators`  Monte Carlo estimators of the reflection equation (uniform, cosine, BSDF,
+  light, MIS) in Dr.Jit, with exact values by quadrature;
+* :mod:`.opengl`      the OpenGL fixed-function local model and its mapping to phonglab's.
+"""

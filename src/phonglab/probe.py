@@ -1,0 +1,292 @@
+r"""The numpy <-> Dr.Jit bridge for probing a Mitsuba BSDF over arrays of directions.
+
+Any BSDF works: a built-in (``diffuse``, ``dielectric``, ``roughconductor``, ``plastic``, ...)
+or one of phonglab's Python plugins (``lambert``, ``phong``)::
+
+    import phonglab
+    phonglab.register("llvm_ad_rgb")
+    import mitsuba as mi
+    from phonglab import probe
+
+    bsdf = mi.load_dict({"type": "diffuse"})
+    wi = probe.direction(0.3)                          # (3,), shared by every lane
+    wo = probe.direction(np.linspace(0, 1.5, 8), 2.0)  # (8, 3)
+    f_cos = probe.eval(bsdf, wi, wo)                   # (8, 3): f_r cos θ_o per RGB channel
+    s = probe.sample_random(bsdf, wi, 10_000, seed=1)  # s.wo, s.weight, s.pdf, ...
+
+Conventions (Mitsuba's):
+
+* Directions are unit vectors in the LOCAL shading frame (normal +z, tangents +x, +y), both
+  pointing away from the surface.  ``wi`` is the incident / viewer side (``si.wi``), ``wo``
+  the other direction (the light in a radiance computation).
+* :func:`eval` returns f_r(wi, wo) · cos θ_o (the cosine is included), :func:`pdf` the
+  solid-angle density of :func:`sample`'s ``wo``, and a sample's ``weight`` is
+  f_r · cos θ_o / pdf (0 for an invalid sample).  For a delta lobe (mirror, glass) eval
+  and pdf of a given direction are 0 and only :func:`sample` sees the lobe.
+* Every result has one row per lane: the lane count N is the broadcast width of ``wi``
+  (3,) or (N, 3) and the other arguments ((3,)/(N, 3) directions, scalar/(N,) sample1,
+  (2,)/(N, 2) sample2).  Spectral quantities are (N, C) float64 with ALL channels:
+  C = 3 in RGB variants, 1 in mono, 4 in spectral ones (one column per wavelength of
+  :func:`default_wavelengths`, unless :func:`interaction` is given others).  Callers that
+  want one channel take ``[:, 0]``.  Scalars (pdf, eta) are (N,), and the sampled type /
+  component are (N,) int64.
+* Polarized variants return Mueller matrices; the probe reports their unpolarized
+  intensity (``mi.unpolarized_spectrum``, the [0, 0] entry), which is what an
+  unpolarized light and sensor would see.
+
+Variants: in JIT variants (``llvm_ad_*``, ``cuda_ad_*``) all N lanes are one Dr.Jit
+array and every call is traced and evaluated in a single kernel launch (``dr.eval`` of all
+outputs at once) unless the BSDF itself forces an evaluation.  In scalar variants
+(``scalar_rgb``, ``scalar_spectral``, ...) a Dr.Jit type holds ONE value, so the probe
+loops over the N lanes in Python, one interaction and one BSDF call per lane: the results
+are the same, but this is thousands of times slower; keep N small there (tens to hundreds).
+Inputs are rounded to float32 (Mitsuba's ``Float``) in every variant; outputs are float64.
+
+Sampling versus pdf: the probe only exposes the numbers.  To test statistically that a
+BSDF's ``sample`` draws directions with the density its ``pdf`` reports, use Mitsuba's
+``mi.chi2.ChiSquareTest`` with ``mi.chi2.BSDFAdapter``; note that it checks sampling
+against pdf only, not that eval / pdf equals the sample weight, nor that eval is right
+(compare ``sample(...).weight`` with ``eval / pdf`` at ``sample(...).wo`` for that).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+__all__ = ["Sample", "context", "default_wavelengths", "direction", "eval", "eval_pdf",
+           "interaction", "pdf", "sample", "sample_random", "to_numpy", "to_vectors"]
+
+
+@dataclass(frozen=True, eq=False)
+class Sample:
+    """The result of :func:`sample` for N lanes, as numpy arrays."""
+
+    wo: np.ndarray                  #: (N, 3) sampled directions, local frame
+    weight: np.ndarray              #: (N, C) f_r cos θ_o / pdf (0 where invalid)
+    pdf: np.ndarray                 #: (N,) density of wo (1 for a delta lobe's discrete choice)
+    eta: np.ndarray                 #: (N,) relative IOR of the sampled event (1 for reflection)
+    sampled_type: np.ndarray        #: (N,) int64 mi.BSDFFlags bits of the sampled lobe
+    sampled_component: np.ndarray   #: (N,) int64 component index of the sampled lobe
+
+    @property
+    def n(self) -> int:
+        """Number of lanes N."""
+        return len(self.pdf)
+
+
+# ----------------------------------------------------------------------------- numpy side
+def direction(theta, phi=0.0) -> np.ndarray:
+    """Unit vector(s) (sin θ cos φ, sin θ sin φ, cos θ): polar angle θ from the normal +z.
+
+    θ and φ (radians) broadcast; scalars give shape (3,), arrays shape (..., 3).
+    """
+    theta, phi = np.broadcast_arrays(np.asarray(theta, np.float64), np.asarray(phi, np.float64))
+    s = np.sin(theta)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def default_wavelengths() -> np.ndarray:
+    """The wavelengths (nm) every lane carries in spectral variants unless told otherwise.
+
+    The centres of equal bins of [MI_CIE_MIN, MI_CIE_MAX] = [360, 830] nm, one per
+    wavelength a spectrum holds (4: 418.75, 536.25, 653.75, 771.25 nm), fixed so that
+    spectral results are deterministic.
+    """
+    k = dr.size_v(mi.UnpolarizedSpectrum)
+    lo, hi = float(mi.MI_CIE_MIN), float(mi.MI_CIE_MAX)
+    return lo + (np.arange(k) + 0.5) * (hi - lo) / k
+
+
+def _rows(a, width: int, name: str) -> np.ndarray:
+    """``a`` as float64 rows: (k, width), or (k,) for width 0; one item gives k = 1."""
+    a = np.asarray(a, dtype=np.float64)
+    if width == 0:
+        if a.ndim > 1:
+            raise ValueError(f"{name}: expected a number or shape (N,), got {a.shape}")
+        return a.reshape(-1)
+    if a.ndim not in (1, 2) or a.shape[-1] != width:
+        raise ValueError(f"{name}: expected shape ({width},) or (N, {width}), got {a.shape}")
+    return a.reshape(-1, width)
+
+
+def _broadcast(arrays: dict[str, np.ndarray], n: int | None = None) -> tuple[int, list]:
+    """The common lane count of row arrays (rows of 1 broadcast) and the broadcast arrays."""
+    counts = {len(a) for a in arrays.values()} - {1}
+    if n is not None:
+        counts |= {n}
+    if len(counts) > 1:
+        shapes = ", ".join(f"{k} {a.shape}" for k, a in arrays.items())
+        raise ValueError(f"lane counts do not broadcast: {shapes}" + (f", n={n}" if n else ""))
+    n = counts.pop() if counts else 1
+    if n == 0:
+        raise ValueError("nothing to probe: zero lanes")
+    return n, [np.broadcast_to(a, (n,) + a.shape[1:]) for a in arrays.values()]
+
+
+# ----------------------------------------------------------------------------- Dr.Jit side
+def _is_jit() -> bool:
+    if mi.variant() is None:
+        raise RuntimeError("no Mitsuba variant is set: call phonglab.register(variant) first")
+    return dr.is_jit_v(mi.Float)
+
+
+def _dr(cls, a: np.ndarray):
+    """numpy -> Dr.Jit ``cls`` (float32).  JIT: (N,) -> Float, (N, k) -> k Float columns.
+    Scalar variants: one lane, a number or a (k,) row."""
+    a = np.asarray(a, dtype=np.float32)
+    if dr.is_jit_v(mi.Float):
+        cols = [a] if a.ndim == 1 else [a[:, j] for j in range(a.shape[1])]
+        return cls(*(mi.Float(np.ascontiguousarray(c)) for c in cols))
+    return cls(*(float(x) for x in a.reshape(-1)))
+
+
+def to_vectors(a) -> mi.Vector3f:
+    """Directions (3,) or (N, 3) -> ``mi.Vector3f`` (float32); width 1 for (3,).
+
+    In scalar variants a Vector3f holds one vector, so only (3,) or (1, 3) is accepted.
+    """
+    a = _rows(a, 3, "vectors")
+    if _is_jit():
+        return _dr(mi.Vector3f, a)
+    if len(a) != 1:
+        raise ValueError(f"{mi.variant()} holds one vector per Vector3f, got {len(a)}")
+    return _dr(mi.Vector3f, a[0])
+
+
+def to_numpy(x, n: int | None = None) -> np.ndarray:
+    """A Dr.Jit value -> float64 numpy with the lanes first.
+
+    Float -> (N,); Vector3f / Color / Spectrum -> (N, C); a polarized Spectrum (Mueller
+    matrix) -> its unpolarized intensity (N, C).  A scalar variant's value is one lane
+    (N = 1).  With ``n``, a width-1 result (a Dr.Jit literal, e.g. a constant pdf) is
+    broadcast to n lanes.
+    """
+    if mi.is_polarized and isinstance(x, mi.Spectrum):
+        x = mi.unpolarized_spectrum(x)
+    if not dr.is_jit_v(x):
+        a = np.array(x, dtype=np.float64)
+        a = a.reshape((1,) + a.shape)
+    elif dr.depth_v(x) > 1:
+        # Column by column: each is an evaluated Float (a plain copy), whereas np.array(x)
+        # would launch a kernel to interleave them.  Columns may be width-1 literals.
+        cols = [np.array(c, dtype=np.float64) for c in x]
+        width = max(len(c) for c in cols)
+        a = np.stack([np.broadcast_to(c, (width,)) for c in cols], axis=1)
+    else:
+        a = np.array(x, dtype=np.float64)
+    if n is not None and len(a) != n:
+        if len(a) != 1:
+            raise ValueError(f"expected {n} lanes or 1, got {len(a)}")
+        a = np.broadcast_to(a, (n,) + a.shape[1:])
+    return np.array(a)               # a writable copy
+
+
+def interaction(wi, n: int | None = None, wavelengths=None) -> mi.SurfaceInteraction3f:
+    """A ``mi.SurfaceInteraction3f`` of n lanes on a surface whose local frame is the world's.
+
+    ``n = (0, 0, 1)``, ``sh_frame = Frame3f(n)`` (tangents +x, +y), ``uv = (0.5, 0.5)``,
+    ``wi`` from (3,) (broadcast) or (N, 3); n defaults to the rows of wi.  In spectral
+    variants ``wavelengths`` (nm, (C,) or (N, C)) defaults to :func:`default_wavelengths`;
+    other variants ignore it.  Scalar variants build one lane only (n = 1).
+    """
+    jit = _is_jit()
+    arrays = {"wi": _rows(wi, 3, "wi")}
+    if mi.is_spectral:
+        lam = default_wavelengths() if wavelengths is None else wavelengths
+        arrays["wavelengths"] = _rows(lam, dr.size_v(mi.UnpolarizedSpectrum), "wavelengths")
+    n, rows = _broadcast(arrays, n)
+    if not jit and n != 1:
+        raise ValueError(f"{mi.variant()} is a scalar variant: one lane per interaction, not {n}")
+    si = dr.zeros(mi.SurfaceInteraction3f, n) if jit else dr.zeros(mi.SurfaceInteraction3f)
+    si.n = mi.Normal3f(0.0, 0.0, 1.0)
+    si.sh_frame = mi.Frame3f(si.n)
+    si.uv = mi.Point2f(0.5, 0.5)
+    si.wi = _dr(mi.Vector3f, rows[0] if jit else rows[0][0])
+    if mi.is_spectral:
+        si.wavelengths = _dr(mi.UnpolarizedSpectrum, rows[1] if jit else rows[1][0])
+    return si
+
+
+def context(mode=None, component: int | None = None, type_mask=None) -> mi.BSDFContext:
+    """A ``mi.BSDFContext``: ``TransportMode.Radiance`` unless told otherwise, all lobes.
+
+    ``component`` restricts it to one component index (``bsdf.flags(i)``), ``type_mask``
+    to the lobes whose ``mi.BSDFFlags`` it contains.
+    """
+    mode = mi.TransportMode.Radiance if mode is None else mode
+    type_mask = mi.BSDFFlags.All if type_mask is None else type_mask
+    return mi.BSDFContext(mode, type_mask, component)
+
+
+def _probe(call, wi, **args) -> list[np.ndarray]:
+    """Run ``call(si, *dr_args)`` (returning a tuple of Dr.Jit values) over the broadcast lanes.
+
+    ``args`` maps a name to (Dr.Jit type, array, item width) -- width 0 for scalars.
+    JIT: one traced call, all outputs evaluated together.  Scalar: a loop over lanes.
+    """
+    arrays = {"wi": _rows(wi, 3, "wi")}
+    arrays.update({k: _rows(a, w, k) for k, (_, a, w) in args.items()})
+    n, rows = _broadcast(arrays)
+    types = [t for t, _, _ in args.values()]
+    if _is_jit():
+        out = call(interaction(rows[0]), *(_dr(t, r) for t, r in zip(types, rows[1:])))
+        dr.eval(*out)
+        return [to_numpy(x, n) for x in out]
+    lanes = [[to_numpy(x) for x in call(interaction(rows[0][i]),
+                                        *(_dr(t, r[i]) for t, r in zip(types, rows[1:])))]
+             for i in range(n)]
+    return [np.concatenate(column) for column in zip(*lanes)]
+
+
+# ----------------------------------------------------------------------------- BSDF queries
+def eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
+    """``bsdf.eval`` = f_r(wi, wo) cos θ_o, all channels: (N, C)."""
+    ctx = context() if ctx is None else ctx
+    (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
+    return value
+
+
+def pdf(bsdf, wi, wo, ctx=None) -> np.ndarray:
+    """``bsdf.pdf``: the solid-angle density with which :func:`sample` picks wo, (N,)."""
+    ctx = context() if ctx is None else ctx
+    (p,) = _probe(lambda si, v: (bsdf.pdf(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
+    return p
+
+
+def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
+    """``bsdf.eval_pdf``: (eval (N, C), pdf (N,)) in one call."""
+    ctx = context() if ctx is None else ctx
+    value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, wo=(mi.Vector3f, wo, 3))
+    return value, p
+
+
+def sample(bsdf, wi, sample1, sample2, ctx=None) -> Sample:
+    """``bsdf.sample`` with given uniform numbers: sample1 scalar or (N,), sample2 (2,) or (N, 2).
+
+    sample1 usually picks the lobe, sample2 the direction within it.
+    """
+    ctx = context() if ctx is None else ctx
+
+    def call(si, u1, u2):
+        bs, weight = bsdf.sample(ctx, si, u1, u2)
+        return bs.wo, weight, bs.pdf, bs.eta, bs.sampled_type, bs.sampled_component
+
+    wo, weight, p, eta, stype, comp = _probe(call, wi, sample1=(mi.Float, sample1, 0),
+                                            sample2=(mi.Point2f, sample2, 2))
+    return Sample(wo, weight, p, eta, stype.astype(np.int64), comp.astype(np.int64))
+
+
+def sample_random(bsdf, wi, n: int, seed: int = 0, ctx=None) -> Sample:
+    """:func:`sample` with n uniform random sample pairs from ``np.random.default_rng(seed)``.
+
+    Draw order (fixed, so results are reproducible): first ``u1 = rng.random(n)``, then
+    ``u2 = rng.random((n, 2))``.  wi is (3,) or (n, 3).
+    """
+    rng = np.random.default_rng(seed)
+    u1 = rng.random(n)
+    u2 = rng.random((n, 2))
+    return sample(bsdf, wi, u1, u2, ctx)

@@ -1,0 +1,131 @@
+"""The one cache of high-sample reference images that errors are measured against.
+
+A reference is a render of a scene file with many samples per pixel, split into passes so
+that it carries its per-pixel standard error (:func:`phonglab.render.render_scene`); the
+metrics subtract that noise (:func:`phonglab.metrics.errors`).  It is rendered
+
+* at **full depth** (``max_depth=-1``, the default): a ``path`` integrator without a depth
+  limit, ended by Russian roulette and so unbiased, keeping the scene's ``rr_depth`` and
+  ``hide_emitters`` — what the planner's error target and ``render --target-error`` mean;
+* with the scene's **own integrator** (``max_depth=None``): the converged image of exactly
+  the render under test — what the bench's error-versus-time curves compare with;
+* or with a ``path`` integrator of a given depth.
+
+Cache layout: ``<cache>/references/<scene stem>-<key>.exr`` and ``.stderr.exr`` beside it,
+the key hashing the scene file's bytes, the parameters, the variant, the depth choice and
+Mitsuba's version; the header records spp, passes, seed and render time.  A cached
+reference with at least the asked spp is reused; a missing one (a clean clone) is rendered.
+The cache lives in ``.bench_cache/`` at the repository root (git-ignored), or where
+``PHONGLAB_CACHE`` points.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import mitsuba as mi
+import numpy as np
+
+from . import exr
+from .errors import PhonglabError
+from .metrics import as_hwc
+from .render import render_scene
+from .runtime import available_backend, quiet_mitsuba, variant_for
+from .scenes import REPO_ROOT, file_hash, inspect_scene, load_scene, path_integrator, scene_path
+
+#: Default cache folder (git-ignored); ``PHONGLAB_CACHE`` overrides it.
+CACHE_DIR = Path(os.environ.get("PHONGLAB_CACHE", REPO_ROOT / ".bench_cache"))
+#: Seed of reference renders: far from the seeds renders under test use (0, 1, 5000, ...).
+REFERENCE_SEED = 1_000_000
+#: Passes of a reference render (its standard error has PASSES − 1 degrees of freedom).
+PASSES = 16
+
+
+@dataclass
+class Reference:
+    """A cached reference: image and per-pixel standard error, (H, W, C) float32, and its header."""
+
+    image: np.ndarray
+    stderr: np.ndarray
+    metadata: dict[str, Any]
+    path: Path
+
+    @property
+    def spp(self) -> int:
+        return int(self.metadata.get("spp", 0))
+
+
+def default_variant(scene: str | Path, params: dict[str, Any] | None = None) -> str:
+    """rgb on the best backend unless the scene carries spectral data (then spectral)."""
+    backend, _ = available_backend()
+    color = "spectral" if inspect_scene(scene, **(params or {})).color == "spectral" else "rgb"
+    return variant_for(color, backend)[0]
+
+
+def cache_path(scene: str | Path, params: dict[str, Any] | None = None, variant: str = "llvm_ad_rgb",
+               max_depth: int | None = -1, cache_dir: str | Path | None = None) -> Path:
+    """Where the reference of this scene file, parameters, variant and depth choice lives."""
+    path = scene_path(scene)
+    h = hashlib.sha256(path.read_bytes())
+    h.update(json.dumps(sorted((k, str(v)) for k, v in (params or {}).items())).encode())
+    h.update(f"{variant}|{max_depth}|{mi.__version__}".encode())
+    return Path(cache_dir or CACHE_DIR) / "references" / f"{path.stem}-{h.hexdigest()[:16]}.exr"
+
+
+def cached(scene: str | Path, params: dict[str, Any] | None = None, variant: str | None = None,
+           max_depth: int | None = -1, min_spp: int = 1,
+           cache_dir: str | Path | None = None) -> Reference | None:
+    """The cached reference with at least ``min_spp`` samples, or None."""
+    try:
+        variant = variant or default_variant(scene, params)
+    except PhonglabError:
+        return None
+    path = cache_path(scene, params, variant, max_depth, cache_dir)
+    se_path = exr.stderr_path(path)
+    if not (path.is_file() and se_path.is_file()):
+        return None
+    image, meta = exr.read(path)
+    stderr, _ = exr.read(se_path)
+    ref = Reference(as_hwc(image), as_hwc(stderr), meta, path)
+    return ref if ref.spp >= min_spp else None
+
+
+def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
+              variant: str | None = None, max_depth: int | None = -1, passes: int = PASSES,
+              seed: int = REFERENCE_SEED, cache_dir: str | Path | None = None,
+              progress: bool = False) -> Reference:
+    """The reference of ``scene`` with at least ``spp`` samples: from the cache, else rendered.
+
+    Args:
+        scene: scene file, or a name in ``scenes_xml/``.
+        spp: samples per pixel the reference must have at least.
+        params: values for the scene's ``<default>`` entries.
+        variant: Mitsuba variant (default: :func:`default_variant`).
+        max_depth: -1 full depth, None the scene's own integrator, d a path tracer of depth d.
+        passes, seed: how a missing reference is rendered (pass k uses pass_seed(seed, k)).
+    """
+    params = {k: v for k, v in (params or {}).items() if v is not None}
+    variant = variant or default_variant(scene, params)
+    found = cached(scene, params, variant, max_depth, spp, cache_dir)
+    if found is not None:
+        return found
+    info = inspect_scene(scene, **params)
+    with quiet_mitsuba():
+        loaded = load_scene(info.path, variant, **params)
+    integrator = None if max_depth is None else path_integrator(max_depth, info)
+    result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
+                          integrator=integrator)
+    meta = {"scene": str(info.path), "scene_sha256": file_hash(info.path), "variant": variant,
+            "spp": spp, "passes": passes, "seed": seed,
+            "max_depth": "scene's integrator" if max_depth is None else max_depth,
+            "params": {k: str(v) for k, v in params.items()},
+            "render_seconds": round(result.seconds, 3), "mitsuba_version": mi.__version__}
+    path = cache_path(scene, params, variant, max_depth, cache_dir)
+    exr.write(path, result.image, meta)
+    exr.write(exr.stderr_path(path), result.stderr, meta)
+    return Reference(result.image, result.stderr, meta, path)

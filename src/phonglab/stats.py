@@ -1,0 +1,83 @@
+r"""The statistics of every check, benchmark and test: one home for the critical values.
+
+Every statistical comparison in phonglab has the form "|measured − expected| <= c · stderr"
+with the critical value c chosen for a significance level α, corrected for the number of
+comparisons made together:
+
+* **Šidák** [Z. Šidák, "Rectangular confidence regions for the means of multivariate normal
+  distributions", JASA 62 (1967)]: m independent tests each at level
+  α' = 1 − (1 − α)^{1/m} keep the family-wise error rate at exactly α
+  (:func:`sidak`); :func:`z_critical` and :func:`t_critical` are the two-sided normal and
+  Student-t quantiles at that level.
+* **Holm** [S. Holm, "A simple sequentially rejective multiple test procedure", Scand. J.
+  Statist. 6 (1979)]: step-down adjusted p-values, valid under any dependence
+  (:func:`holm`), used for per-pixel tests whose pixels a reconstruction filter correlates.
+* **Welch** [B. L. Welch, Biometrika 34 (1947)]: the two-sample t-test with unequal
+  variances and the Welch–Satterthwaite degrees of freedom (:func:`welch_pvalues`).
+
+:data:`ALPHA` = 0.01 is the project's family-wise level: a correct plugin fails a whole
+check run, or a test, at most 1 % of the time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats as _scipy_stats
+
+#: Family-wise significance level of every statistical check, benchmark verdict and test.
+ALPHA = 0.01
+
+
+def sidak(alpha: float, m: int) -> float:
+    """Per-test level keeping the family-wise error rate at ``alpha`` over m independent tests."""
+    return 1.0 - (1.0 - alpha) ** (1.0 / max(1, int(m)))
+
+
+def z_critical(alpha: float = ALPHA, m: int = 1) -> float:
+    """Two-sided standard-normal quantile at the Šidák level of m tests: P(|Z| > z) = sidak(α, m)."""
+    return float(_scipy_stats.norm.isf(sidak(alpha, m) / 2.0))
+
+
+def t_critical(dof: float, alpha: float = ALPHA, m: int = 1) -> float:
+    """Two-sided Student-t quantile with ``dof`` degrees of freedom at the Šidák level of m tests."""
+    return float(_scipy_stats.t.isf(sidak(alpha, m) / 2.0, dof))
+
+
+def two_sided_p(z) -> np.ndarray | float:
+    """Two-sided p-value 2(1 − Φ(|z|)) of a standard-normal statistic."""
+    p = 2.0 * _scipy_stats.norm.sf(np.abs(z))
+    return float(p) if np.ndim(p) == 0 else p
+
+
+def holm(pvalues: np.ndarray) -> np.ndarray:
+    """Holm's step-down adjusted p-values: max_{j<=k} min(1, (m − j + 1) p_(j)), same shape."""
+    p = np.asarray(pvalues, dtype=np.float64).ravel()
+    m = p.size
+    order = np.argsort(p)
+    adj = np.minimum(1.0, (m - np.arange(m)) * p[order])
+    adj = np.maximum.accumulate(adj)
+    out = np.empty(m)
+    out[order] = adj
+    return out.reshape(np.shape(pvalues))
+
+
+def welch_pvalues(m1, se1, m2, se2, passes1: int, passes2: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two-sided Welch t-test p-values of per-pixel means with standard errors se1, se2.
+
+    t = (m1 − m2)/√(se1² + se2²), Welch–Satterthwaite dof
+    ν = (se1² + se2²)² / (se1⁴/(k1 − 1) + se2⁴/(k2 − 1)) with k the number of passes.
+    Pixels with zero variance in both renders get p = 1 when equal, 0 otherwise.
+
+    Returns:
+        (p-values, t statistics), each of the shape of the inputs.
+    """
+    v1, v2 = np.asarray(se1, np.float64) ** 2, np.asarray(se2, np.float64) ** 2
+    diff = np.asarray(m1, np.float64) - np.asarray(m2, np.float64)
+    v = v1 + v2
+    zero = v <= 0
+    vs = np.where(zero, 1.0, v)
+    t = diff / np.sqrt(vs)
+    dof = vs * vs / np.maximum(v1 * v1 / (passes1 - 1) + v2 * v2 / (passes2 - 1), 1e-300)
+    p = 2.0 * _scipy_stats.t.sf(np.abs(t), np.maximum(dof, 1.0))
+    p = np.where(zero, np.where(diff == 0, 1.0, 0.0), p)
+    return p, np.where(zero, 0.0, t)
