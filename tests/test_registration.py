@@ -142,3 +142,14 @@ def test_polarized_variants_render_like_unpolarized(variant, scenes_dir):
         images.append(render_scene(scene, spp=16, seed=3).image)
     assert images[0].mean() > 0.05
     np.testing.assert_allclose(images[0], images[1], rtol=1e-5, atol=1e-6)
+
+
+def test_cuda_without_a_device_falls_back_to_llvm_not_scalar():
+    """A cuda_* variant on a machine without a CUDA device runs on LLVM (not ~150x slower scalar)."""
+    if dr.has_backend(dr.JitBackend.CUDA):
+        pytest.skip("this machine has a CUDA device: cuda_ad_rgb starts, no fallback to test")
+    with pytest.warns(runtime.BackendFallbackWarning, match="cuda_ad_rgb is unusable.*llvm_ad_rgb"):
+        assert runtime.set_variant("cuda_ad_rgb") == "llvm_ad_rgb"
+    with pytest.warns(runtime.BackendFallbackWarning):
+        assert phonglab.register("cuda_ad_mono") == "llvm_ad_mono"
+    phonglab.register("llvm_ad_rgb")

@@ -56,6 +56,10 @@ class SlowFallbackWarning(UserWarning):
     """No usable libLLVM: phonglab runs in a ``scalar_*`` variant (~150x slower)."""
 
 
+class BackendFallbackWarning(UserWarning):
+    """The asked-for JIT backend cannot start (no CUDA device): a working one is used instead."""
+
+
 @dataclass(frozen=True)
 class LLVMChoice:
     """The outcome of :func:`configure`."""
@@ -148,13 +152,6 @@ def configure(force: bool = False) -> LLVMChoice:
     return _choice
 
 
-def jit_backend_available(backend: str) -> bool:
-    """Whether Mitsuba ships variants for a backend ('cuda', 'llvm', 'scalar')."""
-    import mitsuba as mi
-
-    return any(v.startswith(backend + "_") for v in mi.variants())
-
-
 def default_variant(color: str = "rgb") -> str:
     """The variant phonglab uses when none is set: ``llvm_ad_<color>``.
 
@@ -174,8 +171,10 @@ def default_variant(color: str = "rgb") -> str:
 def set_variant(variant: str | None = None) -> str:
     """Set a Mitsuba variant, the default one when ``variant`` is None.
 
-    An ``llvm_*`` variant that fails to start (Dr.Jit cannot load libLLVM)
-    turns into the matching ``scalar_*`` variant with a warning.
+    A JIT variant that fails to start falls back to the best backend that works, with a
+    warning naming both: ``cuda_*`` without a CUDA device becomes ``llvm_ad_*`` (same images up
+    to float rounding, on the CPU) when libLLVM is usable, and ``llvm_*`` without a usable
+    libLLVM becomes ``scalar_*`` (:class:`SlowFallbackWarning`: ~150x slower).
     """
     import mitsuba as mi
 
@@ -183,16 +182,28 @@ def set_variant(variant: str | None = None) -> str:
     variant = check_variant(variant or default_variant())
     try:
         mi.set_variant(variant)
+        return variant
     except ImportError as exc:
         if not variant.startswith(("llvm_", "cuda_")):
             raise
-        fallback = "scalar_" + variant.split("_", 2)[-1]
-        warnings.warn(f"phonglab: {variant} is unusable ({exc}). Falling back to {fallback}: "
-                      f"Python plugins run about 150x slower there.",
-                      SlowFallbackWarning, stacklevel=2)
-        mi.set_variant(fallback)
-        variant = fallback
-    return variant
+        why = exc
+    rest = variant.split("_", 1)[1]                       # "ad_rgb", "ad_spectral_polarized"
+    if variant.startswith("cuda_") and configure().usable and f"llvm_{rest}" in mi.variants():
+        fallback = f"llvm_{rest}"
+        try:
+            mi.set_variant(fallback)
+            warnings.warn(f"phonglab: {variant} is unusable ({why}). Using {fallback} instead: "
+                          f"the same computation on the CPU's LLVM backend.",
+                          BackendFallbackWarning, stacklevel=2)
+            return fallback
+        except ImportError as exc:
+            why = exc
+    fallback = "scalar_" + rest.removeprefix("ad_")
+    warnings.warn(f"phonglab: {variant} is unusable ({why}). Falling back to {fallback}: "
+                  f"Python plugins run about 150x slower there.",
+                  SlowFallbackWarning, stacklevel=2)
+    mi.set_variant(check_variant(fallback))
+    return fallback
 
 
 def check_variant(variant: str) -> str:
