@@ -169,11 +169,29 @@ def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path |
         other = "--stderr-b" if stderr_a is not None else "--stderr-a"
         raise CompareError(f"{given} was given without {other}; give the standard-error images "
                            f"of both renders, or neither (then the pixel differences are used)")
-    sa = exr.read(stderr_a)[0] if stderr_a is not None else None
-    sb = exr.read(stderr_b)[0] if stderr_b is not None else None
+    sa = _stderr_of(path_a, meta_a, stderr_a)
+    sb = _stderr_of(path_b, meta_b, stderr_b)
     result = compare_arrays(img_a, img_b, sa, sb, eps=eps,
                             names=(str(path_a), str(path_b)))
     return result, img_a, img_b, meta_a, meta_b
+
+
+def _stderr_of(image_path, image_meta: dict, path) -> np.ndarray | None:
+    """The standard-error image at ``path`` (None for None), refused when it belongs to another render.
+
+    ``phonglab render`` writes the same ``render_id`` into an image and its ``.stderr.exr``;
+    a standard-error file whose id differs from its image's (or that lacks one when the image
+    has one) was left by another render, and its errors would not describe this image.
+    """
+    if path is None:
+        return None
+    stderr, meta = exr.read(path)
+    image_id = image_meta.get("render_id")
+    if image_id is not None and meta.get("render_id") != image_id:
+        raise CompareError(f"{path} belongs to another render than {image_path} (their "
+                           f"render_id headers differ); render {image_path} again, give its own "
+                           f"standard-error file, or use --no-stderr-files")
+    return stderr
 
 
 def describe_metadata(meta: dict) -> str:

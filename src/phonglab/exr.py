@@ -91,14 +91,19 @@ def write(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = N
     if path.is_dir():
         raise ExrError(f"{path} is a folder; give a file name ending in .exr")
     path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path, ".tmp") as tmp:
+        write_file(tmp, image, metadata)
+    return path
+
+
+def write_file(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = None) -> None:
+    """Write the EXR straight to ``path`` (no temporary: callers that replace a set of files
+    write each into an :func:`atomic_path` temporary with this)."""
     header: dict[str, Any] = {"compression": OpenEXR.ZIP_COMPRESSION,
                               "type": OpenEXR.scanlineimage}
     for key, value in (metadata or {}).items():
         header[PREFIX + str(key)] = json.dumps(value, default=str)
-    channels = _channels(np.asarray(image))
-    with atomic_path(path, ".tmp") as tmp:
-        OpenEXR.File(header, channels).write(tmp)
-    return path
+    OpenEXR.File(header, _channels(np.asarray(image))).write(str(path))
 
 
 def stderr_path(path: str | os.PathLike) -> Path:

@@ -15,6 +15,7 @@ means, is s = √( Σ spp_k (x_k − x̄)² / (N − N/P) / P ) (:func:`render_s
 from __future__ import annotations
 
 import re
+import resource
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,10 +26,12 @@ import mitsuba as mi
 import numpy as np
 from tqdm import tqdm
 
-from . import __version__, exr
-from .errors import PhonglabError
-from .scenes import file_hash, load_scene, scene_defaults, scene_path
-from .tonemap import auto_exposure, preview_png
+from . import __version__
+from .errors import PhonglabError, SceneError
+from .outputs import RenderOutputs
+from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
+                     scene_path)
+from .tonemap import auto_exposure
 
 
 @dataclass
@@ -82,6 +85,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     if spp < 1:
         raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
                             f"least one sample (--spp 1)")
+    preflight(scene, "the scene")
     passes = max(1, min(int(passes), int(spp)))
     per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
     iterator = range(passes)
@@ -123,20 +127,30 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
                 png: bool = True, extra_metadata: dict[str, Any] | None = None) -> RenderResult:
-    """Load, render and write ``out`` (EXR with provenance) plus a PNG preview beside it.
+    """Load, render and write ``out`` (EXR with provenance) plus its standard error and a PNG.
 
-    ``extra_metadata`` is added to the EXR header (the planner records its plan there).
+    Everything that can be checked is checked before the render starts: the output files
+    (:class:`phonglab.outputs.RenderOutputs`), ``spp``, the scene (:func:`preflight`: a
+    sensor, a film of at least one pixel, the memory it needs).  ``max_depth`` applies to
+    the scene's own integrator: through its ``$max_depth`` default when it has one, else by
+    rebuilding the integrator with ``max_depth`` set (refused, with the reason, when that
+    integrator takes no depth).  ``extra_metadata`` is added to the EXR header (the planner
+    records its plan there).  The files are replaced as one set.
     """
     path = scene_path(scene)
+    outputs = RenderOutputs.beside(out, png)
+    outputs.check()
+    if spp is not None and int(spp) < 1:
+        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
+                            f"least one sample (--spp 1)")
     declared = scene_defaults(path)
     params = {k: v for k, v in (("spp", spp), ("max_depth", max_depth))
               if v is not None and k in declared}
     loaded = load_scene(path, variant, **params)
     integrator = None
     if max_depth is not None and "max_depth" not in declared:
-        # The scene does not expose its depth: render with a path tracer of the asked depth.
-        integrator = mi.load_dict({"type": "path", "max_depth": int(max_depth)})
-    sensor = loaded.sensors()[0]
+        integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
+    sensor = preflight(loaded, path)
     spp = int(spp or sensor.sampler().sample_count())
     passes = passes or (min(spp, 8) if spp >= 16 else 1)
     result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
@@ -150,15 +164,61 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
     }
     result.metadata.update(extra_metadata or {})
-    out = Path(out)
-    exr.write(out, result.image, result.metadata)
-    if result.stderr is not None:
-        exr.write(exr.stderr_path(out), result.stderr, result.metadata)
+    ev = auto_exposure(result.image, darken_only=True) if png else 0.0
     if png:
-        ev = auto_exposure(result.image, darken_only=True)
         result.metadata["preview_exposure_ev"] = round(ev, 2)
-        preview_png(out.with_suffix(".png"), result.image, exposure=ev)
+    result.metadata["render_id"] = outputs.write(result.image, result.stderr, result.metadata,
+                                                 exposure=ev)
     return result
+
+
+#: Host memory one film pixel costs through a render (Mitsuba's image block, the float64
+#: sums of :func:`render_scene`, the numpy copies): measured 136 bytes per RGB pixel
+#: (cornell_phong, llvm_ad_rgb, 1024² vs 2048², independent of spp), rounded up.
+BYTES_PER_PIXEL = 160
+#: Fixed cost of a render process (Python, Mitsuba, Dr.Jit, kernels): measured ~200 MB.
+BASE_BYTES = 256 << 20
+
+
+def available_memory() -> int | None:
+    """Bytes this process may still allocate: MemAvailable, capped by RLIMIT_AS (None if unknown)."""
+    limits = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    limits.append(int(line.split()[1]) * 1024)
+    except OSError:
+        pass
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        limits.append(soft)
+    return min(limits) if limits else None
+
+
+def preflight(scene, path: str | Path):
+    """The scene's first sensor, once the render is known to be possible.
+
+    Raises:
+        SceneError: no sensor, a film without pixels, or a film whose render would need more
+            memory than this process can have (estimated as BASE_BYTES + BYTES_PER_PIXEL per
+            pixel: the render is refused before anything is allocated).
+    """
+    sensors = scene.sensors()
+    if not sensors:
+        raise SceneError(f"{path}: the scene has no <sensor>; add a camera (e.g. <sensor "
+                         f"type=\"perspective\">) with a <film>")
+    width, height = (int(v) for v in sensors[0].film().size())
+    if width < 1 or height < 1:
+        raise SceneError(f"{path}: the film is {width} x {height} pixels; give it a width and "
+                         f"height of at least 1 (e.g. res=64)")
+    need = BASE_BYTES + BYTES_PER_PIXEL * width * height
+    have = available_memory()
+    if have is not None and need > have:
+        raise SceneError(f"{path}: a {width} x {height} render needs about {need / 2**30:.1f} GiB "
+                         f"of memory but {have / 2**30:.1f} GiB is available; lower the "
+                         f"resolution (res=...)")
+    return sensors[0]
 
 
 def _max_depth(integrator) -> int | None:

@@ -70,6 +70,12 @@ _MI_LINE = re.compile(r"\(line (\d+)")
 _UNREFERENCED = re.compile(r'unreferenced propert(?:y|ies) in (\w+) plugin of type "([^"]+)"')
 _UNREFERENCED_NAME = re.compile(r'^\s*-\s*\w+\s+"([^"]+)"', re.MULTILINE)
 _NOT_FOUND = re.compile(r'instantiate (\w+) plugin of type "([^"]+)".*Plugin "[^"]+" not found')
+_PLUGIN_EXCEPTION = re.compile(r"^\w*(?:Error|Exception): ((?:.|\n)*?)\s*$", re.MULTILINE)
+_UNPARSABLE = re.compile(r'could not parse (floating point|integer|boolean|\w+) value "([^"]*)"')
+_FILE_ERROR = re.compile(r'\[FileStream\] "([^"]+)": (I/O error[^\n]*)')
+_INSTANTIATE = re.compile(r'instantiate (\w+) plugin of type "([^"]+)"')
+_OUT_OF_RANGE = re.compile(r'Property "(\w+)": value (\S+) is out of bounds, must be in the range '
+                           r'\[([^,]+), ([^\]]+)\]')
 #: Scene-file names of phonglab's own plugins (whose parameters are all listed by traverse).
 _OWN_PLUGINS = ("lambert", "phong")
 
@@ -98,40 +104,94 @@ def explain_load_error(path: Path, exc: Exception) -> SceneError:
     where = f"{path}, line {line_m.group(1)}" if line_m else str(path)
     # Mitsuba prefixes its messages with "[parser.cpp:444] ..." and may nest a Python traceback.
     core = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text.splitlines()[-1] if text else type(exc).__name__)
-    if "MaterialError" in text or "violates energy" in text or "must lie in" in text \
-            or "'exponent'" in text:
-        m = re.search(r"((?:phong|lambert): .*)", text)
-        msg = m.group(1) if m else core
-        return SceneError(f"{where}: {msg}")
-    m = _UNREFERENCED.search(text)
-    if m:
-        kind, plugin_type = m.group(1), m.group(2)
-        names = _UNREFERENCED_NAME.findall(text) or ["?"]
-        known = _plugin_parameters(plugin_type)
-        hints = [difflib.get_close_matches(n, known, n=1) for n in names]
-        guess = "".join(f" (did you mean {h[0]!r}?)" for h in hints if h) if len(names) == 1 else ""
-        listed = (f"its parameters are {', '.join(repr(k) for k in known)}" if known else
-                  "see the Mitsuba plugin reference for its parameters")
-        kind = "" if kind == "unknown" else f"{kind} "
-        plural = "parameters" if len(names) > 1 else "parameter"
-        return SceneError(
-            f"{where}: the {kind}plugin {plugin_type!r} has no {plural} "
-            f"{', '.join(repr(n) for n in names)}{guess}; fix the spelling or remove it "
-            f"({listed}).")
-    m = _NOT_FOUND.search(text)
-    if m:
-        kind, plugin_type = m.group(1), m.group(2)
-        guess = difflib.get_close_matches(plugin_type, _OWN_PLUGINS, n=1)
-        hint = f" (did you mean {guess[0]!r}?)" if guess else ""
-        return SceneError(
-            f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
-            f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
-            f"phonglab.register() before loading from Python.")
-    if "Parsing of XML file" in text or "parse" in text.lower():
+    for explain in (_plugin_raised, _unreferenced, _not_found, _unparsable_value, _missing_file,
+                    _out_of_range, _unused_parameters):
+        message = explain(text, where, path)
+        if message:
+            return SceneError(message)
+    if "Parsing of XML file" in text:
         why = re.sub(r'^Parsing of XML file "[^"]*" failed:\s*', "", core)
         why = re.sub(r"\s*\(line \d+, col \d+\)", "", why)
         return malformed(where, why)
     return SceneError(f"{where}: could not load the scene: {core}")
+
+
+def _plugin_raised(text: str, where: str, path: Path) -> str | None:
+    """A Python plugin's own exception (MaterialError, ValueError): its message, as the plugin wrote it."""
+    if "Traceback (most recent call last)" not in text and "MaterialError" not in text:
+        return None
+    m = _PLUGIN_EXCEPTION.search(text)
+    return f"{where}: {m.group(1).strip()}" if m else None
+
+
+def _unreferenced(text: str, where: str, path: Path) -> str | None:
+    m = _UNREFERENCED.search(text)
+    if not m:
+        return None
+    kind, plugin_type = m.group(1), m.group(2)
+    names = _UNREFERENCED_NAME.findall(text) or ["?"]
+    known = _plugin_parameters(plugin_type)
+    hints = [difflib.get_close_matches(n, known, n=1) for n in names]
+    guess = "".join(f" (did you mean {h[0]!r}?)" for h in hints if h) if len(names) == 1 else ""
+    listed = (f"its parameters are {', '.join(repr(k) for k in known)}" if known else
+              "see the Mitsuba plugin reference for its parameters")
+    kind = "" if kind == "unknown" else f"{kind} "
+    plural = "parameters" if len(names) > 1 else "parameter"
+    return (f"{where}: the {kind}plugin {plugin_type!r} has no {plural} "
+            f"{', '.join(repr(n) for n in names)}{guess}; fix the spelling or remove it "
+            f"({listed}).")
+
+
+def _not_found(text: str, where: str, path: Path) -> str | None:
+    m = _NOT_FOUND.search(text)
+    if not m:
+        return None
+    kind, plugin_type = m.group(1), m.group(2)
+    guess = difflib.get_close_matches(plugin_type, _OWN_PLUGINS, n=1)
+    hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+    return (f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
+            f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
+            f"phonglab.register() before loading from Python.")
+
+
+def _unparsable_value(text: str, where: str, path: Path) -> str | None:
+    m = _UNPARSABLE.search(text)
+    if not m:
+        return None
+    kind, value = m.group(1), m.group(2)
+    example = {"integer": "64", "boolean": "true"}.get(kind, "0.5")
+    return (f"{where}: {value!r} is not a valid {kind} value; write one like "
+            f"value=\"{example}\" (or pass a valid value for the scene parameter that gives it).")
+
+
+def _missing_file(text: str, where: str, path: Path) -> str | None:
+    m = _FILE_ERROR.search(text)
+    if not m:
+        return None
+    plugin = _INSTANTIATE.search(text)
+    needed = f" needed by the {plugin.group(1)} plugin {plugin.group(2)!r}" if plugin else ""
+    return (f"{where}: cannot open the file {m.group(1)!r}{needed} ({m.group(2).strip()}); check "
+            f"the path, which is relative to the scene file's folder {str(path.parent)!r}.")
+
+
+def _out_of_range(text: str, where: str, path: Path) -> str | None:
+    m = _OUT_OF_RANGE.search(text)
+    if not m:
+        return None
+    plugin = _INSTANTIATE.search(text)
+    owner = f" of the {plugin.group(1)} plugin {plugin.group(2)!r}" if plugin else ""
+    return (f"{where}: {m.group(1)} = {m.group(2)}{owner} is outside its range "
+            f"[{m.group(3)}, {m.group(4)}]; give a value in that range.")
+
+
+def _unused_parameters(text: str, where: str, path: Path) -> str | None:
+    if "Found unused parameters" not in text:
+        return None
+    given = re.findall(r"\$(\w+)=(\S*)", text)
+    listed = ", ".join(f"{k}={v}" for k, v in given) or "?"
+    return (f"{path}: the scene does not use the parameter(s) {listed} (it has no $name for "
+            f"them); remove them, or add <default name=\"...\" value=\"...\"/> and use $name "
+            f"in the file.")
 
 
 def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
@@ -172,6 +232,10 @@ class SceneInfo:
     delta_bsdfs: list[str] = field(default_factory=list)  #: "dielectric 'glass'" ...
     integrator: str = "path"
     integrator_props: dict[str, str] = field(default_factory=dict)
+    #: the scene's integrator as a ``mi.load_dict`` dictionary, or None with the reason in
+    #: :attr:`integrator_dict_why` (a nested plugin, a reference, an unknown value type)
+    integrator_dict: dict[str, Any] | None = None
+    integrator_dict_why: str = ""
     gray_values: int = 0                                  #: gray colour values seen
     bsdf_types: set[str] = field(default_factory=set)     #: every <bsdf type=...> in the file
 
@@ -257,7 +321,53 @@ def inspect_scene(scene: str | Path, **params) -> SceneInfo:
         info.integrator = integ.get("type", "path")
         info.integrator_props = {c.get("name"): c.get("value") for c in integ
                                  if c.get("name") and c.get("value") is not None}
+    info.integrator_dict, info.integrator_dict_why = _integrator_dict(integ)
     return info
+
+
+_VALUE_TYPES = {"integer": int, "float": float, "string": str,
+                "boolean": lambda v: v.strip().lower() == "true"}
+
+
+def _integrator_dict(integ: ET.Element | None) -> tuple[dict[str, Any] | None, str]:
+    """The ``<integrator>`` element as a ``mi.load_dict`` dictionary, or (None, why not)."""
+    if integ is None:
+        return {"type": "path"}, ""          # Mitsuba's default integrator
+    d: dict[str, Any] = {"type": integ.get("type", "path")}
+    for c in integ:
+        name, value = c.get("name"), c.get("value")
+        if c.tag in _VALUE_TYPES and name and value is not None:
+            try:
+                d[name] = _VALUE_TYPES[c.tag](value)
+            except ValueError:
+                return None, f"its <{c.tag} name={name!r}> has the value {value!r}"
+        elif c.tag == "rgb" and name and value is not None:
+            d[name] = {"type": "rgb", "value": _floats(value)}
+        else:
+            return None, f"it holds a <{c.tag}> element that phonglab does not rebuild"
+    return d, ""
+
+
+def integrator_with_depth(info: SceneInfo, max_depth: int):
+    """The scene's own integrator with ``max_depth`` set (what ``--max-depth`` means).
+
+    Raises:
+        SceneError: the integrator has no ``max_depth`` parameter, or the scene's integrator
+            cannot be rebuilt outside its file.
+    """
+    if info.integrator_dict is None:
+        raise SceneError(
+            f"{info.path}: cannot apply a max_depth to its {info.integrator!r} integrator "
+            f"({info.integrator_dict_why}); add <default name=\"max_depth\" value=\"8\"/> and "
+            f"max_depth=\"$max_depth\" to the integrator, or render without --max-depth.")
+    d = dict(info.integrator_dict, max_depth=int(max_depth))
+    try:
+        return mi.load_dict(d)
+    except Exception as exc:  # Mitsuba: unreferenced property, or the plugin's own check
+        raise SceneError(
+            f"{info.path}: the scene's {info.integrator!r} integrator does not take "
+            f"max_depth={max_depth} ({str(exc).strip().splitlines()[-1]}); render without "
+            f"--max-depth.") from exc
 
 
 def _scan(root: ET.Element, path: Path, info: SceneInfo, values: dict[str, str]) -> None:

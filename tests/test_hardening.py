@@ -1,0 +1,187 @@
+"""Bad input found by a hostile but fair user: each case ends in one sentence with the fix and
+exit code 2, before any rendering, and nothing on disk is lost or left stale.
+
+Each test names the defect it pins (they failed before the fix):
+* a stale ``.stderr.exr`` from an earlier render was kept and trusted by ``compare``;
+* ``--max-depth`` on a scene without a ``$max_depth`` default swapped its integrator for ``path``;
+* output problems (read-only file or folder, a parent that is a file, a PNG path that is a
+  folder) were found after the render, as tracebacks;
+* a scene with no sensor, a film of 0 pixels or one too large for memory raised Dr.Jit
+  errors (or crashed); problems that are not markup were reported as "malformed XML".
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phonglab import cli, exr
+from phonglab.errors import SceneError
+from phonglab.render import render_scene
+from phonglab.scenes import load_scene
+
+FILM = ('<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" '
+        'target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm">'
+        '<integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>')
+WHITTED_NO_DEPTH_DEFAULT = f"""<scene version="3.0.0">
+  <integrator type="whitted"><string name="units" value="graphics"/></integrator>
+  {FILM}
+  <shape type="sphere"><bsdf type="phong"/></shape>
+  <emitter type="point"><point name="position" value="0, 2, 3"/><rgb name="intensity" value="5"/></emitter>
+</scene>"""
+
+
+def _write(tmp_path: Path, name: str, text: str) -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def _fails_in_one_sentence(capsys, argv: list[str], *patterns: str) -> str:
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("phonglab: error: ") and "\n" not in err, err
+    assert "Traceback" not in err and "malformed XML" not in err, err
+    for p in patterns:
+        assert p in err, (p, err)
+    return err
+
+
+# --- stale files -------------------------------------------------------------------------------
+
+def test_a_render_without_stderr_removes_the_old_one(tmp_path, capsys):
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(out)]) == 0
+    assert exr.stderr_path(out).is_file()
+    assert cli.main(["render", "gray_direct", "--spp", "4", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert out.is_file() and not exr.stderr_path(out).exists()
+    # The image and its (absent) stderr belong to one render: compare uses pixel differences.
+    assert cli.main(["compare", str(out), str(out), "--json"]) == 0
+    assert '"pixel differences"' in capsys.readouterr().out
+
+
+def test_compare_refuses_a_stderr_file_of_another_render(tmp_path, capsys):
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    for out, seed in ((a, "0"), (b, "1")):
+        assert cli.main(["render", "gray_direct", "--spp", "16", "--seed", seed, "-o", str(out)]) == 0
+    ids = {exr.read(p)[1]["render_id"] for p in (a, exr.stderr_path(a), b)}
+    assert len(ids) == 2                     # a and a.stderr share one id, b has another
+    exr.stderr_path(b).replace(exr.stderr_path(a))  # a stale stderr now sits beside a
+    capsys.readouterr()
+    _fails_in_one_sentence(capsys, ["compare", str(a), str(a)], "belongs to another render")
+
+
+# --- --max-depth keeps the scene's integrator ---------------------------------------------------
+
+def test_max_depth_applies_to_the_scenes_own_integrator(tmp_path, capsys):
+    scene = _write(tmp_path, "w.xml", WHITTED_NO_DEPTH_DEFAULT)
+    out = tmp_path / "w.exr"
+    assert cli.main(["render", str(scene), "--spp", "1", "--max-depth", "3", "-o", str(out)]) == 0
+    meta = exr.read(out)[1]
+    assert meta["max_depth"] == 3 and "Whitted" in meta["integrator"], meta
+
+
+def test_max_depth_is_refused_for_an_integrator_without_one(tmp_path, capsys):
+    scene = _write(tmp_path, "d.xml", WHITTED_NO_DEPTH_DEFAULT.replace(
+        '<integrator type="whitted"><string name="units" value="graphics"/></integrator>',
+        '<integrator type="direct"/>'))
+    _fails_in_one_sentence(capsys, ["render", str(scene), "--max-depth", "3", "-o",
+                                    str(tmp_path / "d.exr")], "'direct' integrator", "max_depth")
+    assert not (tmp_path / "d.exr").exists()
+
+
+# --- outputs are checked before the render -----------------------------------------------------
+
+def test_a_read_only_output_is_refused_and_kept(tmp_path, capsys):
+    out = tmp_path / "x.exr"
+    out.write_bytes(b"keep me")
+    out.chmod(stat.S_IRUSR | stat.S_IRGRP)
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "-o", str(out)], "read-only")
+    assert out.read_bytes() == b"keep me"
+
+
+def test_a_read_only_folder_is_refused(tmp_path, capsys):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    try:
+        _fails_in_one_sentence(capsys, ["render", "gray_direct", "-o", str(folder / "x.exr")],
+                               "read-only")
+    finally:
+        folder.chmod(stat.S_IRWXU)
+    assert os.listdir(folder) == []
+
+
+def test_a_parent_that_is_a_file_is_refused(tmp_path, capsys):
+    (tmp_path / "f").write_text("")
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "-o", str(tmp_path / "f" / "x.exr")],
+                           "is a file, not a folder")
+
+
+def test_a_png_path_that_is_a_folder_is_refused(tmp_path, capsys):
+    (tmp_path / "x.png").mkdir()
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "-o", str(tmp_path / "x.exr")],
+                           "is a folder")
+    assert not (tmp_path / "x.exr").exists()
+
+
+# --- scenes that cannot be rendered, and errors named for what went wrong ----------------------
+
+def test_a_scene_without_a_sensor_is_one_sentence(tmp_path, capsys):
+    scene = _write(tmp_path, "s.xml", '<scene version="3.0.0"><shape type="sphere"/>'
+                                      '<emitter type="constant"/></scene>')
+    _fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "s.exr")],
+                           "no <sensor>")
+
+
+@pytest.mark.parametrize("res, words", [(0, "0 x 0 pixels"), (20000, "GiB of memory")])
+def test_impossible_films_are_refused_before_allocation(variant_llvm_rgb, res, words):
+    scene = load_scene("gray_direct", res=res)
+    with pytest.raises(SceneError, match=words):
+        render_scene(scene, 1)
+
+
+@pytest.mark.parametrize("body, params, words", [
+    ('<bsdf type="phong"><float name="exponent" value="shiny"/></bsdf>', {},
+     "'shiny' is not a valid floating point value"),
+    ('<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" '
+     'value="missing.png"/></texture></bsdf>', {}, "cannot open the file 'missing.png'"),
+    ('<bsdf type="diffuse"/>', {"spp": "-3"}, "sample_count = -3"),
+    ('<bsdf type="diffuse"/>', {"unused": "1"}, "does not use the parameter(s) unused=1"),
+])
+def test_load_errors_are_named_for_what_went_wrong(tmp_path, variant_llvm_rgb, body, params, words):
+    film = FILM.replace('<film', '<sampler type="independent"><integer name="sample_count" '
+                                 'value="$spp"/></sampler><film')
+    scene = _write(tmp_path, "e.xml", f'<scene version="3.0.0"><default name="spp" value="4"/>'
+                                      f'{film}<shape type="sphere">{body}</shape></scene>')
+    with pytest.raises(SceneError) as info:
+        load_scene(scene, **params)
+    msg = str(info.value)
+    assert words in msg and "malformed XML" not in msg and "\n" not in msg, msg
+
+
+def test_a_plugin_value_error_is_passed_through(tmp_path, capsys):
+    scene = _write(tmp_path, "w.xml", WHITTED_NO_DEPTH_DEFAULT.replace(
+        '<string name="units" value="graphics"/>',
+        '<float name="attenuation_constant" value="-1"/>'))
+    _fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "w.exr")],
+                           "whitted: attenuation")
+
+
+def test_malformed_xml_is_still_called_so(tmp_path, capsys):
+    scene = _write(tmp_path, "m.xml", '<scene version="3.0.0"><shape type="sphere"></scene>')
+    assert cli.main(["render", str(scene), "-o", str(tmp_path / "m.exr")]) == 2
+    assert "malformed XML" in capsys.readouterr().err
+
+
+def test_the_render_id_ties_image_and_stderr(tmp_path):
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(out)]) == 0
+    image_id = exr.read(out)[1]["render_id"]
+    assert exr.read(exr.stderr_path(out))[1]["render_id"] == image_id
+    assert np.isfinite(exr.read_image(out)).all()
