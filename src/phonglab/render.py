@@ -71,6 +71,13 @@ def pass_seed(seed: int, k: int) -> int:
     return (int(seed) * 1_000_003 + int(k)) % (1 << 32)
 
 
+#: Most samples per pixel a render takes: a float32 running sum of more than 2^24 unit
+#: contributions no longer grows by one sample's worth (24-bit significand).
+MAX_SPP = 1 << 24
+#: Most samples one ``mi.render`` call gets (Mitsuba's limit is 2^32 per call in JIT variants).
+MAX_SAMPLES_PER_CALL = 1 << 31
+
+
 def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 0,
                  progress: bool = False, integrator=None,
                  keep_passes: bool = False) -> RenderResult:
@@ -82,11 +89,14 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     every pass image in :attr:`RenderResult.passes`.  ``pass_seconds`` times each pass with
     the image evaluated and copied to numpy (the first includes JIT compilation).
     """
-    if spp < 1:
-        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
-                            f"least one sample (--spp 1)")
-    preflight(scene, "the scene")
-    passes = max(1, min(int(passes), int(spp)))
+    if not 1 <= spp <= MAX_SPP:
+        raise PhonglabError(f"spp (samples per pixel) must lie in [1, {MAX_SPP}], got {spp}; a "
+                            f"float32 pixel sum cannot take more samples without losing them")
+    sensor = preflight(scene, "the scene")
+    width, height = (int(v) for v in sensor.film().size())
+    # Mitsuba refuses (or splits and then fails) a single render of more than 2^32 samples.
+    min_passes = -(-spp * width * height // MAX_SAMPLES_PER_CALL)
+    passes = max(1, min_passes, min(int(passes), int(spp)))
     per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
     iterator = range(passes)
     if progress:
