@@ -1,11 +1,12 @@
 """phonglab.checks and `phonglab check`: the harness first, then every check at small sample counts.
 
-Cheapest first: the statistics helpers (Holm, Welch, Šidák) against scipy and hand values, the
-quadrature against solid-angle integrals it must reproduce exactly, the records and the table,
-then each check (Config.small(): 16 spp, 16384 BSDF samples per case, 65536 χ² samples) with
-every row passing (the KNOWN rows are Mitsuba's sphere-emitter bias, documented in
-docs/checks.md), then the CLI.  The checks derive their own tolerances (z·SE at ALPHA = 0.01,
-Šidák over each check's statistical rows); seeds are fixed, so these tests are reproducible.
+Cheapest first: the statistics the checks use (phonglab.stats: Holm, Welch, Šidák) against
+scipy and hand values, the quadrature (phonglab.physics.quadrature) against solid-angle
+integrals it must reproduce exactly, the records and the table, then each check
+(Config.small(): 16 spp, 16384 BSDF samples per case, 65536 χ² samples) with every row
+passing (the KNOWN rows are Mitsuba's sphere-emitter bias, documented in docs/checks.md),
+then the CLI.  The checks derive their own tolerances (z·SE at ALPHA = 0.01, Šidák over each
+check's statistical rows); seeds are fixed, so these tests are reproducible.
 """
 
 from __future__ import annotations
@@ -15,27 +16,29 @@ import math
 
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import stats as scipy_stats
 
-from phonglab import checks
+import phonglab
+from phonglab import checks, runtime, stats
 from phonglab.cli import main
+from phonglab.physics.quadrature import lobe_quadrature
 
 # --- harness ------------------------------------------------------------------------------
 
 
 def test_sidak_matches_definition():
-    assert checks.sidak(0.01, 1) == pytest.approx(0.01)
+    assert stats.sidak(0.01, 1) == pytest.approx(0.01)
     # m independent tests at the Šidák level keep the family-wise rate at alpha exactly.
-    a = checks.sidak(0.01, 20)
+    a = stats.sidak(0.01, 20)
     assert 1 - (1 - a) ** 20 == pytest.approx(0.01, rel=1e-12)
-    assert checks.z_critical(0.05, 1) == pytest.approx(1.959964, rel=1e-6)
+    assert stats.z_critical(0.05, 1) == pytest.approx(1.959964, rel=1e-6)
 
 
 def test_holm_adjusted_pvalues_by_hand():
     # Sorted p: 0.01, 0.02, 0.03, 0.04 -> 4·0.01, max(3·0.02, 0.04), max(2·0.03, 0.06), max(0.04, 0.06)
-    adj = checks.holm(np.array([0.03, 0.01, 0.04, 0.02]))
+    adj = stats.holm(np.array([0.03, 0.01, 0.04, 0.02]))
     np.testing.assert_allclose(adj, [0.06, 0.04, 0.06, 0.06])
-    assert checks.holm(np.array([0.9, 0.8]))[0] == 1.0
+    assert stats.holm(np.array([0.9, 0.8]))[0] == 1.0
 
 
 def test_welch_pvalues_match_scipy():
@@ -45,27 +48,27 @@ def test_welch_pvalues_match_scipy():
     b = rng.normal(1.1, 0.5, (k, 5))
     m1, m2 = a.mean(0), b.mean(0)
     se1, se2 = a.std(0, ddof=1) / math.sqrt(k), b.std(0, ddof=1) / math.sqrt(k)
-    p, t = checks.welch_pvalues(m1, se1, m2, se2, k, k)
-    ref = stats.ttest_ind(a, b, axis=0, equal_var=False)
+    p, t = stats.welch_pvalues(m1, se1, m2, se2, k, k)
+    ref = scipy_stats.ttest_ind(a, b, axis=0, equal_var=False)
     np.testing.assert_allclose(t, ref.statistic, rtol=1e-10)
     np.testing.assert_allclose(p, ref.pvalue, rtol=1e-8)
     # Zero variance on both sides: equal means are no evidence, different ones are.
-    p0, _ = checks.welch_pvalues(np.array([1.0, 1.0]), np.zeros(2), np.array([1.0, 2.0]),
-                                 np.zeros(2), k, k)
+    p0, _ = stats.welch_pvalues(np.array([1.0, 1.0]), np.zeros(2), np.array([1.0, 2.0]),
+                                np.zeros(2), k, k)
     assert p0.tolist() == [1.0, 0.0]
 
 
 @pytest.mark.parametrize("theta_deg", [0.0, 30.0, 85.0, 89.5])
 def test_quadrature_integrates_solid_angle_and_cosine_exactly(theta_deg):
     # ∫_H dω = 2π and ∫_H cos θ dω = π, whatever the lobe frame: the horizon is a panel edge.
-    wo, w = checks.hemisphere_quadrature(math.radians(theta_deg), width=0.01)
+    wo, w = lobe_quadrature(math.radians(theta_deg), width=0.01)
     assert np.all(wo[:, 2] >= -1e-15) and np.all(w > 0)
     assert w.sum() == pytest.approx(2 * math.pi, rel=1e-12)
     assert np.sum(w * wo[:, 2]) == pytest.approx(math.pi, rel=1e-12)
 
 
 def test_result_status_and_json_round_trip(tmp_path):
-    rows = checks._Rows("demo")
+    rows = checks.Rows("demo")
     rows.exact("a", "x", 1.0, 1.0, "by hand", 0.0)
     rows.exact("b", "x", 2.0, 1.0, "by hand", 0.5)
     rows.exact("c", "x", 2.0, 1.0, "by hand", 0.5, known_issue="documented elsewhere")
@@ -74,7 +77,7 @@ def test_result_status_and_json_round_trip(tmp_path):
     assert [r.status for r in res] == ["pass", "FAIL", "KNOWN", "FAIL"]
     assert [r.ok for r in res] == [True, False, True, False]
     # One statistical row: z = Φ⁻¹(1 − 0.01/2), tolerance z·SE.
-    assert res[3].tolerance == pytest.approx(stats.norm.isf(0.005) * 0.01)
+    assert res[3].tolerance == pytest.approx(scipy_stats.norm.isf(0.005) * 0.01)
     path = checks.write_json(tmp_path / "r.json", res, {"spp": 1})
     data = json.loads(path.read_text())
     assert [r["name"] for r in data["results"]] == ["a", "b", "c", "d"]
@@ -87,10 +90,7 @@ def test_result_status_and_json_round_trip(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def small(tmp_path_factory, ):
-    import phonglab
-    from phonglab import runtime
-
+def small(tmp_path_factory):
     phonglab.register("llvm_ad_rgb" if runtime.configure().usable else "scalar_rgb")
     return checks.Config.small(out_dir=tmp_path_factory.mktemp("checks"))
 

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 import phonglab
-from phonglab import checks, exr, registration, runtime
+from phonglab import checks, exr, probe, registration, runtime
+from phonglab.cli import main
 
 BROKEN = ("lambert_nopi", "phong_p1", "phong_warped", "phong_badpdf")
 
@@ -95,20 +96,20 @@ def _passed(rows) -> set[str]:
 
 def test_broken_variants_are_really_broken(cfg):
     # Guard against a subclass that silently changes nothing: evaluate one direction each.
-    wi = checks._dir(np.radians([0.0]))
-    wo = checks._dir(np.radians([30.0]))
-    good = mi.load_dict(checks._gray("lambert", reflectance=0.5))
-    bad = mi.load_dict(checks._gray("lambert_nopi", reflectance=0.5))
-    assert checks.bsdf_eval(bad, wi, wo)[0] == pytest.approx(np.pi * checks.bsdf_eval(good, wi, wo)[0],
-                                                            rel=1e-6)
+    wi = probe.direction(np.radians([0.0]))
+    wo = probe.direction(np.radians([30.0]))
+    good = mi.load_dict(checks.gray("lambert", reflectance=0.5))
+    bad = mi.load_dict(checks.gray("lambert_nopi", reflectance=0.5))
+    assert probe.eval(bad, wi, wo)[0, 0] == pytest.approx(np.pi * probe.eval(good, wi, wo)[0, 0],
+                                                          rel=1e-6)
     p = 30.0
     good = mi.load_dict(checks.phong_dict("phong", 0.0, 1.0, p))
     bad = mi.load_dict(checks.phong_dict("phong_p1", 0.0, 1.0, p))
-    assert checks.bsdf_eval(bad, wi, wi)[0] == pytest.approx(
-        checks.bsdf_eval(good, wi, wi)[0] * (p + 1) / (p + 2), rel=1e-6)
+    assert probe.eval(bad, wi, wi)[0, 0] == pytest.approx(
+        probe.eval(good, wi, wi)[0, 0] * (p + 1) / (p + 2), rel=1e-6)
     bad = mi.load_dict(checks.phong_dict("phong_badpdf", 0.0, 1.0, p))
-    assert checks.bsdf_pdf(bad, wi, wi)[0] == pytest.approx(
-        checks.bsdf_pdf(good, wi, wi)[0] * (p + 2) / (p + 1), rel=1e-6)
+    assert probe.pdf(bad, wi, wi)[0] == pytest.approx(
+        probe.pdf(good, wi, wi)[0] * (p + 2) / (p + 1), rel=1e-6)
 
 
 def test_dropping_inv_pi_fails_energy_rows(cfg):
@@ -190,8 +191,6 @@ def test_pdf_with_wrong_normalization_fails_chi2_and_monte_carlo_rows(cfg):
 
 
 def test_cli_exits_nonzero_and_names_the_failing_rows(cfg, capsys):
-    from phonglab.cli import main
-
     code = main(["check", "--only", "reflection", "--phong", "phong_p1", "--spp", "16",
                  "--no-progress", "--out-dir", str(cfg)])
     out = capsys.readouterr().out

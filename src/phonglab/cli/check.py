@@ -11,10 +11,13 @@ import platform
 import sys
 import time
 
+import mitsuba as mi
+
+from .. import __version__, checks, register
+from ..errors import PhonglabError
+
 
 def add_parser(sub) -> None:
-    from ..checks import CHECK_NAMES
-
     p = sub.add_parser(
         "check", help="prove the plugins against physics and Mitsuba's built-ins (table)",
         description="Run phonglab's physics checks (white furnace, reflection equation, "
@@ -24,8 +27,8 @@ def add_parser(sub) -> None:
         epilog="examples:\n  phonglab check\n  phonglab check --only snell --only sanity\n"
                "  phonglab check --spp 256 --json out/checks.json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--only", action="append", metavar="NAME", choices=CHECK_NAMES,
-                   help=f"run only this check (repeatable): {', '.join(CHECK_NAMES)}")
+    p.add_argument("--only", action="append", metavar="NAME", choices=checks.CHECK_NAMES,
+                   help=f"run only this check (repeatable): {', '.join(checks.CHECK_NAMES)}")
     p.add_argument("--json", metavar="PATH", help="also write the rows as JSON to PATH")
     p.add_argument("--spp", type=int, default=256,
                    help="samples per pixel of the statistical renders (default 256; BSDF-level "
@@ -44,8 +47,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .. import checks
-    from ..errors import PhonglabError
+    # Lazy: scipy (through phonglab.stats) and tqdm would add ~0.6 s to every `phonglab` start.
+    from tqdm import tqdm
+
+    from .. import stats
 
     if args.spp is not None and args.spp < 8:
         raise PhonglabError(f"--spp must be at least 8 (renders are split into passes for their "
@@ -54,8 +59,6 @@ def run(args) -> int:
     _require_plugins(args.lambert, args.phong)
     bar = None
     if not args.no_progress:
-        from tqdm import tqdm
-
         bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
     cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
                         lambert=args.lambert, phong=args.phong,
@@ -97,14 +100,10 @@ def run(args) -> int:
               + (f"; difference image {r.details['difference_image']}"
                  if "difference_image" in r.details else ""))
     if args.json:
-        import mitsuba as mi
-
-        from .. import __version__
-
         path = checks.write_json(args.json, results, {
             "phonglab_version": __version__, "mitsuba_version": mi.__version__,
             "variant": mi.variant(), "spp": cfg.spp, "seed": cfg.seed,
-            "samples": cfg.samples, "chi2_samples": cfg.chi2_samples, "alpha": checks.ALPHA,
+            "samples": cfg.samples, "chi2_samples": cfg.chi2_samples, "alpha": stats.ALPHA,
             "seconds": round(seconds, 2), "checks": names, "python": platform.python_version()})
         print(f"JSON: {path}")
     return 1 if failed else 0
@@ -112,11 +111,6 @@ def run(args) -> int:
 
 def _require_plugins(*names: str) -> None:
     """A clear error when a plugin named by --lambert/--phong is not registered."""
-    import mitsuba as mi
-
-    from .. import register
-    from ..errors import PhonglabError
-
     register()
     for name in names:
         try:
