@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from phonglab.stats import ALPHA, sidak
+from phonglab import probe
 from phonglab.physics import radiometry
+from phonglab.stats import ALPHA, sidak
 
 # name -> (plugin type, parameters); parameters as numbers (gray) or RGB triples.
 CASES = {
@@ -76,16 +77,6 @@ def random_dirs(n, seed, upper=False):
     return v
 
 
-def make_si(wi):
-    si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
-    si.wi = mi.Vector3f(*(mi.Float(wi[:, k].astype(np.float32)) for k in range(3)))
-    return si
-
-
-def vec(a):
-    return mi.Vector3f(*(mi.Float(a[:, k].astype(np.float32)) for k in range(3)))
-
-
 def spectrum_np(x, n):
     a = np.atleast_2d(np.array(x, dtype=np.float64))
     return np.broadcast_to(a, (a.shape[0], n)).T
@@ -113,7 +104,7 @@ def test_flags_and_components():
 def test_component_selection_matches_sampled_component():
     ph = mi.load_dict({"type": "phong", "exponent": 10.0})
     n = 4096
-    si = make_si(np.tile([[0.3, 0.1, 0.948683]], (n, 1)))
+    si = probe.interaction(np.tile([[0.3, 0.1, 0.948683]], (n, 1)))
     rng = np.random.default_rng(1)
     s1 = mi.Float(rng.random(n).astype(np.float32))
     s2 = mi.Point2f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(2)))
@@ -147,7 +138,7 @@ def test_eval_matches_closed_form(case):
     near = (wi * np.array([-1, -1, 1]) + width * random_dirs(n, 3))
     near /= np.linalg.norm(near, axis=1, keepdims=True)
     wo[: n // 2] = near[: n // 2]
-    value = np.array(bsdf.eval(mi.BSDFContext(), make_si(wi), vec(wo))).T
+    value = np.array(bsdf.eval(mi.BSDFContext(), probe.interaction(wi), probe.to_vectors(wo))).T
     # Reference from the float32 inputs the plugin saw.
     wi32, wo32 = wi.astype(np.float32).astype(float), wo.astype(np.float32).astype(float)
     expected = closed_form_f(case, wi32, wo32) * np.maximum(wo32[:, 2:3], 0.0)
@@ -161,7 +152,7 @@ def test_eval_matches_closed_form(case):
 def test_eval_pdf_consistency(case):
     bsdf = mi.load_dict(to_dict(case))
     n = 4096
-    si, wo = make_si(random_dirs(n, 4, upper=True)), vec(random_dirs(n, 5))
+    si, wo = probe.interaction(random_dirs(n, 4, upper=True)), probe.to_vectors(random_dirs(n, 5))
     ctx = mi.BSDFContext()
     value, pdf = bsdf.eval_pdf(ctx, si, wo)
     assert np.array_equal(np.array(value), np.array(bsdf.eval(ctx, si, wo)))
@@ -176,7 +167,7 @@ def test_sample_weight_is_eval_over_pdf(case):
     bsdf = mi.load_dict(to_dict(case))
     n = 8192
     rng = np.random.default_rng(6)
-    si = make_si(random_dirs(n, 7, upper=True))
+    si = probe.interaction(random_dirs(n, 7, upper=True))
     s1 = mi.Float(rng.random(n).astype(np.float32))
     s2 = mi.Point2f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(2)))
     ctx = mi.BSDFContext()
@@ -198,8 +189,9 @@ def test_reciprocity(case):
     n = 8192
     wi, wo = random_dirs(n, 8, upper=True), random_dirs(n, 9, upper=True)
     ctx = mi.BSDFContext()
-    a = np.array(bsdf.eval(ctx, make_si(wi), vec(wo))) / wo[:, 2].astype(np.float32)
-    b = np.array(bsdf.eval(ctx, make_si(wo), vec(wi))) / wi[:, 2].astype(np.float32)
+    a = np.array(bsdf.eval(ctx, probe.interaction(wi), probe.to_vectors(wo)))
+    b = np.array(bsdf.eval(ctx, probe.interaction(wo), probe.to_vectors(wi)))
+    a, b = a / wo[:, 2].astype(np.float32), b / wi[:, 2].astype(np.float32)
     _, p = params_of(case)
     rtol = 1e-5 + 8 * p.get("exponent", 0.0) * 2.0 ** -24
     np.testing.assert_allclose(a, b, rtol=rtol, atol=1e-6)
@@ -218,7 +210,7 @@ def test_finite_at_grazing_angles_and_extreme_exponents(case):
     s = np.sqrt(1 - c * c)
     wi[:, 0], wi[:, 1], wi[:, 2] = s * np.cos(phi), s * np.sin(phi), c
     n = len(wi)
-    si = make_si(wi)
+    si = probe.interaction(wi)
     ctx = mi.BSDFContext()
     s1 = mi.Float(rng.random(n).astype(np.float32))
     # Include the extreme corners of the sample square (u = 0 and u -> 1).
@@ -239,6 +231,8 @@ def test_finite_at_grazing_angles_and_extreme_exponents(case):
 def test_phong_lobe_sampling_is_exact_at_huge_exponents():
     """cos α^(p+1) of lobe samples is U(0, 1) (inverse-CDF sampling), also at p = 1e5
     where 1 − cos α ~ 1e-5 and naive float32 arithmetic loses sin α."""
+    # Imported here: the plugin module defines a class of the current variant's mi.BSDF, so it
+    # can only be imported once the fixture has set a variant.
     from phonglab.plugins.phong import square_to_phong_lobe, square_to_phong_lobe_pdf
 
     n = 50000
@@ -317,7 +311,7 @@ def test_chi2_catches_a_wrong_pdf(tmp_path, monkeypatch):
 # ---------------------------------------------------------------------------- furnace / albedo
 def directional_albedo(bsdf, theta, n, seed):
     """Monte Carlo directional albedo ∫ f_r cos θ_o dω_o = E[sample weight], and its SE."""
-    a = radiometry.directional_albedo(bsdf, [math.sin(theta), 0.0, math.cos(theta)], n, seed)
+    a = radiometry.directional_albedo(bsdf, probe.direction(theta), n, seed)
     return a.mean, a.stderr
 
 
@@ -371,7 +365,7 @@ def test_gradients_match_the_analytic_derivatives():
     ):
         dr.enable_grad(params[key])
         params.update()
-        value = bsdf.eval(mi.BSDFContext(), make_si(wi), vec(wo))
+        value = bsdf.eval(mi.BSDFContext(), probe.interaction(wi), probe.to_vectors(wo))
         dr.forward(params[key])
         grad = np.array(dr.grad(value))[0]
         dr.disable_grad(params[key])
@@ -384,8 +378,8 @@ def test_exponent_sweep_never_recompiles():
     number of times launches one and the same kernel (a baked float would recompile, ~0.4 s)."""
     bsdf = mi.load_dict({"type": "phong", "exponent": 30.0})
     params = mi.traverse(bsdf)
-    si = make_si(np.tile([[0.0, 0.0, 1.0]], (257, 1)))
-    wo = vec(random_dirs(257, 30, upper=True))
+    si = probe.interaction(np.tile([[0.0, 0.0, 1.0]], (257, 1)))
+    wo = probe.to_vectors(random_dirs(257, 30, upper=True))
     dr.eval(si, wo)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:

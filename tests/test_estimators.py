@@ -1,4 +1,4 @@
-"""phonglab.estimators: exact values (closed forms, quadrature convergence, an independent
+"""phonglab.physics.estimators: exact values (closed forms, quadrature convergence, an independent
 2-D quadrature), input errors, and sweeps that never recompile.  Cheap checks only; the
 statistical convergence of the estimators is in test_convergence.py."""
 
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from phonglab.physics.estimators import (METHODS, Problem, ReflectionEstimators, clipped_cosine_mean,
-                                 exact_normal_incidence, exact_value)
 from phonglab.errors import PhonglabError
+from phonglab.physics.estimators import (METHODS, Problem, ReflectionEstimators,
+                                         clipped_cosine_mean, exact_normal_incidence, exact_value)
 
 
 @pytest.mark.parametrize("A,B", [(0.3, 0.0), (-0.2, 0.0), (0.5, 0.2), (0.1, 0.7), (-0.3, 0.6),

@@ -11,12 +11,14 @@ start-up and Mitsuba's first JIT compilation.
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
 nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
+from jupyter_client.kernelspec import KernelSpecManager  # noqa: E402  (nbclient's dependency)
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 #: Every notebook in notebooks/.
@@ -28,8 +30,6 @@ LIMIT_S = 120
 
 def _kernel_name() -> str:
     """``python3`` when it is the venv's kernel; otherwise fail with the fix."""
-    from jupyter_client.kernelspec import KernelSpecManager
-
     spec = KernelSpecManager().get_kernel_spec("python3")
     exe = spec.argv[0]
     if exe not in ("python", "python3") and Path(exe).resolve() != Path(sys.executable).resolve():
@@ -40,8 +40,6 @@ def _kernel_name() -> str:
 
 @pytest.mark.parametrize("name", OWNED)
 def test_notebook_runs(name, monkeypatch):
-    import time
-
     path = NOTEBOOKS / name
     book = nbformat.read(path, as_version=4)
     assert all(not c.get("outputs") for c in book.cells if c.cell_type == "code"), \

@@ -1,4 +1,4 @@
-"""phonglab.radiometry: the seed's radiometry as numbers, checked against closed forms.
+"""phonglab.physics.radiometry: the seed's radiometry as numbers, checked against closed forms.
 
 Cheapest first: solid angles and quadrature (float64, deterministic) → the pencil of rays →
 the reflection equation by quadrature of the plugins' eval (deterministic; float32 eval) →
@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import math
 
+import mitsuba as mi
 import numpy as np
 import pytest
 from scipy import stats
 
+from phonglab import figures, probe
 from phonglab.stats import ALPHA, sidak
 from phonglab.physics import radiometry as R
 
@@ -84,7 +86,7 @@ def test_radiance_is_constant_along_a_ray():
 @pytest.mark.parametrize("theta_deg", [0, 30, 60, 85])
 def test_lambert_reflects_rho_times_a_uniform_sky(variant_llvm_rgb, theta_deg):
     bsdf = R_bsdf("lambert", reflectance=0.7)
-    value = R.reflected_radiance(bsdf, R.direction(math.radians(theta_deg)), incident=2.0)
+    value = R.reflected_radiance(bsdf, probe.direction(math.radians(theta_deg)), incident=2.0)
     np.testing.assert_allclose(value, 1.4, rtol=FLOAT32_SUM)
 
 
@@ -99,15 +101,13 @@ def test_phong_albedo_at_normal_incidence_is_kd_plus_ks(variant_llvm_rgb, p):
 def test_reflection_equation_with_a_cosine_sky(variant_llvm_rgb):
     """Lambert under L_i = cos θ_i: L_r = ρ/π ∫ cos²θ dω = ρ/π · 2π/3 = 2ρ/3, for any view."""
     bsdf = R_bsdf("lambert", reflectance=0.6)
-    views = np.array([R.direction(t) for t in (0.0, 0.7, 1.3)])
+    views = probe.direction([0.0, 0.7, 1.3])
     out = R.reflected_radiance(bsdf, views, lambda w: w[:, 2])
     assert out.shape == (3, 3)
     np.testing.assert_allclose(out, 0.4, rtol=FLOAT32_SUM)
 
 
 def R_bsdf(kind, **params):
-    import mitsuba as mi
-
     return mi.load_dict({"type": kind, **params})
 
 
@@ -120,7 +120,7 @@ def test_mean_sample_weight_is_the_albedo(variant_llvm_rgb, p, theta_deg):
     """E[f_r cos θ_o / pdf] = a(θ) (the quadrature value, exact to ~1e-6 by the tests above):
     z-test on 50 000 samples at ALPHA, Šidák over the cases."""
     bsdf = R_bsdf("phong", diffuse_reflectance=0.5, specular_reflectance=0.3, exponent=p)
-    wi = R.direction(math.radians(theta_deg))
+    wi = probe.direction(math.radians(theta_deg))
     expected = R.reflected_radiance(bsdf, wi)[0]
     est = R.directional_albedo(bsdf, wi, n=50_000, seed=int(p) * 100 + int(theta_deg))
     z = (est.mean[0] - expected) / est.stderr[0]
@@ -133,14 +133,12 @@ def test_furnace_render_is_the_albedo(variant_llvm_rgb):
     Pixels with r < 0.9 (away from the silhouette): z = Σ(pixel − a) / √Σ s.e.², the
     standard errors from 8 independent passes (thousands of pixels: the pooled variance is
     accurate), two-sided at ALPHA."""
-    from phonglab import figures
-
     kd, ks, p, res, extent = 0.5, 0.3, 10.0, 64, 1.1
     result = figures.render_furnace(spp=64, passes=8, res=res, kd=kd, ks=ks, exponent=p)
     bsdf = R_bsdf("phong", diffuse_reflectance=kd, specular_reflectance=ks, exponent=p)
     # a(θ) tabulated finely in θ (linear interpolation error ~ Δθ²/8 · |a''| < 1e-5).
     grid = np.linspace(0.0, math.asin(0.95), 240)
-    table = R.reflected_radiance(bsdf, np.array([R.direction(t) for t in grid]),
+    table = R.reflected_radiance(bsdf, probe.direction(grid),
                                  n_theta=96, n_phi=192)[:, 0]
     sub = 4                                              # 4 x 4 sub-pixel average
     c = ((np.arange(res * sub) + 0.5) / (res * sub) * 2 - 1) * extent

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from phonglab.scenes import SCENES_DIR as SCENES
+from phonglab.scenes import SCENES_DIR as SCENES, load_scene, scene_defaults
 from phonglab.stats import ALPHA, sidak
 from phonglab.physics import optics
 from phonglab.render import render_scene
@@ -330,6 +330,8 @@ def slab_scene():
 
 
 def _children(scene, origins, directions):
+    # Imported here: the plugin module subclasses the current variant's mi.SamplingIntegrator,
+    # so it can only be imported once a variant is set.
     from phonglab.plugins.whitted import delta_child
 
     ray = mi.Ray3f(mi.Point3f(*(mi.Float(c) for c in np.asarray(origins, np.float32).T)),
@@ -428,8 +430,6 @@ def test_glass_and_metal_ray_tree_equals_path_in_expectation(variant_llvm_rgb):
                                   "glass_sphere"])
 def test_scenes_render_with_whitted_and_path(variant_llvm_rgb, name):
     """Each new scene loads with its whitted integrator (and path where it declares one)."""
-    from phonglab.scenes import load_scene, scene_defaults
-
     small = {"width": 24, "height": 16, "spp": 1}
     kinds = ["whitted", "path"] if "integrator" in scene_defaults(SCENES / f"{name}.xml") \
         else ["whitted"]
@@ -480,8 +480,6 @@ def test_radiance_units_equal_path_in_every_variant(any_variant):
 
 def test_attenuation_demo_header(variant_llvm_rgb):
     """The values attenuation_demo.xml's header derives, at each sphere's nearest point."""
-    from phonglab.scenes import load_scene
-
     light, eye, radius = np.array([-0.8, 1.8, 1.5]), np.array([3.0, 2.4, 6.0]), 0.3
     centres = np.array([[0.4 + i, 0.0, 0.0] for i in range(7)])
     to_light = light - centres

@@ -18,17 +18,21 @@ normalisation, attenuation, ambient).  Pixel values are compared per channel.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import mitsuba as mi
 import numpy as np
+from matplotlib.figure import Figure
 
 from . import exr
 from .errors import PhonglabError
-from .tonemap import auto_exposure, preview_png, to_srgb
-from .scenes import file_hash, load_scene, scene_defaults, scene_path
+from .metrics import luminance
 from .render import render_scene
+from .scenes import file_hash, load_scene, scene_defaults, scene_path
+from .tonemap import auto_exposure, preview_png, to_srgb
 
 MODELS = ("graphics", "radiance", "path")
 #: (a, b) pairs compared, b the reference.
@@ -109,8 +113,6 @@ def integrator_dicts(scene, max_depth: int | None = None) -> dict[str, dict[str,
 def _graphics_integrator(scene, dicts, max_depth):
     """The scene's own graphics-units whitted when it has one at the asked depth (it keeps
     ambient textures and per-material ambient reflectances), else one built from ``dicts``."""
-    import mitsuba as mi
-
     own = scene.integrator()
     if getattr(own, "units", None) == "graphics" and \
             (max_depth is None or int(max_depth) == own.max_depth):
@@ -134,10 +136,6 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
         max_depth: path length for all three (default: the scene's whitted, else 5).
         params: values for the scene's other ``<default>`` entries (width, intensity, ...).
     """
-    import time
-
-    import mitsuba as mi
-
     if spp < 1 or (path_spp is not None and path_spp < 1):
         raise PhonglabError(f"spp must be >= 1, got spp={spp}, path_spp={path_spp}")
     path = scene_path(scene)
@@ -173,22 +171,9 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
     return comparison
 
 
-def _luminance(image: np.ndarray) -> np.ndarray:
-    image = np.asarray(image, np.float64)
-    if image.ndim == 3 and image.shape[2] >= 3:
-        return 0.2126 * image[..., 0] + 0.7152 * image[..., 1] + 0.0722 * image[..., 2]
-    return image[..., 0] if image.ndim == 3 else image
-
-
 def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[str, int],
                   seed: int) -> list[Path]:
     """EXR + PNG per model, one difference PNG per pair, ``figure.png`` and ``table.txt``."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-    import mitsuba as mi
-
     out_dir.mkdir(parents=True, exist_ok=True)
     files: list[Path] = []
     for name in MODELS:
@@ -202,16 +187,17 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
     for st in c.stats:
         a, b = c.images[st.a], c.images[st.b]
         scale = 1.0 if st.a == "radiance" else st.scale
-        diffs[(st.a, st.b)] = (_luminance(scale * a - b), scale)
-        fig, ax = plt.subplots(figsize=(4, 3.4))
+        diffs[(st.a, st.b)] = (luminance(scale * a - b), scale)
+        fig = Figure(figsize=(4, 3.4))
+        ax = fig.subplots()
         _diff_panel(fig, ax, *diffs[(st.a, st.b)], st)
         fig.tight_layout()
         files.append(out_dir / f"diff_{st.a}_{st.b}.png")
         fig.savefig(files[-1], dpi=110)
-        plt.close(fig)
     h, w = c.images["path"].shape[:2]
     panel = 4.2                                     # inches per panel, titles ≈ 0.9 in
-    fig, axes = plt.subplots(2, 3, figsize=(3 * panel + 1.2, 2 * (panel * h / w + 0.9) + 0.4))
+    fig = Figure(figsize=(3 * panel + 1.2, 2 * (panel * h / w + 0.9) + 0.4))
+    axes = fig.subplots(2, 3)
     titles = {"graphics": "whitted, graphics units\n(the seed's formula)",
               "radiance": "whitted, radiance units\n(f_r cos θ I/r², direct only)",
               "path": f"path tracer\n(all light, {counts['path']} spp)"}
@@ -228,7 +214,6 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
     fig.tight_layout()
     files.append(out_dir / "figure.png")
     fig.savefig(files[-1], dpi=110)
-    plt.close(fig)
     files.append(out_dir / "table.txt")
     files[-1].write_text(format_table(c.stats) + "\n")
     return files

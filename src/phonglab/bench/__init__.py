@@ -543,12 +543,12 @@ def _render_jit(scene, spp: int, seed: int) -> tuple[float, float, int, int]:
     """(seconds, compile ms, kernels, cache hits) of one render (kernel history on)."""
     import drjit as dr
 
-    from ..physics.estimators import _kernel_stats
+    from ..physics.estimators import kernel_stats
 
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()
     _, seconds = render_image(scene, spp, seed)
-    ms, kernels, hits = _kernel_stats()
+    ms, kernels, hits = kernel_stats()
     return seconds, ms, kernels, hits
 
 
@@ -690,7 +690,7 @@ def sweep_ratios(out: Path, cfg: Config, progress: bool = True) -> None:
 _COLD_PROBE = r"""
 import json, sys, phonglab, drjit as dr
 from phonglab import bench
-from phonglab.physics.estimators import ReflectionEstimators, _kernel_stats
+from phonglab.physics.estimators import ReflectionEstimators, kernel_stats
 phonglab.register("llvm_ad_rgb")
 out = {}
 for scene_name, methods in bench.render_setups(res=8).items():

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import PhonglabError
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
@@ -34,8 +36,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    # Imported here, not at the top: `phonglab` imports every subcommand module to build its
+    # parser, and these pull in Mitsuba and matplotlib, which `phonglab --help` does not need.
     from ..compare_models import compare_models, format_table
-    from ..errors import PhonglabError
     from ..scenes import scene_path
 
     params = {}

@@ -2,7 +2,7 @@
 
 import sys
 
-from . import write_doc_images
+from .docs import write_doc_images
 
 for p in write_doc_images(sys.argv[1] if len(sys.argv) > 1 else "docs/img"):
     print(p)

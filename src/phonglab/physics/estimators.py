@@ -60,8 +60,11 @@ import math
 import time
 from dataclasses import dataclass, field, replace
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
+from .. import probe, registration
 from ..errors import PhonglabError
 
 #: Estimator names, in the order charts and tables list them.
@@ -107,6 +110,11 @@ class Problem:
             raise PhonglabError(f"half_angle must lie in (0, 90) degrees, got {self.half_angle}")
         if not (math.isfinite(self.exponent) and self.exponent >= 0):
             raise PhonglabError(f"exponent must be finite and >= 0, got {self.exponent}")
+
+    @property
+    def wi(self) -> tuple[float, float, float]:
+        """ω_i in the local frame: (sin θ_i, 0, cos θ_i)."""
+        return tuple(float(c) for c in probe.direction(math.radians(self.theta_i)))
 
     @property
     def label(self) -> str:
@@ -250,13 +258,12 @@ def exact_normal_incidence(problem: Problem) -> float:
 # The Dr.Jit estimators
 # --------------------------------------------------------------------------------------------
 
-def _kernel_stats(hashes: list | None = None) -> tuple[float, int, int]:
+def kernel_stats(hashes: list | None = None) -> tuple[float, int, int]:
     """(compile ms, kernels, cache hits) of the JIT kernels launched since the last call.
 
-    Appends each kernel's hash to ``hashes`` when given.
+    Reads (and so clears) ``dr.kernel_history()``; appends each kernel's hash to ``hashes``
+    when given.
     """
-    import drjit as dr
-
     ms, count, hits = 0.0, 0, 0
     for k in dr.kernel_history():
         if str(k.get("type", "")).endswith("JIT"):
@@ -266,6 +273,149 @@ def _kernel_stats(hashes: list | None = None) -> tuple[float, int, int]:
             if hashes is not None:
                 hashes.append(k.get("hash"))
     return ms, count, hits
+
+
+@dataclass(frozen=True)
+class KernelLight:
+    """A :class:`Problem`'s light inside the kernel: L(ω), its own sampling and that density.
+
+    ``axis`` (the mirror direction R), ``cos_cutoff`` (cos δ) and ``radiance`` (L_e) are
+    opaque Dr.Jit values, so a new problem reuses the compiled kernel.
+    """
+
+    constant: bool              #: the constant light (else the disk)
+    axis: mi.Vector3f           #: R = 2(N·ω_i)N − ω_i, the cone's axis
+    cos_cutoff: mi.Float        #: cos δ
+    radiance: mi.Float          #: L_e
+
+    @classmethod
+    def of(cls, problem: Problem) -> "KernelLight":
+        wi = problem.wi
+        return cls(problem.light == "constant",
+                   dr.opaque(mi.Vector3f, (-wi[0], -wi[1], wi[2])),     # R = 2(N·ω_i)N − ω_i
+                   dr.opaque(mi.Float, math.cos(math.radians(problem.half_angle))),
+                   dr.opaque(mi.Float, problem.radiance))
+
+    def emitted(self, wo):
+        """L(ω_o): L_e inside the cone (disk) or everywhere (constant)."""
+        if self.constant:
+            return dr.full(mi.Float, 1.0, dr.width(wo)) * self.radiance
+        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
+        return dr.select(inside, self.radiance, 0.0)
+
+    def sample(self, sample2):
+        """(ω, pdf) of the light's own sampling: uniform in the cone (disk) or on the sphere."""
+        if self.constant:
+            wo = mi.warp.square_to_uniform_sphere(sample2)
+            return wo, mi.warp.square_to_uniform_sphere_pdf(wo)
+        local = mi.warp.square_to_uniform_cone(sample2, self.cos_cutoff)
+        return mi.Frame3f(self.axis).to_world(local), \
+            mi.warp.square_to_uniform_cone_pdf(local, self.cos_cutoff)
+
+    def pdf(self, wo):
+        """The density of :meth:`sample` at ω_o: 1/(4π), or 1/Ω inside the cone and 0 outside."""
+        if self.constant:
+            return dr.full(mi.Float, dr.inv_four_pi, dr.width(wo))
+        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
+        return dr.select(inside, dr.rcp(dr.two_pi * (1.0 - self.cos_cutoff)), 0.0)
+
+
+@dataclass(frozen=True)
+class Integrand:
+    """eval(ω_i, ω) · L(ω) at one surface point: the BSDF, its interaction, the light."""
+
+    bsdf: mi.BSDF
+    si: mi.SurfaceInteraction3f     #: si.wi = ω_i (local frame)
+    light: KernelLight
+    ctx: mi.BSDFContext
+
+
+def _interaction(problem: Problem) -> mi.SurfaceInteraction3f:
+    """A one-lane interaction whose ``wi`` = ω_i is an opaque Dr.Jit value (all else zero).
+
+    Not :func:`phonglab.probe.interaction`, which is the numpy-side bridge: with it (ω_i in a
+    one-lane buffer made from numpy) the sweep of tests/test_estimators.py launched kernels of
+    a new hash after :meth:`ReflectionEstimators.set`, i.e. recompiled, where ``dr.opaque``
+    keeps one kernel per estimator.  The phonglab plugins and ``diffuse`` read only ``si.wi``
+    (and constant textures) here.
+    """
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = dr.opaque(mi.Vector3f, problem.wi)
+    return si
+
+
+def _safe_ratio(value, pdf):
+    """value / pdf where pdf > 0, else 0 (no 0/0 or x/0 for a sample the density never draws)."""
+    return dr.select(pdf > 0, value / dr.select(pdf > 0, pdf, 1.0), 0.0)
+
+
+# One function per estimator (module docstring): the per-sample value X from the uniform
+# numbers u1 (lobe choice), u2 (direction) and, for MIS's second sample, the stream rng.
+def _uniform(f: Integrand, u1, u2, rng):
+    """ω ~ uniform hemisphere, p = 1/(2π): X = eval · L · 2π."""
+    wo = mi.warp.square_to_uniform_hemisphere(u2)
+    return f.bsdf.eval(f.ctx, f.si, wo) * (f.light.emitted(wo) * dr.two_pi)
+
+
+def _cosine(f: Integrand, u1, u2, rng):
+    """ω ~ cos θ/π (Malley): X = eval · L / p."""
+    wo = mi.warp.square_to_cosine_hemisphere(u2)
+    pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+    return f.bsdf.eval(f.ctx, f.si, wo) * _safe_ratio(f.light.emitted(wo), pdf)
+
+
+def _bsdf(f: Integrand, u1, u2, rng):
+    """ω, w = bsdf.sample: X = w · L (w = eval / pdf)."""
+    bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
+    return weight * f.light.emitted(bs.wo)
+
+
+def _light(f: Integrand, u1, u2, rng):
+    """ω ~ the light's own sampling: X = eval · L_e / p."""
+    wo, pdf = f.light.sample(u2)
+    return f.bsdf.eval(f.ctx, f.si, wo) * _safe_ratio(f.light.radiance, pdf)
+
+
+def _mis(f: Integrand, u1, u2, rng):
+    """One BSDF sample and one light sample, power heuristic β = 2 [Veach 1997, §9.2]."""
+    bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
+    p_b = bs.pdf
+    p_l = f.light.pdf(bs.wo)
+    w_b = dr.select(p_b > 0, dr.square(p_b) / (dr.square(p_b) + dr.square(p_l)), 0.0)
+    value = weight * (f.light.emitted(bs.wo) * w_b)
+    u3 = mi.Point2f(rng.next_float32(), rng.next_float32())
+    wo, p_l = f.light.sample(u3)
+    f_l, p_b = f.bsdf.eval_pdf(f.ctx, f.si, wo)
+    w_l = dr.select(p_l > 0, dr.square(p_l) / (dr.square(p_l) + dr.square(p_b)), 0.0)
+    return value + f_l * _safe_ratio(f.light.radiance * w_l, p_l)
+
+
+#: The estimators by name (the order of :data:`METHODS`).
+_ESTIMATORS = {"uniform": _uniform, "cosine": _cosine, "bsdf": _bsdf, "light": _light,
+               "mis": _mis}
+
+
+def _load_bsdf(problem: Problem):
+    """The BSDF of ``problem`` (a phonglab plugin or Mitsuba's ``diffuse``)."""
+    if problem.bsdf == "phong":
+        spec = {"type": "phong", "diffuse_reflectance": problem.diffuse_reflectance,
+                "specular_reflectance": problem.specular_reflectance,
+                "exponent": float(problem.exponent)}
+    elif problem.bsdf in ("lambert", "diffuse"):
+        spec = {"type": problem.bsdf, "reflectance": problem.diffuse_reflectance}
+    else:
+        raise PhonglabError(f"unsupported bsdf {problem.bsdf!r} for the estimators; use "
+                            f"phong, lambert or diffuse")
+    try:
+        return mi.load_dict(spec)
+    except Exception as exc:
+        raise PhonglabError(f"cannot create the {problem.bsdf} BSDF: {exc}") from exc
+
+
+def _channel_mean(spectrum):
+    """Mean over colour channels (the problems are grey, so all channels agree)."""
+    channels = [spectrum[k] for k in range(len(spectrum))]
+    return sum(channels[1:], channels[0]) * (1.0 / len(channels))
 
 
 class ReflectionEstimators:
@@ -282,51 +432,29 @@ class ReflectionEstimators:
         print(e.value, e.stderr[0], est.exact())
     """
 
+    #: Largest number of per-sample values one launch brings back to the host.
+    CHUNK = 1 << 22
+
     def __init__(self, problem: Problem):
-        import mitsuba as mi
-
-        from .. import registration
-
         registration.register()
         if not mi.variant().startswith(("llvm_", "cuda_")):
             raise PhonglabError(f"the estimators need a JIT variant (llvm_ad_rgb), not "
                                 f"{mi.variant()}; call phonglab.register('llvm_ad_rgb') first")
-        self._mi = mi
         self.problem = problem
         self._material = None
         self._load(problem)
 
-    # -- set-up --------------------------------------------------------------------------
     def _load(self, problem: Problem) -> None:
-        import drjit as dr
-
-        mi = self._mi
         material = (problem.bsdf, problem.diffuse_reflectance, problem.specular_reflectance)
         if material != self._material:
-            if problem.bsdf == "phong":
-                spec = {"type": "phong", "diffuse_reflectance": problem.diffuse_reflectance,
-                        "specular_reflectance": problem.specular_reflectance,
-                        "exponent": float(problem.exponent)}
-            elif problem.bsdf in ("lambert", "diffuse"):
-                spec = {"type": problem.bsdf, "reflectance": problem.diffuse_reflectance}
-            else:
-                raise PhonglabError(f"unsupported bsdf {problem.bsdf!r} for the estimators; use "
-                                    f"phong, lambert or diffuse")
-            try:
-                self.bsdf = mi.load_dict(spec)
-            except Exception as exc:
-                raise PhonglabError(f"cannot create the {problem.bsdf} BSDF: {exc}") from exc
+            self.bsdf = _load_bsdf(problem)
             self.params = mi.traverse(self.bsdf)
             self._material = material
         if problem.bsdf == "phong" and float(self.params["exponent"][0]) != problem.exponent:
             self.params["exponent"] = mi.Float(float(problem.exponent))
             self.params.update()
-        t = math.radians(problem.theta_i)
-        wi = (math.sin(t), 0.0, math.cos(t))
-        self.wi = dr.opaque(mi.Vector3f, wi)
-        self.axis = dr.opaque(mi.Vector3f, (-wi[0], -wi[1], wi[2]))   # R = 2(N·ω_i)N − ω_i
-        self.cos_cutoff = dr.opaque(mi.Float, math.cos(math.radians(problem.half_angle)))
-        self.radiance = dr.opaque(mi.Float, problem.radiance)
+        self.integrand = Integrand(self.bsdf, _interaction(problem), KernelLight.of(problem),
+                                   mi.BSDFContext())
         self.problem = problem
 
     def set(self, problem: Problem | None = None, **changes) -> "ReflectionEstimators":
@@ -337,99 +465,23 @@ class ReflectionEstimators:
     def exact(self) -> float:
         return exact_value(self.problem)
 
-    # -- pieces of the integrand -----------------------------------------------------------
-    def _si(self):
-        import drjit as dr
-
-        si = dr.zeros(self._mi.SurfaceInteraction3f)
-        si.wi = self.wi
-        return si
-
-    def _light(self, wo):
-        """L(ω_o): L_e inside the cone (disk) or everywhere (constant)."""
-        import drjit as dr
-
-        if self.problem.light == "constant":
-            return dr.full(self._mi.Float, 1.0, dr.width(wo)) * self.radiance
-        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
-        return dr.select(inside, self.radiance, 0.0)
-
-    def _light_sample(self, sample2):
-        """(ω, pdf) of the light's own sampling: the cone (disk) or the sphere (constant)."""
-        mi = self._mi
-        if self.problem.light == "constant":
-            wo = mi.warp.square_to_uniform_sphere(sample2)
-            return wo, mi.warp.square_to_uniform_sphere_pdf(wo)
-        local = mi.warp.square_to_uniform_cone(sample2, self.cos_cutoff)
-        return mi.Frame3f(self.axis).to_world(local), \
-            mi.warp.square_to_uniform_cone_pdf(local, self.cos_cutoff)
-
-    def _light_pdf(self, wo):
-        import drjit as dr
-
-        mi = self._mi
-        if self.problem.light == "constant":
-            return dr.full(mi.Float, dr.inv_four_pi, dr.width(wo))
-        inside = dr.dot(wo, self.axis) >= self.cos_cutoff
-        return dr.select(inside, dr.rcp(dr.two_pi * (1.0 - self.cos_cutoff)), 0.0)
-
-    @staticmethod
-    def _scalar(spectrum):
-        """Mean over colour channels (the problems are grey, so all channels agree)."""
-        channels = [spectrum[k] for k in range(len(spectrum))]
-        return sum(channels[1:], channels[0]) * (1.0 / len(channels))
-
     def _samples(self, method: str, n_total: int, seed: int):
-        """Per-sample values X (a Dr.Jit Float of n_total entries; MIS: of pairs)."""
-        import drjit as dr
+        """Per-sample values X (a Dr.Jit Float of n_total entries; MIS: of pairs).
 
-        mi = self._mi
-        ctx = mi.BSDFContext()
-        si = self._si()
+        Sample k draws from PCG32 stream TEA(seed, k): u1, then u2 (then MIS's u3).
+        """
+        if method not in _ESTIMATORS:
+            raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
         idx = dr.arange(mi.UInt32, n_total)
         v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
         rng = mi.PCG32(size=n_total)
         rng.seed(mi.UInt64(v0), mi.UInt64(v1))
         u1 = rng.next_float32()
         u2 = mi.Point2f(rng.next_float32(), rng.next_float32())
-        if method == "uniform":
-            wo = mi.warp.square_to_uniform_hemisphere(u2)
-            value = self.bsdf.eval(ctx, si, wo) * (self._light(wo) * dr.two_pi)
-        elif method == "cosine":
-            wo = mi.warp.square_to_cosine_hemisphere(u2)
-            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
-            value = self.bsdf.eval(ctx, si, wo) * \
-                dr.select(pdf > 0, self._light(wo) / dr.select(pdf > 0, pdf, 1.0), 0.0)
-        elif method == "bsdf":
-            bs, weight = self.bsdf.sample(ctx, si, u1, u2)
-            value = weight * self._light(bs.wo)
-        elif method == "light":
-            wo, pdf = self._light_sample(u2)
-            value = self.bsdf.eval(ctx, si, wo) * \
-                dr.select(pdf > 0, self.radiance / dr.select(pdf > 0, pdf, 1.0), 0.0)
-        elif method == "mis":
-            # One BSDF sample and one light sample per pair, power heuristic (β = 2).
-            bs, weight = self.bsdf.sample(ctx, si, u1, u2)
-            p_b = bs.pdf
-            p_l = self._light_pdf(bs.wo)
-            w_b = dr.select(p_b > 0, dr.square(p_b) / (dr.square(p_b) + dr.square(p_l)), 0.0)
-            value = weight * (self._light(bs.wo) * w_b)
-            u3 = mi.Point2f(rng.next_float32(), rng.next_float32())
-            wo, p_l = self._light_sample(u3)
-            f_l, p_b = self.bsdf.eval_pdf(ctx, si, wo)
-            w_l = dr.select(p_l > 0, dr.square(p_l) / (dr.square(p_l) + dr.square(p_b)), 0.0)
-            value += f_l * dr.select(p_l > 0, self.radiance * w_l / dr.select(p_l > 0, p_l, 1.0), 0.0)
-        else:
-            raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
-        return self._scalar(value)
-
-    #: Largest number of per-sample values one launch brings back to the host.
-    CHUNK = 1 << 22
+        return _channel_mean(_ESTIMATORS[method](self.integrand, u1, u2, rng))
 
     def _values(self, method: str, per: int, batches: int, seed: int) -> np.ndarray:
         """(batches, per) float64 per-sample values, launched in chunks of <= CHUNK samples."""
-        import drjit as dr
-
         rows = max(1, self.CHUNK // per)
         out = []
         for c, b0 in enumerate(range(0, batches, rows)):
@@ -449,8 +501,6 @@ class ReflectionEstimators:
             seed: the random seed (sample k of the launch uses PCG32 stream TEA(seed, k)).
             batches: S, the number of independent estimates.
         """
-        import drjit as dr
-
         if method not in METHODS:
             raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
         if n < 2 or batches < 1:
@@ -462,7 +512,7 @@ class ReflectionEstimators:
         arr = self._values(method, per, batches, seed)
         seconds = time.perf_counter() - t0
         hashes: list[str] = []
-        compile_ms, kernels, hits = _kernel_stats(hashes)
+        compile_ms, kernels, hits = kernel_stats(hashes)
         nan_count = int(np.isnan(arr).sum())
         inf_count = int(np.isinf(arr).sum())
         values = arr.mean(axis=1)

@@ -219,7 +219,7 @@ def gl_to_physical(material: GLMaterial, light: GLLight,
     rho_d, rho_s = kd, 2.0 * ks / (p + 2.0)
     s = _energy_scale(rho_d, rho_s)
     D = _rgb("light GL_DIFFUSE", light.diffuse)
-    notes = [f"the specular term gains cos θ_i (GL has none): ratio physics/GL = cos θ_i"]
+    notes = ["the specular term gains cos θ_i (GL has none): ratio physics/GL = cos θ_i"]
     if light.constant_attenuation == 0 and light.linear_attenuation == 0:
         intensity = math.pi * D / light.quadratic_attenuation
     else:

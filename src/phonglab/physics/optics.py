@@ -12,12 +12,17 @@ refractive index on v's side to the index on the other side.
 
 Both functions accept numpy arrays of shape (..., 3) (computed in float64) and
 Dr.Jit 3-vectors (computed in their own precision, vectorized).  Angles and
-Fresnel reflectance for unpolarized light are provided for the checks.
+Fresnel reflectance for unpolarized light are provided for the checks, and the
+angle between two directions (:func:`angle_between`) for comparing refracted rays.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+# The Dr.Jit formulas live with the plugins, which may import only Mitsuba, Dr.Jit and numpy
+# (not phonglab): one implementation per array kind, this module's numpy and theirs.
+from ..plugins import _optics
 
 
 def _is_drjit(x) -> bool:
@@ -35,8 +40,6 @@ def reflect(v, n):
         R, of the same kind as v.
     """
     if _is_drjit(v) or _is_drjit(n):
-        from phonglab.plugins import _optics
-
         return _optics.reflect(v, n)
     v, n = np.asarray(v, dtype=np.float64), np.asarray(n, dtype=np.float64)
     return 2.0 * np.sum(n * v, axis=-1, keepdims=True) * n - v
@@ -57,9 +60,6 @@ def refract(v, n, eta):
         internal reflection).
     """
     if _is_drjit(v) or _is_drjit(n):
-        # One Dr.Jit implementation, shared with the plugins (which cannot import phonglab).
-        from phonglab.plugins import _optics
-
         return _optics.refract(v, n, eta)
     v, n = np.asarray(v, dtype=np.float64), np.asarray(n, dtype=np.float64)
     eta = np.asarray(eta, dtype=np.float64)
@@ -110,3 +110,15 @@ def snell_residual(v, t, n, n1, n2):
     sin1 = np.sqrt(np.maximum(0.0, 1.0 - cos1 * cos1))
     sin2 = np.sqrt(np.maximum(0.0, 1.0 - cos2 * cos2))
     return np.abs(n1 * sin1 - n2 * sin2)
+
+
+def angle_between(a, b) -> np.ndarray:
+    """The angle [rad] between directions a and b, (..., 3) each (need not be unit length).
+
+    atan2(|â × b̂|, â·b̂) keeps full precision for tiny angles, where arccos(â·b̂) loses it
+    (an angle of 1e-8 rad is a cosine 5e-17 below 1, lost in float64).
+    """
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    a = a / np.maximum(np.linalg.norm(a, axis=-1, keepdims=True), 1e-30)
+    b = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), 1e-30)
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))

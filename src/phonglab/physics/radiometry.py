@@ -21,6 +21,11 @@ The seed (D. Zorin, "Lighting", 2005) defines, and this module computes:
   constant unit sky (the white furnace), estimated from a BSDF's ``sample`` as the mean
   sample weight (weight = f_r cos θ / pdf), with its standard error.
 
+BSDFs are probed through :mod:`phonglab.probe` (directions in the local shading frame,
+normal +z, both pointing away from the surface; ``probe.direction(θ, φ)`` builds them),
+so any Mitsuba BSDF, built-in or plugin, works in any variant (JIT variants evaluate all
+directions in one kernel launch).
+
 Hemisphere quadrature: Gauss–Legendre in μ = cos θ on [0, 1] times the midpoint rule in φ,
 dω = dμ dφ (exact for polynomials in μ up to degree 2 n_theta − 1 and trigonometric
 polynomials in φ of degree < n_phi).
@@ -33,6 +38,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+
+from .. import probe
 
 #: Solid angle of the whole sphere, in steradians.
 SPHERE_SOLID_ANGLE = 4.0 * math.pi
@@ -153,80 +160,7 @@ def pencil(radiance: float, area_1: float, area_2: float, theta_1: float, theta_
     return Pencil(r, d_omega_1, d_omega_2, e1, e2, flux, flux / e1, flux / e2)
 
 
-# ----------------------------------------------------------------------------- BSDF helpers
-def _require_jit():
-    import drjit as dr
-    import mitsuba as mi
-
-    from ..errors import PhonglabError
-
-    if mi.variant() is None or not dr.is_jit_v(mi.Float):
-        raise PhonglabError(f"radiometry's BSDF helpers evaluate many directions at once and "
-                            f"need a JIT variant, not {mi.variant()}; call "
-                            f"phonglab.register('llvm_ad_rgb') first")
-    return dr, mi
-
-
-def _frame_vectors(v: np.ndarray):
-    import mitsuba as mi
-
-    v = np.asarray(v, dtype=np.float32).reshape(-1, 3)
-    return mi.Vector3f(v[:, 0], v[:, 1], v[:, 2])
-
-
-def _to_numpy(x) -> np.ndarray:
-    """A Dr.Jit array of N vectors/spectra as numpy (N, channels) (Dr.Jit gives (channels, N))."""
-    a = np.array(x, dtype=np.float64)
-    return a.T if a.ndim == 2 else a[:, None]
-
-
-def _interaction(wi: np.ndarray, n: int):
-    dr, mi = _require_jit()
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.n = mi.Normal3f(0.0, 0.0, 1.0)
-    si.sh_frame = mi.Frame3f(si.n)
-    si.wi = _frame_vectors(np.broadcast_to(np.asarray(wi, np.float64), (n, 3)))
-    return si
-
-
-def direction(theta: float, phi: float = 0.0) -> np.ndarray:
-    """Unit vector at polar angle θ from +z (the normal) and azimuth φ, in the local frame."""
-    return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi),
-                     math.cos(theta)])
-
-
-def bsdf_eval(bsdf, wi, wo) -> np.ndarray:
-    """Mitsuba's ``bsdf.eval`` = f_r(wi, wo) cos θ_o for N pairs: (N, channels).
-
-    ``wi`` is one direction (3,) shared by all, or one per ``wo`` (N, 3).
-
-    Directions are unit vectors in the local frame (normal +z), both pointing away from
-    the surface; wi is the viewer's side in Mitsuba's convention.
-    """
-    dr, mi = _require_jit()
-    wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
-    si = _interaction(wi, len(wo))
-    return _to_numpy(bsdf.eval(mi.BSDFContext(), si, _frame_vectors(wo)))
-
-
-def bsdf_sample(bsdf, wi, n: int, seed: int = 0, sample1=None, sample2=None):
-    """``bsdf.sample`` for one wi and n random (or given) sample pairs.
-
-    Returns:
-        (wo (n, 3), weight (n, channels), pdf (n,), sampled_type (n,)), numpy; weight is
-        Mitsuba's f_r cos θ_o / pdf (0 for invalid samples).
-    """
-    dr, mi = _require_jit()
-    rng = np.random.default_rng(seed)
-    u1 = rng.random(n) if sample1 is None else np.broadcast_to(np.asarray(sample1, float), (n,))
-    u2 = rng.random((n, 2)) if sample2 is None else np.broadcast_to(np.asarray(sample2, float), (n, 2))
-    si = _interaction(wi, n)
-    bs, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(u1.astype(np.float32)),
-                             mi.Point2f(u2[:, 0].astype(np.float32), u2[:, 1].astype(np.float32)))
-    return (_to_numpy(bs.wo), _to_numpy(weight), np.array(bs.pdf, dtype=np.float64),
-            np.array(bs.sampled_type, dtype=np.int64))
-
-
+# ----------------------------------------------------------------------------- BSDFs
 def reflected_radiance(bsdf, wo_view, incident: Callable[[np.ndarray], np.ndarray] | float = 1.0,
                        n_theta: int = 128, n_phi: int = 256) -> np.ndarray:
     """The reflection equation L_r(ω_r) = ∫_H² f_r(ω_i, ω_r) L_i(ω_i) cos θ_i dω_i, by quadrature.
@@ -255,7 +189,7 @@ def reflected_radiance(bsdf, wo_view, incident: Callable[[np.ndarray], np.ndarra
         L = L[:, None] if L.ndim == 1 else L
     m, n = len(views), len(dirs)
     # One launch over all (view, light direction) pairs: eval = f_r cos θ_i (Mitsuba's eval).
-    f_cos = bsdf_eval(bsdf, np.repeat(views, n, axis=0), np.tile(dirs, (m, 1)))
+    f_cos = probe.eval(bsdf, np.repeat(views, n, axis=0), np.tile(dirs, (m, 1)))
     out = np.sum((w[:, None] * L)[None] * f_cos.reshape(m, n, -1), axis=1)
     return out[0] if single else out
 
@@ -275,5 +209,5 @@ def directional_albedo(bsdf, wi, n: int = 100_000, seed: int = 0) -> AlbedoEstim
     This is the radiance reflected towards ω_i under a constant unit sky (a white furnace),
     so a(ω_i) <= 1 for an energy-conserving BSDF; for phong a = k_d + k_s at normal incidence.
     """
-    _, w, _, _ = bsdf_sample(bsdf, wi, n, seed)
+    w = probe.sample_random(bsdf, wi, n, seed).weight
     return AlbedoEstimate(w.mean(axis=0), w.std(axis=0, ddof=1) / math.sqrt(n), n)
