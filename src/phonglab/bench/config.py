@@ -14,6 +14,8 @@ from pathlib import Path
 from ..physics.estimators import METHODS, Problem
 
 DEFAULT_OUT = Path("out") / "bench"
+#: The parts of a run, in the order they run (``phonglab bench --only``).
+PARTS = ("estimators", "stability", "renders", "variants", "ratios", "jit")
 #: The variant every sweep but the variant comparison renders and estimates in.
 VARIANT = "llvm_ad_rgb"
 

@@ -23,12 +23,10 @@ from .. import __version__, registration
 from ..errors import PhonglabError
 from .charts import chart_error_time, chart_stability
 from .cold_compile import sweep_cold_compile
-from .config import DEFAULT_OUT, LOGS, VARIANT, Config
+from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
 from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants
 from .report import write_markdown
-
-PARTS = ("estimators", "stability", "renders", "variants", "ratios", "jit")
 
 
 def machine_info() -> dict[str, Any]:
