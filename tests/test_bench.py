@@ -12,6 +12,8 @@ import pytest
 from phonglab import bench
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
+from phonglab.metrics import errors
+from phonglab.physics.estimators import METHODS
 
 
 def test_pareto_front_keeps_only_undominated_points():
@@ -73,7 +75,7 @@ def test_image_errors_remove_reference_noise():
     err = np.full((4, 4, 3), 0.1)
     img = ref + 0.2
     img[0, 0, 0] = np.nan
-    e = bench.image_errors(img, ref, err)
+    e = errors(img, ref, err)
     assert e["nan_count"] == 1
     assert e["rmse"] == pytest.approx(math.sqrt(0.2 ** 2 - 0.1 ** 2))
 
@@ -86,7 +88,7 @@ def test_bench_cli_runs_resumes_and_reports(tmp_path, variant_llvm_rgb):
     assert main(args) == 0
     rows = list(csv.DictReader((out / "results.csv").open()))
     cfg = bench.Config(quick=True)
-    assert len(rows) == len(bench.ESTIMATOR_SCENES) * len(bench.METHODS) * len(cfg.estimator_ns)
+    assert len(rows) == len(bench.ESTIMATOR_SCENES) * len(METHODS) * len(cfg.estimator_ns)
     assert all(r["nan_count"] == "0" and float(r["rmse"]) > 0 for r in rows)
     assert (out / "estimators.png").stat().st_size > 10_000
     # A second run resumes: no row is computed or written again.

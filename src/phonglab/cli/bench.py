@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..bench.config import PARTS
+
 
 def add_parser(sub) -> None:
-    from ..bench import PARTS
-
     p = sub.add_parser(
         "bench", help="error-versus-time sweeps, stability map and charts (CSV + PNG)",
         description="Run the estimator, stability, render, variant and render-time-ratio sweeps. "
@@ -26,13 +26,13 @@ def add_parser(sub) -> None:
                    help=f"run only these parts ({', '.join(PARTS)})")
     p.add_argument("--quick-run", default=None,
                    help="run.json of a --quick run, whose wall time the report quotes")
-    p.add_argument("--cache", default=None, help="reference-image cache (default .bench_cache/)")
+    p.add_argument("--cache", default=None, help="reference-image cache folder (default .bench_cache/, or $PHONGLAB_CACHE)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from ..bench import run_bench
+    from ..bench.run import run_bench  # lazy: the sweeps load scipy, matplotlib and Mitsuba (~1.5 s)
 
     rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
                     markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
