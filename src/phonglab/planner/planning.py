@@ -129,10 +129,11 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
         scene = load_scene(info.path, variant, **params)
     sensor = scene.sensors()[0]
     resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
+    scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
     pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed)
     depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
     chosen = pilot.measure(depth)
-    n = _choose_spp(chosen, target_error, spp, int(sensor.sampler().sample_count()), reasons)
+    n = _choose_spp(chosen, target_error, spp, scene_spp, reasons)
     noise = math.sqrt(chosen.noise_per_sample ** 2 / n)
     predicted = math.sqrt(chosen.bias ** 2 + noise ** 2)
     if predicted > target_error * (1 + 1e-9):
