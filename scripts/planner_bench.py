@@ -2,13 +2,15 @@
 
 For each scene (at a common resolution):
 
-1. a converged reference (max_depth -1, many spp; cached in .bench_cache/references);
+1. a converged reference (max_depth -1, many spp; phonglab.references, cached in
+   .bench_cache/references);
 2. the default configuration, llvm_ad_rgb with max_depth 8 and the scene's spp: its relative
    RMSE E_def against the reference (mean over repeats with different seeds);
 3. ``planner.plan(scene, target_error=E_def)``: the planned variant, depth and spp;
-4. timing: both configurations are rendered alternately ``--repeats`` times (one mi.render call
-   each, kernels compiled beforehand, so JIT time is excluded) and their median wall times are
-   compared; each timed image also gives an error sample.
+4. timing: both configurations are rendered alternately ``--repeats`` times (one pass of
+   phonglab.render.render_scene each, kernels compiled beforehand, so JIT time is excluded) and
+   their median wall times are compared; each timed image also gives an error sample
+   (phonglab.metrics.relative_rmse, the reference's noise subtracted).
 
 Reported per scene: both configurations, the predicted and achieved error and time of the plan,
 the speed-up (median time of default / planned) and the pilot's own cost. Results are printed
@@ -26,9 +28,10 @@ import statistics
 import time
 from pathlib import Path
 
+import mitsuba as mi
 import numpy as np
 
-from phonglab import planner, render
+from phonglab import metrics, planner, references, render, runtime, scenes
 
 SCENES = ["gray_direct", "gray_room", "cornell_phong", "glass_slab"]
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -36,49 +39,43 @@ DEFAULT_DEPTH = 8
 
 
 def timed_render(scene, spp: int, seed: int, integrator, variant: str) -> tuple[np.ndarray, float]:
-    """Render in ``variant`` (set first, outside the timing); (image, wall seconds)."""
-    import drjit as dr
-    import mitsuba as mi
-
+    """One pass of render.render_scene in ``variant`` (set first, outside the timing); (image,
+    wall seconds of mi.render, evaluation and the copy to numpy)."""
     if mi.variant() != variant:
-        mi.set_variant(variant)
-    t0 = time.perf_counter()
-    img = mi.render(scene, spp=spp, seed=seed, integrator=integrator)
-    dr.eval(img)
-    arr = np.array(img, dtype=np.float64)
-    return arr, time.perf_counter() - t0
+        runtime.set_variant(variant)
+    result = render.render_scene(scene, spp, seed=seed, integrator=integrator)
+    return result.image, result.pass_seconds[0]
 
 
 def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
     params = {"res": res}
-    info = planner.inspect_scene(name, **params)
+    info = scenes.inspect_scene(name, **params)
     # Default configuration: rgb, depth 8, the scene's spp.
-    with planner.quiet_mitsuba():
-        scene_def = render.load_scene(name, DEFAULT_VARIANT, **params)
+    with runtime.quiet_mitsuba():
+        scene_def = scenes.load_scene(info.path, DEFAULT_VARIANT, **params)
     spp_def = int(scene_def.sensors()[0].sampler().sample_count())
-    # Reference, converged well below the errors compared (its own noise is subtracted too).
-    pilot_def = planner.plan(name, 0.05, variant=DEFAULT_VARIANT, max_depth=DEFAULT_DEPTH,
+    pilot_def = planner.plan(info.path, 0.05, variant=DEFAULT_VARIANT, max_depth=DEFAULT_DEPTH,
                              spp=spp_def, params=params)
+    # Reference, converged well below the errors compared (its own noise is subtracted too).
     ref_spp = max(1024, ref_factor * spp_def)
     t0 = time.perf_counter()
-    ref, ref_se, _ = planner.make_reference(name, ref_spp, params=params)
+    ref = references.reference(info.path, ref_spp, params=params)
     ref_seconds = time.perf_counter() - t0
-    ref_noise = planner.noise_error(ref, ref_se)
+    ref_noise = metrics.relative_noise(ref.image, ref.stderr)
 
-    import mitsuba as mi
+    def error(image) -> float:
+        return metrics.relative_rmse(image, ref.image, ref_stderr=ref.stderr)
 
-    mi.set_variant(DEFAULT_VARIANT)
-    integ_def = planner._path_integrator(DEFAULT_DEPTH, info)
+    integ_def = scenes.path_integrator(DEFAULT_DEPTH, info)
     timed_render(scene_def, spp_def, 999, integ_def, DEFAULT_VARIANT)  # compile
-    err_def = [planner.achieved_error(timed_render(scene_def, spp_def, 100 + k, integ_def,
-                                                   DEFAULT_VARIANT)[0],
-                                      ref, ref_se) for k in range(repeats)]
+    err_def = [error(timed_render(scene_def, spp_def, 100 + k, integ_def, DEFAULT_VARIANT)[0])
+               for k in range(repeats)]
     e_def = float(np.mean(err_def))
 
-    plan = planner.plan(name, e_def, params=params)
-    with planner.quiet_mitsuba():
-        scene_plan = render.load_scene(name, plan.variant, **params)
-    integ_plan = planner._path_integrator(plan.max_depth, info)
+    plan = planner.plan(info.path, e_def, params=params)
+    with runtime.quiet_mitsuba():
+        scene_plan = scenes.load_scene(info.path, plan.variant, **params)
+    integ_plan = scenes.path_integrator(plan.max_depth, info)
     timed_render(scene_plan, plan.spp, 998, integ_plan, plan.variant)  # compile
     # Alternate the two configurations so that load changes hit both alike.
     t_def, t_plan, err_plan = [], [], []
@@ -87,11 +84,11 @@ def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
         t_def.append(t)
         img, t = timed_render(scene_plan, plan.spp, 300 + k, integ_plan, plan.variant)
         t_plan.append(t)
-        err_plan.append(planner.achieved_error(img, ref, ref_se))
+        err_plan.append(error(img))
     med_def, med_plan = statistics.median(t_def), statistics.median(t_plan)
     return {
         "scene": name, "res": res, "repeats": repeats,
-        "reference": {"spp": ref_spp, "noise": ref_noise, "seconds": ref_seconds},
+        "reference": {"spp": ref.spp, "noise": ref_noise, "seconds": ref_seconds},
         "default": {"variant": DEFAULT_VARIANT, "max_depth": DEFAULT_DEPTH, "spp": spp_def,
                     "error": e_def, "error_sd": float(np.std(err_def, ddof=1)),
                     "seconds_median": med_def, "seconds": t_def,
@@ -119,7 +116,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--ref-factor", type=int, default=64,
                     help="reference spp = max(1024, factor x scene spp)")
-    ap.add_argument("--out", default=str(planner.CACHE_DIR / "planner_bench.json"))
+    ap.add_argument("--out", default=str(references.CACHE_DIR / "planner_bench.json"))
     args = ap.parse_args(argv)
     rows = []
     for name in args.scenes:

@@ -212,7 +212,7 @@ def test_achieved_error_is_near_the_target(plans, name):
     """The planned render's relative RMSE lies in [0.5, 1.5] x the target (issue 6).
 
     The reference has 16x the planned spp (its noise, about E/4, is subtracted by
-    achieved_error); the achieved error of one render over 32 x 32 x C values scatters by a few
+    metrics.relative_rmse); the achieved error of one render over 32 x 32 x C values scatters by a few
     percent, so the window tests the planner's prediction, not the luck of one seed.
     """
     p = plans[name]

@@ -1,9 +1,21 @@
-"""``phonglab render``: render a scene to a float EXR with provenance and a PNG preview."""
+"""``phonglab render``: render a scene to a float EXR with provenance and a PNG preview.
+
+Lazy imports: the modules that pull in Mitsuba, matplotlib or numpy (render, scenes, planner,
+references, metrics) are imported inside :func:`run` and :func:`run_planned`, because
+``phonglab`` builds every subcommand's parser at start-up and importing them there would cost
+every command, ``--help`` included, one to two seconds (``python -X importtime -c 'import
+phonglab.render'``).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import statistics
 from pathlib import Path
+
+from .. import runtime
+from ..errors import PhonglabError
 
 
 def add_parser(sub) -> None:
@@ -33,8 +45,6 @@ def run(args) -> int:
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
     if out.is_dir() or out.suffix.lower() != ".exr":
-        from ..errors import PhonglabError
-
         raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
                             f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
     if args.target_error is not None:
@@ -50,9 +60,7 @@ def run(args) -> int:
 
 def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan, report predicted and achieved error and time."""
-    import numpy as np
-
-    from .. import metrics, planner, references, runtime
+    from .. import metrics, planner, references
     from ..render import render_file
 
     plan = planner.plan(path, args.target_error, variant=args.variant,
@@ -65,7 +73,7 @@ def run_planned(args, path: Path, out: Path) -> int:
                              **plan.render_kwargs())
     times = result.pass_seconds
     # Steady state: the first pass may include JIT compilation; count it as a median pass.
-    steady = (float(np.median(times[1:])) * len(times)) if len(times) > 1 else result.seconds
+    steady = statistics.median(times[1:]) * len(times) if len(times) > 1 else result.seconds
     print(f"rendered {path} with {plan.spp} spp, max_depth {plan.max_depth} in {plan.variant}: "
           f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
           f"{plan.predicted_seconds:.3g} s)")
@@ -77,7 +85,7 @@ def run_planned(args, path: Path, out: Path) -> int:
               f"{plan.target_error:g}")
     elif result.stderr is not None:
         noise = metrics.relative_noise(result.image, result.stderr)
-        err = float(np.hypot(noise, plan.predicted_bias))
+        err = math.hypot(noise, plan.predicted_bias)
         print(f"  error: about {err:.4g} (noise {noise:.4g} estimated from {len(times)} passes, "
               f"depth bias {plan.predicted_bias:.3g} from the pilot; no cached reference: make "
               f"one with 'phonglab plan {path} --make-reference 4096'); predicted "

@@ -1,0 +1,177 @@
+r"""The planner's pilot: short renders that measure the depth bias, the noise and the time.
+
+With ``P`` passes of ``s`` samples each (pass k of every depth uses the seed
+:func:`phonglab.render.pass_seed` (seed, k), so the passes of two depths follow the same paths
+up to the shallower depth), ``full_k`` the pass images at full depth and ``depth_k`` those at
+depth d, ``D_k = full_k − depth_k`` and per pixel and channel:
+
+* weights      w ≈ 1/(r² + ε), from a second full-depth pilot with other seeds (:func:`_weights`);
+* depth bias   b(d)² = mean[((mean_k D_k)² − var_k(D_k)/P) · w]  (:meth:`Pilot.measure`);
+* noise        σ² = s · var_k(pass_k), the variance of one sample; a render of N samples per
+  pixel has the relative noise n(N)² = mean[σ² · w]/N (:attr:`DepthSample.noise_per_sample`
+  is n(1));
+* time         T(spp) = a + b·spp, fitted to timed renders (:func:`_time_model`).
+
+The package docstring (:mod:`phonglab.planner`) derives each of them and gives the sources.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import render
+from ..metrics import REL_EPS
+from ..scenes import SceneInfo, path_integrator
+
+#: ε of the relative error E = √mean((x − r)²/(r² + ε)) (phonglab.metrics.relative_rmse).
+EPS = REL_EPS
+#: The depth bias may use at most this fraction of the target error (b(d) <= BIAS_FRACTION · E).
+BIAS_FRACTION = 0.25
+#: Candidate depths, searched in order, then bisected between the last failing and first passing.
+DEPTH_LADDER = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
+#: Pilot: total samples per pixel, split into this many passes of equal size (same seeds per depth).
+PILOT_SPP = 64
+PILOT_PASSES = 8
+#: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
+PILOT_SEED = 1
+
+
+@dataclass
+class DepthSample:
+    """Pilot statistics at one max_depth."""
+
+    depth: int
+    bias: float            #: b(d): relative RMS of the omitted (deeper) contribution
+    energy_omitted: float  #: Σ(full − depth) / Σ full over the image: energy of deeper bounces
+    noise_per_sample: float  #: √mean(σ²/(r² + ε)): relative noise of a 1-spp image
+
+
+def _weights(passes_img: np.ndarray) -> np.ndarray:
+    r"""Per-value weights ≈ 1/(r² + ε) of the relative MSE, from P pass images of an estimate of r.
+
+    With r̂ the pass mean, se² its squared standard error (``var_k/P``), q = r² + ε and
+    f(r) = 1/q, the delta method (second-order Taylor expansion about r, E[r̂ − r] = 0) gives
+    E[f(r̂)] ≈ f(r) + ½ f''(r)·se², with f''(r) = (6r² − 2ε)/q³, so
+    E[1/(r̂² + ε)] ≈ (1 + (3r² − ε)·se²/q²)/q.  Dividing 1/(r̂² + ε) by that factor (evaluated
+    at r̂) removes the second-order bias a noisy r̂ adds: without it dark, noisy pixels
+    (r² < ε/3, where f is concave) would weigh too little and bright, noisy ones too much.
+    The factor is kept >= 1/2 (it falls below 1/2 only where se² > ε/2 at r ≈ 0): there the
+    expansion no longer holds and the uncorrected weight is the safer estimate.
+    """
+    r2 = passes_img.mean(axis=0) ** 2
+    se2 = passes_img.var(axis=0, ddof=1) / passes_img.shape[0]
+    q = r2 + EPS
+    return 1.0 / q / np.maximum(1.0 + (3.0 * r2 - EPS) * se2 / (q * q), 0.5)
+
+
+def _time_model(scene, integrator, spp_small: int, repeats: int = 3) -> tuple[float, float]:
+    """(a, b) of T(spp) = a + b·spp from alternating one-pass renders of spp_small and 4·spp_small.
+
+    Each render goes through :func:`phonglab.render.render_scene`, the loop the planned render
+    runs, and its ``pass_seconds[0]`` (``mi.render``, evaluation and the copy to numpy) is the
+    time.  Medians of ``repeats`` renders each; the kernel must already be compiled.
+    """
+    spp_big = 4 * spp_small
+    t_small, t_big = [], []
+    for k in range(repeats):
+        for spp, bucket in ((spp_small, t_small), (spp_big, t_big)):
+            timed = render.render_scene(scene, spp, seed=7 + k, integrator=integrator)
+            bucket.append(timed.pass_seconds[0])
+    ts, tb = float(np.median(t_small)), float(np.median(t_big))
+    b = (tb - ts) / (spp_big - spp_small)
+    if b <= 0:  # timing noise swamped the difference: charge everything per sample
+        return 0.0, tb / spp_big
+    return max(ts - b * spp_small, 0.0), b
+
+
+class Pilot:
+    """The pilot renders of one loaded scene, and the statistics drawn from them.
+
+    Construction renders the two full-depth pilots (the reference of the depth bias and, with
+    other seeds, the weights); :meth:`measure` renders a depth on first use and caches it.
+    """
+
+    def __init__(self, scene, info: SceneInfo, spp: int = PILOT_SPP,
+                 passes: int = PILOT_PASSES, seed: int = PILOT_SEED):
+        self.scene, self.info, self.passes, self.seed = scene, info, passes, seed
+        self.spp_per_pass = spp // passes
+        self.full = self._render(-1, seed).passes
+        # The weights come from an independent full-depth pilot (other seeds): taken from
+        # `full` itself they would shrink exactly where a rare bright sample inflates the
+        # variance (a caustic firefly raises both), and the noise would be underestimated.
+        self.weight = _weights(self._render(-1, seed + 1).passes)
+        self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
+        self.samples: dict[int, DepthSample] = {}
+        self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
+
+    @property
+    def spp(self) -> int:
+        """Samples per pixel of each pilot render (passes × samples per pass)."""
+        return self.spp_per_pass * self.passes
+
+    def _render(self, depth: int, seed: int) -> render.RenderResult:
+        return render.render_scene(self.scene, self.spp, seed=seed, passes=self.passes,
+                                   integrator=path_integrator(depth, self.info),
+                                   keep_passes=True)
+
+    def noise_per_sample(self, passes_img: np.ndarray) -> float:
+        """n(1) = √mean(σ² · w), σ² = s · var_k(pass_k) the variance of one sample."""
+        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
+        return math.sqrt(float(np.mean(sigma2 * self.weight)))
+
+    def measure(self, d: int) -> DepthSample:
+        """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
+        if d not in self.samples:
+            if d == -1:
+                self.samples[d] = DepthSample(-1, 0.0, 0.0, self.noise_per_sample(self.full))
+            else:
+                imgs = self._render(d, self.seed).passes
+                self.compiled.add(d)
+                diff = self.full - imgs
+                mean = diff.mean(axis=0)
+                se2 = diff.var(axis=0, ddof=1) / self.passes
+                bias2 = float(np.mean((mean * mean - se2) * self.weight))
+                energy = float(mean.sum()) / self.total_energy
+                self.samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
+                                              energy if abs(energy) > 1e-9 else 0.0,
+                                              self.noise_per_sample(imgs))
+        return self.samples[d]
+
+    def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1]) -> tuple[int, int]:
+        """(depth, failing): the smallest depth with b(d) <= ``allowed``, and the deepest one
+        measured that fails (0 when depth 1 passes).
+
+        The ladder :data:`DEPTH_LADDER` (depths <= ``cap``) is climbed until a depth passes,
+        then the gap to the last failing one is bisected (b is non-increasing in d).  When no
+        depth up to ``cap`` passes, ``depth`` is -1 (unbounded).
+        """
+        failing, passing = 0, None
+        for d in (d for d in DEPTH_LADDER if d <= cap):
+            if self.measure(d).bias <= allowed:
+                passing = d
+                break
+            failing = d
+        if passing is None:
+            self.measure(-1)
+            return -1, failing
+        while passing - failing > 1:
+            mid = (passing + failing) // 2
+            if self.measure(mid).bias <= allowed:
+                passing = mid
+            else:
+                failing = mid
+        return passing, failing
+
+    def time_model(self, depth: int) -> tuple[float, float]:
+        """(a, b) of T(spp) = a + b·spp at ``depth``, steady state (the kernel compiled first)."""
+        integrator = path_integrator(depth, self.info)
+        if depth not in self.compiled:  # compile the kernel before timing
+            render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
+        return _time_model(self.scene, integrator, self.spp_per_pass)
+
+    def depths(self) -> list[DepthSample]:
+        """Every depth measured, finite ones in order, then -1."""
+        return [self.samples[d] for d in sorted(self.samples, key=lambda d: (d == -1, d))]

@@ -1,0 +1,263 @@
+"""The plan: :func:`plan` chooses the variant, runs the pilot, and picks depth, spp and time.
+
+Each step is a function of its own and appends its reason to :attr:`Plan.reasons`; the math
+is in the package docstring (:mod:`phonglab.planner`), the pilot in :mod:`.pilot`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import PlanError
+from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
+from ..scenes import SceneInfo, inspect_scene, load_scene
+from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
+                    DepthSample, Pilot)
+
+
+@dataclass
+class Plan:
+    """A rendering configuration for a target error, with its predictions and reasons."""
+
+    scene: str
+    target_error: float
+    variant: str
+    backend: str
+    color: str
+    max_depth: int
+    spp: int
+    passes: int                #: passes the render uses (for the standard error)
+    predicted_error: float     #: √(bias² + noise²)
+    predicted_bias: float      #: b(max_depth)
+    predicted_noise: float     #: noise at spp
+    predicted_seconds: float   #: steady-state render time (JIT compile excluded)
+    seconds_per_sample: float  #: b of T = a + b·spp, per pixel sample
+    seconds_per_pass: float    #: a of T = a + b·spp
+    resolution: tuple[int, int]
+    params: dict[str, Any]     #: scene parameters the plan was made with (res=..., ...)
+    pilot_spp: int
+    pilot_seconds: float       #: wall time of the whole pilot (inspection, renders, timing)
+    depths: list[DepthSample] = field(default_factory=list)
+    reasons: list[str] = field(default_factory=list)
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["resolution"] = list(self.resolution)
+        return d
+
+    def to_json(self, indent: int | None = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+    def render_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`phonglab.render.render_file` that apply the plan."""
+        return {"spp": self.spp, "variant": self.variant, "max_depth": self.max_depth,
+                "passes": self.passes}
+
+    def summary(self) -> str:
+        """The plan and its reasons, as the CLI prints them."""
+        w, h = self.resolution
+        lines = [
+            f"plan for {self.scene} ({w}x{h}), target relative RMSE {self.target_error:g} "
+            f"(eps {EPS:g}):",
+            f"  variant   {self.variant}",
+            f"  max_depth {self.max_depth}",
+            f"  spp       {self.spp}  ({self.passes} passes)",
+            f"  predicted error {self.predicted_error:.4g} (depth bias {self.predicted_bias:.3g}, "
+            f"noise {self.predicted_noise:.4g}); time {self.predicted_seconds:.3g} s "
+            f"steady state ({self.seconds_per_sample * 1e9:.3g} ns per sample + "
+            f"{self.seconds_per_pass * 1e3:.3g} ms per pass); pilot took "
+            f"{self.pilot_seconds:.2f} s",
+            "because:",
+        ]
+        lines += [f"  - {r}" for r in self.reasons]
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+
+def render_passes(spp: int) -> int:
+    """Passes a planned render uses: 8 (or spp when fewer), at least 2 so it has a stderr."""
+    return max(1, min(int(spp), 8)) if spp >= 2 else 1
+
+
+def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int = PILOT_SPP,
+         pilot_passes: int = PILOT_PASSES, seed: int = PILOT_SEED,
+         bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
+         variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
+         max_depth_cap: int = DEPTH_LADDER[-1], params: dict[str, Any] | None = None) -> Plan:
+    """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
+
+    Args:
+        scene_path: scene file, or a name in ``scenes_xml/``.
+        target_error: E, a relative RMSE (package docstring; ``0.01`` = 1 %).
+        pilot_spp, pilot_passes: pilot samples per pixel and the passes they are split into.
+        seed: pilot seed (the render that follows should use another; the CLI uses 0).
+        bias_fraction: the depth bias may use this fraction of E.
+        polarized: plan a polarized variant (never chosen otherwise).
+        variant, max_depth, spp: fix that part of the plan (the predictions follow it).
+        max_depth_cap: deepest finite depth tried; beyond it the plan uses -1 (unbounded).
+        params: values for the scene's ``<default>`` entries (``{"res": 64}``).
+
+    Returns:
+        a :class:`Plan`.
+
+    Raises:
+        PlanError: bad target or pilot size, unknown variant, a scene whose integrator is not
+            ``path``; SceneError: a scene that cannot be found, parsed or loaded.
+    """
+    t_start = time.perf_counter()
+    _check_arguments(target_error, pilot_spp, pilot_passes, spp, max_depth)
+    params = {k: v for k, v in (params or {}).items() if v is not None}
+    info = inspect_scene(scene_path, **params)
+    if info.integrator != "path":
+        raise PlanError(f"{info.path}: the planner plans path-traced scenes, but this one "
+                        f"uses the '{info.integrator}' integrator; use <integrator "
+                        f"type=\"path\"> or render it with 'phonglab render' directly.")
+    reasons: list[str] = []
+    overrides = {k: v for k, v in (("variant", variant), ("max_depth", max_depth), ("spp", spp))
+                 if v is not None}
+    variant, backend, color = _choose_variant(info, variant, polarized, reasons)
+    with quiet_mitsuba():
+        scene = load_scene(info.path, variant, **params)
+    sensor = scene.sensors()[0]
+    resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
+    scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
+    pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed)
+    depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
+    chosen = pilot.measure(depth)
+    n = _choose_spp(chosen, target_error, spp, scene_spp, reasons)
+    noise = math.sqrt(chosen.noise_per_sample ** 2 / n)
+    predicted = math.sqrt(chosen.bias ** 2 + noise ** 2)
+    if predicted > target_error * (1 + 1e-9):
+        reasons.append(f"warning: the predicted error {predicted:.4g} misses the target "
+                       f"{target_error:g} with the configuration given")
+    a, b, passes, seconds = _predict_time(pilot, depth, n, resolution, reasons)
+    pixels = resolution[0] * resolution[1]
+    return Plan(scene=str(info.path), target_error=float(target_error), variant=variant,
+                backend=backend, color=color, max_depth=int(depth), spp=int(n), passes=passes,
+                predicted_error=predicted, predicted_bias=chosen.bias, predicted_noise=noise,
+                predicted_seconds=seconds, seconds_per_sample=b / pixels,
+                seconds_per_pass=a, resolution=resolution, params=dict(params),
+                pilot_spp=pilot.spp, pilot_seconds=time.perf_counter() - t_start,
+                depths=pilot.depths(), reasons=reasons, overrides=overrides)
+
+
+def _check_arguments(target_error, pilot_spp: int, pilot_passes: int, spp: int | None,
+                     max_depth: int | None) -> None:
+    """Refuse a target, pilot size, spp or max_depth the plan cannot use (PlanError)."""
+    if not (isinstance(target_error, (int, float)) and math.isfinite(target_error)
+            and 0 < target_error < 10):
+        raise PlanError(f"target error must be a relative RMSE in (0, 10), e.g. 0.01 for "
+                        f"1 %, got {target_error!r}.")
+    if pilot_passes < 2 or pilot_spp < pilot_passes:
+        raise PlanError(f"the pilot needs at least 2 passes of at least 1 spp, got "
+                        f"pilot_spp={pilot_spp}, pilot_passes={pilot_passes}.")
+    if spp is not None and spp < 1:
+        raise PlanError(f"spp must be >= 1, got {spp}.")
+    if max_depth is not None and (max_depth == 0 or max_depth < -1):
+        raise PlanError(f"max_depth must be -1 (unbounded) or >= 1, got {max_depth}.")
+
+
+def _choose_variant(info: SceneInfo, variant: str | None, polarized: bool,
+                    reasons: list[str]) -> tuple[str, str, str]:
+    """Step 1: (variant, backend, colour model), from the scene file alone unless given."""
+    if variant is not None:
+        try:
+            check_variant(variant)
+        except ValueError as exc:  # the one "unknown variant" message, as a planner error
+            raise PlanError(str(exc)) from None
+        color = "spectral" if "spectral" in variant else "mono" if "mono" in variant else "rgb"
+        reasons.append(f"variant {variant}: given by the caller (the scene alone would need "
+                       f"{info.color})")
+        return variant, variant.split("_")[0], color
+    backend, backend_why = available_backend()
+    color = info.color
+    if color == "spectral":
+        reasons.append("spectral: the scene carries spectral data: " + "; ".join(info.spectral[:3]))
+    elif color == "rgb":
+        more = f" (and {len(info.colored) - 2} more)" if len(info.colored) > 2 else ""
+        reasons.append("rgb: not every reflectance/emitter is gray: "
+                       + "; ".join(info.colored[:2]) + more)
+    else:
+        reasons.append(f"mono: every reflectance, texture and emitter value is gray "
+                       f"({info.gray_values} values, none coloured, no spectral data)")
+    chosen, notes = variant_for(color, backend, polarized)
+    reasons.append(f"backend {backend}: {backend_why}")
+    reasons += notes
+    if not polarized:
+        reasons.append("not polarized: not asked for")
+    return chosen, backend, color
+
+
+def _choose_depth(pilot: Pilot, target_error: float, bias_fraction: float,
+                  max_depth: int | None, cap: int, reasons: list[str]) -> int:
+    """Step 2: the smallest depth whose bias b(d) is <= bias_fraction · E (or the given one)."""
+    allowed = bias_fraction * target_error
+    if max_depth is not None:
+        bias = pilot.measure(max_depth).bias
+        reasons.append(f"max_depth {max_depth}: given by the caller; its omitted contribution "
+                       f"is a relative RMS {bias:.3g}"
+                       + (f" (more than the {allowed:.3g} the planner would allow)"
+                          if bias > allowed else ""))
+        return max_depth
+    depth, failing = pilot.search_depth(allowed, cap)
+    if depth == -1:
+        reasons.append(f"max_depth -1 (unbounded, Russian roulette): even depth {failing} "
+                       f"omits a relative RMS {pilot.measure(failing).bias:.3g} > "
+                       f"{bias_fraction:g} x E = {allowed:.3g}")
+    else:
+        s = pilot.measure(depth)
+        why = (f"max_depth {depth}: the smallest depth whose omitted contribution (deeper "
+               f"bounces: {100 * s.energy_omitted:.3g} % of the image's energy, relative RMS "
+               f"{s.bias:.3g}) is <= {bias_fraction:g} x E = {allowed:.3g}")
+        if failing >= 1:
+            f = pilot.measure(failing)
+            why += (f"; depth {failing} omits {100 * f.energy_omitted:.3g} % "
+                    f"(relative RMS {f.bias:.3g})")
+        reasons.append(why)
+    if pilot.info.delta_bsdfs:
+        names = sorted(set(pilot.info.delta_bsdfs))
+        reasons.append(f"delta BSDFs ({', '.join(names)}): their chains were followed as far "
+                       f"as the pilot saw them carry energy (the depth search measures what "
+                       f"deeper bounces add, delta paths included)")
+    return depth
+
+
+def _choose_spp(chosen: DepthSample, target_error: float, spp: int | None, scene_spp: int,
+                reasons: list[str]) -> int:
+    """Step 3: the smallest N with b(d)² + n(1)²/N <= E² (or the given spp)."""
+    if spp is not None:
+        reasons.append(f"spp {int(spp)}: given by the caller")
+        return int(spp)
+    v1 = chosen.noise_per_sample ** 2
+    if v1 == 0.0:
+        reasons.append("spp 1: the pilot shows no variance at all at this depth")
+        return 1
+    budget2 = target_error ** 2 - chosen.bias ** 2
+    n = max(1, math.ceil(v1 / budget2))
+    reasons.append(f"spp {n}: the pilot's per-pixel variance gives a relative noise of "
+                   f"{chosen.noise_per_sample:.4g} at 1 spp, falling as 1/sqrt(spp); "
+                   f"sqrt(E^2 - bias^2) = {math.sqrt(budget2):.4g} needs {n} spp "
+                   f"(the scene's own spp is {scene_spp})")
+    return n
+
+
+def _predict_time(pilot: Pilot, depth: int, n: int, resolution: tuple[int, int],
+                  reasons: list[str]) -> tuple[float, float, int, float]:
+    """Step 4: (a, b, passes, seconds): T(spp) = a + b·spp at ``depth``, and p·a + b·N."""
+    a, b = pilot.time_model(depth)
+    passes = render_passes(n)
+    seconds = passes * a + b * n
+    pixels = resolution[0] * resolution[1]
+    reasons.append(f"time: {b / pixels * 1e9:.3g} ns per pixel sample + {a * 1e3:.3g} ms per "
+                   f"pass, measured at this depth after JIT compilation, so {passes} passes "
+                   f"of {n} spp take about {seconds:.3g} s")
+    return a, b, passes, seconds
