@@ -185,3 +185,21 @@ def test_the_render_id_ties_image_and_stderr(tmp_path):
     image_id = exr.read(out)[1]["render_id"]
     assert exr.read(exr.stderr_path(out))[1]["render_id"] == image_id
     assert np.isfinite(exr.read_image(out)).all()
+
+
+# --- absurd plans are refused before anything renders ------------------------------------------
+
+def test_an_absurd_target_is_refused_by_plan_and_render(tmp_path, capsys):
+    _fails_in_one_sentence(capsys, ["plan", "gray_direct", "--target-error", "1e-9", "--set",
+                                    "res=16"], "more than a render takes")
+    out = tmp_path / "x.exr"
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--target-error", "1e-9", "-o",
+                                    str(out)], "more than a render takes")
+    assert not out.exists()
+
+
+def test_a_plan_over_the_time_limit_is_refused_unless_allowed(capsys):
+    argv = ["plan", "gray_direct", "--target-error", "0.01", "--set", "res=16"]
+    _fails_in_one_sentence(capsys, argv + ["--max-seconds", "1e-6"], "over the limit",
+                           "--max-seconds")
+    assert cli.main(argv + ["--max-seconds", "inf"]) == 0

@@ -44,6 +44,9 @@ def add_parser(sub) -> None:
                    help="pilot samples per pixel, in 8 passes (default 64)")
     p.add_argument("--set", dest="params", type=_param, action="append", default=[],
                    metavar="NAME=VALUE", help="a scene <default> value, e.g. res=64 (repeatable)")
+    p.add_argument("--max-seconds", type=float, default=None, metavar="S",
+                   help="refuse a plan predicted to take longer (default: planner.MAX_SECONDS, "
+                        "one hour; 'inf' allows any)")
     p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
                    help="also render a converged reference (max_depth -1, SPP samples) into "
                         ".bench_cache/, which 'phonglab render --target-error' compares with")
@@ -57,17 +60,18 @@ def run(args) -> int:
     path = scene_path(args.scene)
     params = dict(args.params)
     kwargs = {}
+    if args.make_reference is not None and args.make_reference < 16:
+        raise PhonglabError(f"--make-reference needs at least 16 spp (16 passes), got "
+                            f"{args.make_reference}.")
     if args.pilot_spp is not None:
         if args.pilot_spp < 8:
             raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
         kwargs["pilot_spp"] = args.pilot_spp
     p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
-                     max_depth=args.max_depth, spp=args.spp, params=params, **kwargs)
+                     max_depth=args.max_depth, spp=args.spp, params=params,
+                     max_seconds=args.max_seconds, **kwargs)
     print(p.to_json() if args.json else p.summary())
     if args.make_reference is not None:
-        if args.make_reference < 16:
-            raise PhonglabError(f"--make-reference needs at least 16 spp (16 passes), got "
-                                f"{args.make_reference}.")
         ref = references.reference(path, args.make_reference, params=params, progress=True)
         if not args.json:
             print(f"reference: {ref.spp} spp, max_depth -1, {ref.metadata['variant']}, relative "

@@ -31,6 +31,9 @@ def add_parser(sub) -> None:
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--max-depth", type=int, default=None, help="path length limit (default: the scene's)")
+    p.add_argument("--max-seconds", type=float, default=None, metavar="S",
+                   help="with --target-error: refuse a plan predicted to take longer (default: "
+                        "planner.MAX_SECONDS, one hour; 'inf' allows any)")
     p.add_argument("-o", "--output", default=None, help="output EXR (default: out/<scene>.exr)")
     p.add_argument("--target-error", type=float, default=None, metavar="E",
                    help="plan variant, max_depth and spp for this relative RMSE (see 'phonglab "
@@ -64,7 +67,8 @@ def run_planned(args, path: Path, out: Path) -> int:
     from ..render import render_file
 
     plan = planner.plan(path, args.target_error, variant=args.variant,
-                        max_depth=args.max_depth, spp=args.spp)
+                        max_depth=args.max_depth, spp=args.spp,
+                        max_seconds=args.max_seconds)
     print(plan.summary())
     meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
             "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}

@@ -63,7 +63,7 @@ pilot renders, depth search, weights, noise and time model), :mod:`.benchmark` (
 from .benchmark import benchmark_table
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
                     DepthSample, Pilot)
-from .planning import Plan, plan, render_passes
+from .planning import MAX_SECONDS, Plan, plan, render_passes
 
-__all__ = ["BIAS_FRACTION", "DEPTH_LADDER", "EPS", "PILOT_PASSES", "PILOT_SEED", "PILOT_SPP",
+__all__ = ["BIAS_FRACTION", "DEPTH_LADDER", "EPS", "MAX_SECONDS", "PILOT_PASSES", "PILOT_SEED", "PILOT_SPP",
            "DepthSample", "Pilot", "Plan", "benchmark_table", "plan", "render_passes"]

@@ -15,10 +15,14 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanError
+from ..render import MAX_SPP
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
                     DepthSample, Pilot)
+
+#: A plan predicted to take longer than this (seconds) is refused unless asked for.
+MAX_SECONDS = 3600.0
 
 
 @dataclass
@@ -92,7 +96,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
          pilot_passes: int = PILOT_PASSES, seed: int = PILOT_SEED,
          bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
          variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
-         max_depth_cap: int = DEPTH_LADDER[-1], params: dict[str, Any] | None = None) -> Plan:
+         max_depth_cap: int = DEPTH_LADDER[-1], params: dict[str, Any] | None = None,
+         max_seconds: float | None = None) -> Plan:
     """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
 
     Args:
@@ -105,13 +110,15 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
         variant, max_depth, spp: fix that part of the plan (the predictions follow it).
         max_depth_cap: deepest finite depth tried; beyond it the plan uses -1 (unbounded).
         params: values for the scene's ``<default>`` entries (``{"res": 64}``).
+        max_seconds: a plan predicted to take longer is refused (default :data:`MAX_SECONDS`;
+            ``math.inf`` allows any).
 
     Returns:
         a :class:`Plan`.
 
     Raises:
         PlanError: bad target or pilot size, unknown variant, a scene whose integrator is not
-            ``path``; SceneError: a scene that cannot be found, parsed or loaded.
+            ``path``, a plan beyond ``max_seconds`` or beyond the spp a render takes; SceneError: a scene that cannot be found, parsed or loaded.
     """
     t_start = time.perf_counter()
     _check_arguments(target_error, pilot_spp, pilot_passes, spp, max_depth)
@@ -140,6 +147,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
         reasons.append(f"warning: the predicted error {predicted:.4g} misses the target "
                        f"{target_error:g} with the configuration given")
     a, b, passes, seconds = _predict_time(pilot, depth, n, resolution, reasons)
+    _refuse_absurd(info.path, target_error, n, seconds,
+                   MAX_SECONDS if max_seconds is None else max_seconds)
     pixels = resolution[0] * resolution[1]
     return Plan(scene=str(info.path), target_error=float(target_error), variant=variant,
                 backend=backend, color=color, max_depth=int(depth), spp=int(n), passes=passes,
@@ -148,6 +157,24 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
                 seconds_per_pass=a, resolution=resolution, params=dict(params),
                 pilot_spp=pilot.spp, pilot_seconds=time.perf_counter() - t_start,
                 depths=pilot.depths(), reasons=reasons, overrides=overrides)
+
+
+def _refuse_absurd(path, target_error: float, n: int, seconds: float, max_seconds: float) -> None:
+    """A plan no one should start by accident: more spp than a render takes, or over the time limit."""
+    if n > MAX_SPP:
+        raise PlanError(f"{path}: reaching E = {target_error:g} needs about {n:.3g} spp, more than "
+                        f"a render takes ({MAX_SPP}); ask for a larger --target-error.")
+    if seconds > max_seconds:
+        raise PlanError(f"{path}: reaching E = {target_error:g} needs {n} spp and about "
+                        f"{_duration(seconds)}, over the limit of {_duration(max_seconds)}; ask "
+                        f"for a larger --target-error, or allow it with --max-seconds.")
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("years", 365.25 * 86400), ("days", 86400), ("h", 3600), ("min", 60)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
 
 
 def _check_arguments(target_error, pilot_spp: int, pilot_passes: int, spp: int | None,
