@@ -238,8 +238,10 @@ class Whitted(mi.SamplingIntegrator):
     def _check_attenuation_sum(self):
         abc = [_common.scalar_of(getattr(self, name)) for name in ATTENUATION]
         if sum(abc) <= 0.0:
-            raise MaterialError(f"whitted: attenuation a, b, c must be >= 0 and not all 0 "
-                                f"(1/(a + b r + c r²)), got {abc}; use a=1, b=c=0 for none.")
+            raise MaterialError(
+                f"whitted: attenuation a, b, c ('attenuation_constant', 'attenuation_linear', "
+                f"'attenuation_quadratic') must be >= 0 and not all 0 (1/(a + b r + c r²)), "
+                f"got {abc}; use a=1, b=c=0 for none.")
         if self.units == "radiance" and abc != list(ATTENUATION.values()):
             raise MaterialError(
                 f"whitted: attenuation_* applies to units='graphics' only, got {abc}; radiance "
