@@ -4,7 +4,8 @@ A reflectance is the fraction of incident light a surface reflects, so every
 value a reflectance texture can return must lie in [0, 1], and the lobes of one
 material together must not reflect more than they receive.  Every other numeric
 parameter (an exponent, an attenuation coefficient, an ambient intensity) must be
-a finite float32 number in its documented range.  Errors are raised as
+a finite float32 number in its documented range (an unbounded intensity at most
+``INTENSITY_MAX`` = 1e30, which leaves float32 headroom for the film's sums).  Errors are raised as
 :class:`MaterialError` (a ``ValueError``) whose message is one sentence naming the
 plugin, the parameter, the value and the fix.
 
@@ -43,12 +44,15 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-#: Slack for float rounding (spectral up-sampling, sRGB decoding) in range checks.
+#: Slack for float rounding (spectral up-sampling, sRGB decoding) above a range's upper bound.
 TOLERANCE = 1e-4
 #: The smallest normal float32 number; non-zero magnitudes below it are denormal.
 FLOAT32_TINY = float(np.finfo(np.float32).tiny)
 #: The largest finite float32 number.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: The largest intensity an unbounded texture (whitted's ambient) may hold: 1e8 below
+#: FLOAT32_MAX, the headroom Mitsuba's film needs (weights, colour conversion, sums).
+INTENSITY_MAX = 1e30
 _SCALAR_MAX_GRID = 64
 _N_WAVELENGTH_ROWS = 32
 _BATCH = 1 << 18   #: points per evaluation batch (memory stays bounded for any bitmap)
@@ -271,27 +275,26 @@ def _nan_min_max(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 # ----------------------------------------------------------------------------- range checks
 
 def check_range(plugin: str, name: str, lo, hi, finite: bool = True, denormal=None,
-                upper: float | None = 1.0) -> None:
+                upper: float = 1.0) -> None:
     """Raise :class:`MaterialError` unless the values are finite, not denormal and in
-    [0, upper] in every channel (``upper=None``: an unbounded intensity >= 0)."""
-    what = "a reflectance in [0, 1]" if upper is not None else "an intensity >= 0"
+    [0, upper] in every channel (``upper`` 1: a reflectance, else an intensity)."""
+    reflectance = upper == 1.0
+    what = "a reflectance in [0, 1]" if reflectance else f"an intensity in [0, {upper:g}]"
     if not finite:
         raise MaterialError(
             f"{plugin}: '{name}' has non-finite values (NaN or Inf); give {what}.")
     if denormal is not None:
         raise _denormal_error(plugin, name, denormal)
-    low = np.any(np.asarray(lo) < -TOLERANCE)
-    high = upper is not None and np.any(np.asarray(hi) > upper + TOLERANCE)
-    if low or high:
-        if upper is not None:
+    # No slack below 0: a value of -1e-30 already darkens a pixel below 0.
+    if np.any(np.asarray(lo) < 0) or np.any(np.asarray(hi) > upper * (1 + TOLERANCE)):
+        if reflectance:
             rule = ("must lie in [0, 1] in every channel (a reflectance is the fraction of "
                     "light reflected)")
-            fix = "use values in [0, 1]"
         else:
-            rule = "must be >= 0 in every channel (a light intensity)"
-            fix = "use values >= 0"
+            rule = (f"must lie in [0, {upper:g}] in every channel (a light intensity, "
+                    f"with float32 headroom for the sums over lights, samples and pixels)")
         raise MaterialError(f"{plugin}: '{name}' {rule}, but ranges from {_fmt(lo)} to "
-                            f"{_fmt(hi)}; {fix}.")
+                            f"{_fmt(hi)}; use values in [0, {upper:g}].")
 
 
 def check_reflectance_range(plugin: str, name: str, values: np.ndarray,
@@ -318,7 +321,7 @@ def check_energy(plugin: str, names, total, parts) -> None:
 
 
 def check_textures(plugin: str, textures: dict, energy: bool = False,
-                   upper: float | None = 1.0) -> None:
+                   upper: float = 1.0) -> None:
     """Validate textures {name: texture}: each in range, and their sum <= 1 when ``energy``."""
     summary = Summary(list(textures.values()))
     for k, name in enumerate(textures):
@@ -352,11 +355,11 @@ def load_textures(plugin: str, props, names_defaults, energy: bool = False,
     """Read and check texture parameters [(name, default)]: the textures, in order.
 
     Reflectances (``unbounded`` False) must lie in [0, 1] (and sum to at most 1 when
-    ``energy``); unbounded textures (an intensity) must be finite and >= 0.  Plain
+    ``energy``); unbounded textures (an intensity) in [0, INTENSITY_MAX].  Plain
     numbers and colours are checked as the scene declared them, before Mitsuba turns
     them into textures (so the error names the parameter); textures by evaluation.
     """
-    upper = None if unbounded else 1.0
+    upper = INTENSITY_MAX if unbounded else 1.0
     declared = [declared_value(props, n, d) for n, d in names_defaults]
     for (name, _), values in zip(names_defaults, declared):
         if values is not None:

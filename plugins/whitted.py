@@ -7,22 +7,26 @@ r"""Whitted-style integrator (``whitted``): the seed lecture's complete lighting
        transport in physical units, f_r · I/r² · cos θ through the BSDF's own ``eval``.
    * - ambient
      - |spectrum| or |texture|
-     - Ambient "intensity" I_amb (default 0), unbounded.
+     - Ambient "intensity" I_amb (default 0), in [0, 1e30] (float32 headroom).
    * - ambient_reflectance_<bsdf id>
      - |spectrum| or |texture|
-     - Ambient reflectance k_amb of the BSDF with that ``id`` (any number of these);
-       a BSDF without one uses its diffuse reflectance (the seed's default).
+     - Ambient reflectance k_amb in [0, 1] of the BSDF with that ``id`` (any number of
+       these); a BSDF without one uses its diffuse reflectance (the seed's default).
+       An id that names no BSDF of the scene is an error at the first render.
    * - attenuation_constant, attenuation_linear, attenuation_quadratic
      - |float|
      - OpenGL attenuation a, b, c >= 0 of 1/(a + b r + c r²) (defaults 1, 0, 0: no
-       attenuation).  ``graphics`` units only: ``radiance`` units have the physical 1/r².
+       attenuation), finite float32 numbers, not denormal, not all 0.  The denominator
+       is floored at ``ATTENUATION_FLOOR`` = 1e-6 (the factor is at most 10^6), so a
+       light at r -> 0 or a tiny a stays finite.  ``graphics`` units only: ``radiance``
+       units have the physical 1/r².
    * - shadows
      - |bool|
      - true (default): only lights visible from the point count (the ray-tracing case);
        false: every light counts (the OpenGL/z-buffer case).
    * - max_depth
      - |int|
-     - Longest path in segments, Mitsuba's convention (default 5, 1 <= max_depth <= 10):
+     - Longest path in segments, Mitsuba's convention (default 5, a whole number in 1..10):
        1 = emission seen directly, 2 = local illumination at the first hit, each further
        level one more reflected or transmitted ray.
    * - hide_emitters
@@ -88,6 +92,8 @@ from .phong import phong_lobe
 UNITS = ("graphics", "radiance")
 MAX_DEPTH_LIMIT = 10  #: the ray tree doubles per level in glass: cap the traced kernel
 AMBIENT_PREFIX = "ambient_reflectance_"
+#: Least denominator a + b r + c r² of the attenuation (its factor is at most 1e6).
+ATTENUATION_FLOOR = 1e-6
 #: OpenGL attenuation coefficients a, b, c of 1/(a + b r + c r²) and their defaults.
 ATTENUATION = {"attenuation_constant": 1.0, "attenuation_linear": 0.0,
                "attenuation_quadratic": 0.0}
@@ -225,7 +231,8 @@ class Whitted(mi.SamplingIntegrator):
                 _check_attenuation(name, _common.scalar_of(getattr(self, name)))
             self._check_attenuation_sum()
             if not mi.is_spectral:   # spectral textures hold up-sampled spectra
-                _common.check_textures("whitted", {"ambient": self.ambient}, upper=None)
+                _common.check_textures("whitted", {"ambient": self.ambient},
+                                       upper=_common.INTENSITY_MAX)
 
         self._accepted = _common.commit(self._members(), self._accepted, validate,
                                         self._make_opaque)
@@ -344,8 +351,11 @@ class Whitted(mi.SamplingIntegrator):
             if _is_point_like(emitter):
                 r = ds.dist
                 intensity = spec * (r * r)    # I_i (times the spot falloff)
-                attenuation = (self.attenuation_constant + self.attenuation_linear * r
-                               + self.attenuation_quadratic * r * r)
+                # Floored: a light closer than the coefficients allow (a + b r + c r² -> 0)
+                # stays finite instead of overflowing float32 to Inf (and Inf·0 to NaN).
+                attenuation = dr.maximum(self.attenuation_constant + self.attenuation_linear * r
+                                         + self.attenuation_quadratic * r * r,
+                                         ATTENUATION_FLOOR)
             else:
                 intensity, attenuation = spec, mi.Float(1.0)
             front = lit & (wi.z > 0.0) & (cos_n > 0.0)
