@@ -7,7 +7,7 @@ parameter (an exponent, an attenuation coefficient, an ambient intensity) must b
 a finite float32 number in its documented range (an unbounded intensity at most
 ``INTENSITY_MAX`` = 1e30, which leaves float32 headroom for the film's sums).  Errors are raised as
 :class:`MaterialError` (a ``ValueError``) whose message is one sentence naming the
-plugin, the parameter, the value and the fix.
+plugin, the parameter, the value and the fix, on one line.
 
 Where the values are looked at:
 
@@ -314,10 +314,10 @@ def check_energy(plugin: str, names, total, parts) -> None:
     if np.any(total > 1 + TOLERANCE):
         summed = " + ".join(f"{n} {_fmt(v)}" for n, v in zip(names, parts))
         raise MaterialError(
-            f"{plugin}: {summed} = {_fmt(total)} exceeds 1, so the material violates energy "
-            f"conservation (it would reflect more light than it receives); lower "
+            f"{plugin}: {summed} = {_fmt(total)} exceeds 1: the material violates energy "
+            f"conservation (it would reflect more light than it receives). Lower "
             f"{' or '.join(repr(n) for n in names)} so that their sum is at most 1 in every "
-            f"channel (phonglab never rescales it silently).")
+            f"channel; phonglab never rescales it silently.")
 
 
 def check_textures(plugin: str, textures: dict, energy: bool = False,
