@@ -39,20 +39,28 @@ class Lambert(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        (self.reflectance,), _ = _common.load_reflectances("lambert", props, [("reflectance", 0.5)])
+        (self.reflectance,) = _common.load_textures("lambert", props, [("reflectance", 0.5)])
         flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         self.m_components = [flags]
         self.m_flags = flags
+        self._accepted = _common.snapshot(self._members())
 
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
 
+    def _members(self) -> dict:
+        return {"reflectance": self.reflectance}
+
     def parameters_changed(self, keys=None):
-        """Re-validate the reflectance after ``params.update()`` (not in spectral variants,
-        whose textures hold up-sampled spectra: see ``_common.declared_value``)."""
-        if keys and not mi.is_spectral:
-            (values,) = _common.texture_values([self.reflectance])
-            _common.check_reflectance_range("lambert", "reflectance", values)
+        """Re-validate the reflectance after ``params.update()``; a refused value is
+        replaced by the last accepted one before the error propagates (not checked in
+        spectral variants, whose textures hold up-sampled spectra: see
+        ``_common.declared_value``)."""
+        def validate():
+            if keys and not mi.is_spectral:
+                _common.check_textures("lambert", self._members())
+
+        self._accepted = _common.commit(self._members(), self._accepted, validate, lambda: None)
 
     def _active(self, ctx, si, wo, active):
         enabled = ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, DIFFUSE)

@@ -87,39 +87,48 @@ class Phong(mi.BSDF):
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
-        (self.diffuse_reflectance, self.specular_reflectance), (kd, ks) = _common.load_reflectances(
-            "phong", props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)])
+        self.diffuse_reflectance, self.specular_reflectance = _common.load_textures(
+            "phong", props, [("diffuse_reflectance", 0.5), ("specular_reflectance", 0.2)],
+            energy=True)
         exponent = _common.check_exponent("phong", props.get("exponent", 30.0))
         self.exponent = mi.Float(exponent)
         diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
         self.m_components = [diffuse, glossy]   # indices DIFFUSE, GLOSSY
         self.m_flags = diffuse | glossy
-        self._validate(kd, ks)
         self._update_factors()
+        self._accepted = _common.snapshot(self._members())
 
     def traverse(self, callback):
         callback.put("diffuse_reflectance", self.diffuse_reflectance, mi.ParamFlags.Differentiable)
         callback.put("specular_reflectance", self.specular_reflectance, mi.ParamFlags.Differentiable)
         callback.put("exponent", self.exponent, mi.ParamFlags.Differentiable)
 
-    def parameters_changed(self, keys=None):
-        """Re-validate after ``params.update()`` (an optimizer step, a sweep), then re-derive."""
-        keys = keys or []
-        if any("reflectance" in k for k in keys) and not mi.is_spectral:
-            # In spectral variants textures hold up-sampled spectra: see _common.declared_value.
-            self._validate(*_common.texture_values(
-                [self.diffuse_reflectance, self.specular_reflectance]))
-        self._update_factors()
+    def _members(self) -> dict:
+        """The traversed members, whose values an update writes in place."""
+        return {"diffuse_reflectance": self.diffuse_reflectance,
+                "specular_reflectance": self.specular_reflectance, "exponent": self.exponent}
 
-    @staticmethod
-    def _validate(kd, ks):
-        _common.check_reflectance_range("phong", "diffuse_reflectance", kd)
-        _common.check_reflectance_range("phong", "specular_reflectance", ks)
-        _common.check_energy("phong", ("diffuse_reflectance", "specular_reflectance"), [kd, ks])
+    def parameters_changed(self, keys=None):
+        """Re-validate after ``params.update()`` (an optimizer step, a sweep), then re-derive.
+
+        Transactional: a refused value is replaced by the last accepted one (in the BSDF
+        and in the caller's parameter map) before the :class:`MaterialError` propagates.
+        """
+        keys = keys or []
+
+        def validate():
+            if any("reflectance" in k for k in keys) and not mi.is_spectral:
+                # In spectral variants textures hold up-sampled spectra: see _common.declared_value.
+                _common.check_textures("phong", {
+                    "diffuse_reflectance": self.diffuse_reflectance,
+                    "specular_reflectance": self.specular_reflectance}, energy=True)
+            _common.check_exponent("phong", _common.scalar_of(self.exponent))
+
+        self._accepted = _common.commit(self._members(), self._accepted, validate,
+                                        self._update_factors)
 
     def _update_factors(self):
-        _common.check_exponent("phong", _common.scalar_of(self.exponent))
         # An opaque exponent is a kernel input, not a baked literal: sweeps never recompile.
         dr.make_opaque(self.exponent)
         self.brdf_factor = (self.exponent + 2.0) * dr.inv_two_pi   # normalizes f_r's lobe

@@ -7,22 +7,26 @@ r"""Whitted-style integrator (``whitted``): the seed lecture's complete lighting
        transport in physical units, f_r · I/r² · cos θ through the BSDF's own ``eval``.
    * - ambient
      - |spectrum| or |texture|
-     - Ambient "intensity" I_amb (default 0), unbounded.
+     - Ambient "intensity" I_amb (default 0), in [0, 1e30] (float32 headroom).
    * - ambient_reflectance_<bsdf id>
      - |spectrum| or |texture|
-     - Ambient reflectance k_amb of the BSDF with that ``id`` (any number of these);
-       a BSDF without one uses its diffuse reflectance (the seed's default).
+     - Ambient reflectance k_amb in [0, 1] of the BSDF with that ``id`` (any number of
+       these); a BSDF without one uses its diffuse reflectance (the seed's default).
+       An id that names no BSDF of the scene is an error at the first render.
    * - attenuation_constant, attenuation_linear, attenuation_quadratic
      - |float|
      - OpenGL attenuation a, b, c >= 0 of 1/(a + b r + c r²) (defaults 1, 0, 0: no
-       attenuation).  ``graphics`` units only: ``radiance`` units have the physical 1/r².
+       attenuation), finite float32 numbers, not denormal, not all 0.  The denominator
+       is floored at ``ATTENUATION_FLOOR`` = 1e-6 (the factor is at most 10^6), so a
+       light at r -> 0 or a tiny a stays finite.  ``graphics`` units only: ``radiance``
+       units have the physical 1/r².
    * - shadows
      - |bool|
      - true (default): only lights visible from the point count (the ray-tracing case);
        false: every light counts (the OpenGL/z-buffer case).
    * - max_depth
      - |int|
-     - Longest path in segments, Mitsuba's convention (default 5, 1 <= max_depth <= 10):
+     - Longest path in segments, Mitsuba's convention (default 5, a whole number in 1..10):
        1 = emission seen directly, 2 = local illumination at the first hit, each further
        level one more reflected or transmitted ray.
    * - hide_emitters
@@ -75,16 +79,43 @@ OpenGL 2.1 specification §2.14.1 (lighting equation, attenuation).
 
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import _optics
+from . import _common, _optics
+from ._common import MaterialError
 from .phong import phong_lobe
 
 UNITS = ("graphics", "radiance")
 MAX_DEPTH_LIMIT = 10  #: the ray tree doubles per level in glass: cap the traced kernel
 AMBIENT_PREFIX = "ambient_reflectance_"
+#: Least denominator a + b r + c r² of the attenuation (its factor is at most 1e6).
+ATTENUATION_FLOOR = 1e-6
+#: OpenGL attenuation coefficients a, b, c of 1/(a + b r + c r²) and their defaults.
+ATTENUATION = {"attenuation_constant": 1.0, "attenuation_linear": 0.0,
+               "attenuation_quadratic": 0.0}
+
+
+def _check_max_depth(value) -> int:
+    """max_depth as an int in 1..MAX_DEPTH_LIMIT, or :class:`MaterialError`."""
+    try:
+        depth = float(value)
+    except (TypeError, ValueError):
+        depth = math.nan
+    if not (math.isfinite(depth) and depth == int(depth) and 1 <= depth <= MAX_DEPTH_LIMIT):
+        raise MaterialError(
+            f"whitted: 'max_depth' must lie in 1..{MAX_DEPTH_LIMIT} (a whole number of path "
+            f"segments, 2 = local illumination at the first hit), got {value!r}; the ray tree "
+            f"is unrolled, so unbounded depth (-1) is not available.")
+    return int(depth)
+
+
+def _check_attenuation(name: str, value) -> float:
+    return _common.check_number("whitted", name, value, "a coefficient of 1/(a + b r + c r²)",
+                                "use a=1, b=c=0 for no attenuation")
 
 
 def _is_point_like(emitter) -> bool:
@@ -165,50 +196,70 @@ class Whitted(mi.SamplingIntegrator):
         mi.SamplingIntegrator.__init__(self, props)
         self.units = str(props.get("units", "graphics"))
         if self.units not in UNITS:
-            raise ValueError(f"whitted: 'units' must be 'graphics' or 'radiance', got "
-                             f"{self.units!r}.")
-        self.max_depth = int(props.get("max_depth", 5))
-        if not 1 <= self.max_depth <= MAX_DEPTH_LIMIT:
-            raise ValueError(f"whitted: 'max_depth' must lie in 1..{MAX_DEPTH_LIMIT} (2 = local "
-                             f"illumination at the first hit), got {self.max_depth}; the ray "
-                             f"tree is unrolled, so unbounded depth (-1) is not available.")
+            raise MaterialError(f"whitted: 'units' must be 'graphics' or 'radiance', got "
+                                f"{self.units!r}.")
+        self.max_depth = _check_max_depth(props.get("max_depth", 5))
         self.shadows = bool(props.get("shadows", True))
         self.hide_emitters = bool(props.get("hide_emitters", False))
-        self.ambient = props.get_unbounded_texture("ambient", 0.0)
-        abc = [props.get(k, d) for k, d in (("attenuation_constant", 1.0),
-                                            ("attenuation_linear", 0.0),
-                                            ("attenuation_quadratic", 0.0))]
-        abc = [float(x) for x in abc]
-        if any(x < 0.0 for x in abc) or sum(abc) <= 0.0:
-            raise ValueError(f"whitted: attenuation a, b, c must be >= 0 and not all 0 "
-                             f"(1/(a + b r + c r²)), got {abc}; use a=1, b=c=0 for none.")
-        if self.units == "radiance" and abc != [1.0, 0.0, 0.0]:
-            raise ValueError("whitted: attenuation_* applies to units='graphics' only; radiance "
-                             "units already have the physical 1/r², so leave a=1, b=c=0 there.")
-        self.attenuation_constant = mi.Float(abc[0])
-        self.attenuation_linear = mi.Float(abc[1])
-        self.attenuation_quadratic = mi.Float(abc[2])
-        self.ambient_reflectance = {key[len(AMBIENT_PREFIX):]: props.get_texture(key)
-                                    for key in props.keys() if key.startswith(AMBIENT_PREFIX)}
-        self.parameters_changed([])
+        (self.ambient,) = _common.load_textures("whitted", props, [("ambient", 0.0)],
+                                                unbounded=True)
+        for name, default in ATTENUATION.items():
+            setattr(self, name, mi.Float(_check_attenuation(name, props.get(name, default))))
+        self._check_attenuation_sum()
+        self.ambient_reflectance = {}
+        for key in props.keys():
+            if key.startswith(AMBIENT_PREFIX):
+                (texture,) = _common.load_textures("whitted", props, [(key, 0.0)])
+                self.ambient_reflectance[key[len(AMBIENT_PREFIX):]] = texture
+        self._make_opaque()
+        self._accepted = _common.snapshot(self._members())
 
     def traverse(self, callback):
         callback.put("ambient", self.ambient, mi.ParamFlags.NonDifferentiable)
-        for name in ("attenuation_constant", "attenuation_linear", "attenuation_quadratic"):
+        for name in ATTENUATION:
             callback.put(name, getattr(self, name), mi.ParamFlags.NonDifferentiable)
 
+    def _members(self) -> dict:
+        """The traversed members, whose values an update writes in place."""
+        return {"ambient": self.ambient, **{name: getattr(self, name) for name in ATTENUATION}}
+
     def parameters_changed(self, keys=None):
+        """Re-validate after ``params.update()``; a refused value is replaced by the last
+        accepted one (here and in the caller's parameter map) before the error propagates."""
+        def validate():
+            for name in ATTENUATION:
+                _check_attenuation(name, _common.scalar_of(getattr(self, name)))
+            self._check_attenuation_sum()
+            if not mi.is_spectral:   # spectral textures hold up-sampled spectra
+                _common.check_textures("whitted", {"ambient": self.ambient},
+                                       upper=_common.INTENSITY_MAX)
+
+        self._accepted = _common.commit(self._members(), self._accepted, validate,
+                                        self._make_opaque)
+
+    def _make_opaque(self):
         # Opaque: a sweep of a, b, c through mi.traverse never recompiles the kernel.
-        for name in ("attenuation_constant", "attenuation_linear", "attenuation_quadratic"):
+        for name in ATTENUATION:
             dr.make_opaque(getattr(self, name))
+
+    def _check_attenuation_sum(self):
+        abc = [_common.scalar_of(getattr(self, name)) for name in ATTENUATION]
+        if sum(abc) <= 0.0:
+            raise MaterialError(
+                f"whitted: attenuation a, b, c ('attenuation_constant', 'attenuation_linear', "
+                f"'attenuation_quadratic') must be >= 0 and not all 0 (1/(a + b r + c r²)), "
+                f"got {abc}; use a=1, b=c=0 for none.")
+        if self.units == "radiance" and abc != list(ATTENUATION.values()):
+            raise MaterialError(
+                f"whitted: attenuation_* applies to units='graphics' only, got {abc}; radiance "
+                f"units already have the physical 1/r², so leave a=1, b=c=0 there.")
 
     def parameters(self) -> dict:
         """This integrator's settings as a ``mi.load_dict`` dictionary (uniform textures only)."""
         out = {"type": "whitted", "units": self.units, "max_depth": self.max_depth,
                "shadows": self.shadows, "hide_emitters": self.hide_emitters,
                **{name: float(np.asarray(getattr(self, name)).ravel()[0])
-                  for name in ("attenuation_constant", "attenuation_linear",
-                               "attenuation_quadratic")}}
+                  for name in ATTENUATION}}
         return out
 
     # ------------------------------------------------------------------ rendering
@@ -217,9 +268,10 @@ class Whitted(mi.SamplingIntegrator):
         ids = {b.id() for b in materials}
         unknown = sorted(set(self.ambient_reflectance) - ids)
         if unknown:
-            raise ValueError(f"whitted: ambient_reflectance_{unknown[0]} names no BSDF of the "
-                             f"scene (BSDF ids: {sorted(i for i in ids if i)}); give the id of "
-                             f"a <bsdf id=...> used by a shape.")
+            known = ", ".join(repr(i) for i in sorted(i for i in ids if i)) or "none"
+            raise MaterialError(
+                f"whitted: '{AMBIENT_PREFIX}{unknown[0]}' names no BSDF of the scene (the ids "
+                f"of its BSDFs: {known}); use the id of a <bsdf id=...> that a shape uses.")
         flags = 0
         for b in materials:
             flags |= int(b.flags())
@@ -299,8 +351,11 @@ class Whitted(mi.SamplingIntegrator):
             if _is_point_like(emitter):
                 r = ds.dist
                 intensity = spec * (r * r)    # I_i (times the spot falloff)
-                attenuation = (self.attenuation_constant + self.attenuation_linear * r
-                               + self.attenuation_quadratic * r * r)
+                # Floored: a light closer than the coefficients allow (a + b r + c r² -> 0)
+                # stays finite instead of overflowing float32 to Inf (and Inf·0 to NaN).
+                attenuation = dr.maximum(self.attenuation_constant + self.attenuation_linear * r
+                                         + self.attenuation_quadratic * r * r,
+                                         ATTENUATION_FLOOR)
             else:
                 intensity, attenuation = spec, mi.Float(1.0)
             front = lit & (wi.z > 0.0) & (cos_n > 0.0)
