@@ -43,7 +43,7 @@ def _write(tmp_path: Path, name: str, text: str) -> Path:
 
 def _fails_in_one_sentence(capsys, argv: list[str], *patterns: str) -> str:
     assert cli.main(argv) == 2
-    err = capsys.readouterr().err.strip()
+    err = capsys.readouterr().err.split("\r")[-1].strip()   # after the progress bar, if any
     assert err.startswith("phonglab: error: ") and "\n" not in err, err
     assert "Traceback" not in err and "malformed XML" not in err, err
     for p in patterns:
@@ -170,7 +170,7 @@ def test_a_plugin_value_error_is_passed_through(tmp_path, capsys):
         '<string name="units" value="graphics"/>',
         '<float name="attenuation_constant" value="-1"/>'))
     _fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "w.exr")],
-                           "whitted: attenuation")
+                           "whitted: 'attenuation_constant' must be >= 0")
 
 
 def test_malformed_xml_is_still_called_so(tmp_path, capsys):
@@ -203,3 +203,13 @@ def test_a_plan_over_the_time_limit_is_refused_unless_allowed(capsys):
     _fails_in_one_sentence(capsys, argv + ["--max-seconds", "1e-6"], "over the limit",
                            "--max-seconds")
     assert cli.main(argv + ["--max-seconds", "inf"]) == 0
+
+
+def test_a_plugin_error_during_the_render_is_the_plugins_sentence(tmp_path, capsys):
+    """whitted refuses an unknown ambient_reflectance_<id> at render time; Dr.Jit wraps that in
+    its custom-operation RuntimeError, which render_scene unwraps."""
+    scene = _write(tmp_path, "w.xml", WHITTED_NO_DEPTH_DEFAULT.replace(
+        '<string name="units" value="graphics"/>',
+        '<rgb name="ambient_reflectance_nope" value="0.3"/>'))
+    _fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "w.exr")],
+                           "ambient_reflectance_nope")

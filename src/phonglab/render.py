@@ -27,7 +27,7 @@ import numpy as np
 from tqdm import tqdm
 
 from . import __version__
-from .errors import PhonglabError, SceneError
+from .errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs
 from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
                      scene_path)
@@ -92,8 +92,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     if not 1 <= spp <= MAX_SPP:
         raise PhonglabError(f"spp (samples per pixel) must lie in [1, {MAX_SPP}], got {spp}; a "
                             f"float32 pixel sum cannot take more samples without losing them")
-    sensor = preflight(scene, "the scene")
-    width, height = (int(v) for v in sensor.film().size())
+    width, height = (int(v) for v in preflight(scene, "the scene", sensor).film().size())
     # Mitsuba refuses (or splits and then fails) a single render of more than 2^32 samples.
     min_passes = -(-spp * width * height // MAX_SAMPLES_PER_CALL)
     passes = max(1, min_passes, min(int(passes), int(spp)))
@@ -109,8 +108,8 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     t_start = time.perf_counter()
     for k in iterator:
         t0 = time.perf_counter()
-        img = mi.render(scene, spp=per_pass[k], seed=pass_seed(seed, k), sensor=sensor,
-                        integrator=integrator)
+        img = _render_call(scene, spp=per_pass[k], seed=pass_seed(seed, k), sensor=sensor,
+                           integrator=integrator)
         dr.eval(img)
         arr = _to_numpy(img).astype(np.float64)
         times.append(time.perf_counter() - t0)
@@ -131,6 +130,22 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     return RenderResult(mean.astype(np.float32), stderr, seconds, times,
                         pass_means=np.array(means), pass_spp=per_pass,
                         passes=np.stack(kept) if keep_passes else None)
+
+
+def _render_call(scene, **kwargs):
+    """``mi.render``, with a plugin's own error unwrapped from Dr.Jit's custom-operation wrapper.
+
+    A Python plugin that raises during the render (whitted refusing an unknown
+    ``ambient_reflectance_<id>``) reaches the caller as Dr.Jit's ``RuntimeError: ... error
+    while performing a custom differentiable operation``, the plugin's sentence buried in its
+    ``__cause__``; that cause is raised instead.
+    """
+    try:
+        return mi.render(scene, **kwargs)
+    except RuntimeError as exc:
+        if isinstance(exc.__cause__, user_errors()):
+            raise exc.__cause__ from None
+        raise
 
 
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
@@ -206,8 +221,8 @@ def available_memory() -> int | None:
     return min(limits) if limits else None
 
 
-def preflight(scene, path: str | Path):
-    """The scene's first sensor, once the render is known to be possible.
+def preflight(scene, path: str | Path, sensor: int = 0):
+    """The scene's sensor number ``sensor``, once the render is known to be possible.
 
     Raises:
         SceneError: no sensor, a film without pixels, or a film whose render would need more
@@ -218,7 +233,10 @@ def preflight(scene, path: str | Path):
     if not sensors:
         raise SceneError(f"{path}: the scene has no <sensor>; add a camera (e.g. <sensor "
                          f"type=\"perspective\">) with a <film>")
-    width, height = (int(v) for v in sensors[0].film().size())
+    if not 0 <= sensor < len(sensors):
+        raise SceneError(f"{path}: there is no sensor number {sensor}; the scene has "
+                         f"{len(sensors)} (numbered from 0)")
+    width, height = (int(v) for v in sensors[sensor].film().size())
     if width < 1 or height < 1:
         raise SceneError(f"{path}: the film is {width} x {height} pixels; give it a width and "
                          f"height of at least 1 (e.g. res=64)")
@@ -228,7 +246,7 @@ def preflight(scene, path: str | Path):
         raise SceneError(f"{path}: a {width} x {height} render needs about {need / 2**30:.1f} GiB "
                          f"of memory but {have / 2**30:.1f} GiB is available; lower the "
                          f"resolution (res=...)")
-    return sensors[0]
+    return sensors[sensor]
 
 
 def _max_depth(integrator) -> int | None:
