@@ -60,11 +60,17 @@ class Reference:
         return int(self.metadata.get("spp", 0))
 
 
-def default_variant(scene: str | Path, params: dict[str, Any] | None = None) -> str:
-    """rgb on the best backend unless the scene carries spectral data (then spectral)."""
+def variant_for_color(color: str) -> str:
+    """The variant of a reference for a scene of colour model ``color`` ('mono', 'rgb',
+    'spectral'): rgb on the best backend unless the scene carries spectral data (then
+    spectral); a mono render is compared with the reference's luminance."""
     backend, _ = available_backend()
-    color = "spectral" if inspect_scene(scene, **(params or {})).color == "spectral" else "rgb"
-    return variant_for(color, backend)[0]
+    return variant_for("spectral" if color == "spectral" else "rgb", backend)[0]
+
+
+def default_variant(scene: str | Path, params: dict[str, Any] | None = None) -> str:
+    """:func:`variant_for_color` of the scene's colour model (read from its XML)."""
+    return variant_for_color(inspect_scene(scene, **(params or {})).color)
 
 
 def cache_path(scene: str | Path, params: dict[str, Any] | None = None, variant: str = "llvm_ad_rgb",

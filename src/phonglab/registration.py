@@ -5,6 +5,10 @@ from the variant's ``mi.BSDF``/``mi.SamplingIntegrator``.  :func:`register`
 therefore (re)builds each plugin module for the active variant and registers
 it; a variant callback repeats this after every later ``mi.set_variant``
 (the pattern of Mitsuba's own ``python/ad/integrators``).
+
+Mitsuba is imported inside the functions: ``import phonglab`` imports this module, and it must
+neither load Mitsuba (about half a second for every ``phonglab`` command, ``--help`` included)
+nor let Dr.Jit start before :mod:`phonglab.runtime` has pinned libLLVM.
 """
 
 from __future__ import annotations

@@ -81,7 +81,7 @@ def run_planned(args, path: Path, out: Path) -> int:
     print(f"rendered {path} with {plan.spp} spp, max_depth {plan.max_depth} in {plan.variant}: "
           f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
           f"{plan.predicted_seconds:.3g} s)")
-    ref = references.cached(path)
+    ref = references.cached(path, variant=references.variant_for_color(plan.color))
     if ref is not None:
         err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
         print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} "
