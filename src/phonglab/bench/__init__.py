@@ -39,36 +39,21 @@ CSVs into BENCHMARKS.md; :func:`run_bench` (:mod:`.run`) runs it all.  Sizes and
 constants: :mod:`.config`.
 """
 
-import importlib
+from ..lazy import lazy_exports
 
-#: Public name → the module of this package that defines it.
+#: The public API, by the module of this package that defines it, re-exported on first use
+#: (phonglab.lazy says why).
 _EXPORTS = {
-    **dict.fromkeys(("efficiency_ratios", "loglog_slope", "mis_ratios", "pareto_front", "ratio_summary",
-                     "stability_verdict", "stability_z_crit"), "analysis"),
-    **dict.fromkeys(("chart_error_time", "chart_stability"), "charts"),
-    **dict.fromkeys(("BIAS_FLOOR", "BREAKDOWN_REL_RMSE", "DEFAULT_OUT", "ESTIMATOR_SCENES",
-                     "NEAR_ZERO_REL_SD", "PARTS", "RATIO_COMPARISONS", "STABILITY_ANGLES",
-                     "STABILITY_EXPONENTS", "STABILITY_LIGHTS", "STABILITY_N", "Config"), "config"),
-    **dict.fromkeys(("BOX_TYPES", "CornellSpec", "beckmann_alpha", "cornell_xml", "render_setups"),
-                    "cornell"),
-    "CsvLog": "csvlog",
-    **dict.fromkeys(("stability_explanations", "write_markdown"), "report"),
-    **dict.fromkeys(("machine_info", "run_bench"), "run"),
+    "analysis": ("efficiency_ratios", "loglog_slope", "mis_ratios", "pareto_front",
+                 "ratio_summary", "stability_verdict", "stability_z_crit"),
+    "charts": ("chart_error_time", "chart_stability"),
+    "config": ("BIAS_FLOOR", "BREAKDOWN_REL_RMSE", "Config", "DEFAULT_OUT", "ESTIMATOR_SCENES",
+               "NEAR_ZERO_REL_SD", "PARTS", "RATIO_COMPARISONS", "STABILITY_ANGLES",
+               "STABILITY_EXPONENTS", "STABILITY_LIGHTS", "STABILITY_N"),
+    "cornell": ("BOX_TYPES", "CornellSpec", "beckmann_alpha", "cornell_xml", "render_setups"),
+    "csvlog": ("CsvLog",),
+    "report": ("stability_explanations", "write_markdown"),
+    "run": ("machine_info", "run_bench"),
 }
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    # Lazy re-exports (PEP 562): every ``phonglab`` command builds its parser from
-    # phonglab.bench.config (PARTS); importing the sweeps eagerly would load scipy,
-    # matplotlib and the render core first, ~1.5 s added to each command's start-up.
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(name for names in _EXPORTS.values() for name in names)

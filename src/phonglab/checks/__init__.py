@@ -37,14 +37,12 @@ reproducible.
 
 from __future__ import annotations
 
-import importlib
+from ..lazy import lazy_exports
 
 #: Names accepted by ``--only``, in the order the table lists them.
 CHECK_NAMES = ("energy", "reflection", "scene", "constancy", "snell", "sanity")
 
-# The public API, re-exported from the submodules on first use: the command line builds its
-# parser from CHECK_NAMES at every start, and importing the checks themselves (Mitsuba
-# plugins, scipy) would add most of a second to every `phonglab` invocation.
+# The public API, re-exported from the submodules on first use (phonglab.lazy says why).
 _EXPORTS = {
     "common": ("CheckResult", "Config", "Rows", "EPS32", "gray", "phong_dict"),
     "report": ("CHECKS", "run_checks", "format_table", "write_json"),
@@ -55,19 +53,5 @@ _EXPORTS = {
     "snell": ("check_snell", "INDICES"),
     "sanity": ("check_sanity",),
 }
-_HOME = {name: module for module, names in _EXPORTS.items() for name in names}
-
-__all__ = ["CHECK_NAMES", *_HOME]
-
-
-def __getattr__(name: str):
-    module = _HOME.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOME))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = ["CHECK_NAMES", *(name for names in _EXPORTS.values() for name in names)]
