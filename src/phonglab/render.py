@@ -78,6 +78,18 @@ MAX_SPP = 1 << 24
 MAX_SAMPLES_PER_CALL = 1 << 31
 
 
+def check_spp(spp: int) -> int:
+    """``spp`` as an int when a render can take it (1 to :data:`MAX_SPP`), else one sentence."""
+    if int(spp) < 1:
+        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
+                            f"least one sample (--spp 1)")
+    if int(spp) > MAX_SPP:
+        raise PhonglabError(f"spp (samples per pixel) must be at most {MAX_SPP}, got {spp}: a "
+                            f"float32 pixel sum loses samples beyond that; render in several "
+                            f"files and average them")
+    return int(spp)
+
+
 def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 0,
                  progress: bool = False, integrator=None,
                  keep_passes: bool = False) -> RenderResult:
@@ -89,9 +101,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     every pass image in :attr:`RenderResult.passes`.  ``pass_seconds`` times each pass with
     the image evaluated and copied to numpy (the first includes JIT compilation).
     """
-    if not 1 <= spp <= MAX_SPP:
-        raise PhonglabError(f"spp (samples per pixel) must lie in [1, {MAX_SPP}], got {spp}; a "
-                            f"float32 pixel sum cannot take more samples without losing them")
+    spp = check_spp(spp)
     width, height = (int(v) for v in preflight(scene, "the scene", sensor).film().size())
     # Mitsuba refuses (or splits and then fails) a single render of more than 2^32 samples.
     min_passes = -(-spp * width * height // MAX_SAMPLES_PER_CALL)
@@ -165,9 +175,8 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
     path = scene_path(scene)
     outputs = RenderOutputs.beside(out, png)
     outputs.check()
-    if spp is not None and int(spp) < 1:
-        raise PhonglabError(f"spp (samples per pixel) must be >= 1, got {spp}; ask for at "
-                            f"least one sample (--spp 1)")
+    if spp is not None:
+        check_spp(spp)
     declared = scene_defaults(path)
     params = {k: v for k, v in (("spp", spp), ("max_depth", max_depth))
               if v is not None and k in declared}

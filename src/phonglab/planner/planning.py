@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanError
-from ..render import MAX_SPP
+from ..render import MAX_SPP, check_spp
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
@@ -179,7 +179,8 @@ def _duration(seconds: float) -> str:
 
 def _check_arguments(target_error, pilot_spp: int, pilot_passes: int, spp: int | None,
                      max_depth: int | None) -> None:
-    """Refuse a target, pilot size, spp or max_depth the plan cannot use (PlanError)."""
+    """Refuse a target, pilot size, spp or max_depth the plan cannot use (PlanError; a bad
+    spp is render.check_spp's PhonglabError, the same sentence a render gives)."""
     if not (isinstance(target_error, (int, float)) and math.isfinite(target_error)
             and 0 < target_error < 10):
         raise PlanError(f"target error must be a relative RMSE in (0, 10), e.g. 0.01 for "
@@ -187,8 +188,8 @@ def _check_arguments(target_error, pilot_spp: int, pilot_passes: int, spp: int |
     if pilot_passes < 2 or pilot_spp < pilot_passes:
         raise PlanError(f"the pilot needs at least 2 passes of at least 1 spp, got "
                         f"pilot_spp={pilot_spp}, pilot_passes={pilot_passes}.")
-    if spp is not None and spp < 1:
-        raise PlanError(f"spp must be >= 1, got {spp}.")
+    if spp is not None:
+        check_spp(spp)
     if max_depth is not None and (max_depth == 0 or max_depth < -1):
         raise PlanError(f"max_depth must be -1 (unbounded) or >= 1, got {max_depth}.")
 
