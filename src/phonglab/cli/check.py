@@ -52,17 +52,15 @@ def run(args) -> int:
 
     from .. import stats
 
-    if args.spp is not None and args.spp < 8:
-        raise PhonglabError(f"--spp must be at least 8 (renders are split into passes for their "
-                            f"standard errors), got {args.spp}; use --spp 8 or more.")
+    # Config refuses a bad --spp: built first, before the plugins load.
+    cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
+                        lambert=args.lambert, phong=args.phong)
     names = args.only or list(checks.CHECK_NAMES)
     _require_plugins(args.lambert, args.phong)
     bar = None
     if not args.no_progress:
         bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
-    cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
-                        lambert=args.lambert, phong=args.phong,
-                        progress=(lambda msg: bar.set_description(msg)) if bar else None)
+        cfg.progress = bar.set_description
     t0 = time.perf_counter()
     done: list[str] = []
 
