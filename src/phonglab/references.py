@@ -91,7 +91,11 @@ def cached(scene: str | Path, params: dict[str, Any] | None = None, variant: str
         variant = variant or default_variant(scene, params)
     except PhonglabError:
         return None
-    path = cache_path(scene, params, variant, max_depth, cache_dir)
+    return _read(cache_path(scene, params, variant, max_depth, cache_dir), min_spp)
+
+
+def _read(path: Path, min_spp: int) -> Reference | None:
+    """The reference stored at ``path`` (and its ``.stderr.exr``) if it has ``min_spp`` samples."""
     se_path = exr.stderr_path(path)
     if not (path.is_file() and se_path.is_file()):
         return None
@@ -116,11 +120,14 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
         passes, seed: how a missing reference is rendered (pass k uses pass_seed(seed, k)).
     """
     params = {k: v for k, v in (params or {}).items() if v is not None}
-    variant = variant or default_variant(scene, params)
-    found = cached(scene, params, variant, max_depth, spp, cache_dir)
+    # The XML is read once: for the default variant, or (on a cache miss) for the integrator.
+    info = inspect_scene(scene, **params) if variant is None else None
+    variant = variant or variant_for_color(info.color)
+    path = cache_path(scene, params, variant, max_depth, cache_dir)
+    found = _read(path, spp)
     if found is not None:
         return found
-    info = inspect_scene(scene, **params)
+    info = info or inspect_scene(scene, **params)
     with quiet_mitsuba():
         loaded = load_scene(info.path, variant, **params)
     integrator = None if max_depth is None else path_integrator(max_depth, info)
@@ -131,7 +138,6 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
             "max_depth": "scene's integrator" if max_depth is None else max_depth,
             "params": {k: str(v) for k, v in params.items()},
             "render_seconds": round(result.seconds, 3), "mitsuba_version": mi.__version__}
-    path = cache_path(scene, params, variant, max_depth, cache_dir)
     exr.write(path, result.image, meta)
     exr.write(exr.stderr_path(path), result.stderr, meta)
     return Reference(result.image, result.stderr, meta, path)
