@@ -33,15 +33,19 @@ from .errors import PhonglabError
 from .tonemap import preview_png
 
 
-def check_writable(path: Path, what: str = "output") -> None:
-    """Raise :class:`PhonglabError` unless ``path`` can be written (created or replaced)."""
+def check_file(path: Path, what: str = "output") -> None:
+    """Raise :class:`PhonglabError` when ``path`` is a folder or a read-only file."""
     path = Path(path)
     if path.is_dir():
         raise PhonglabError(f"the {what} {path} is a folder; give a file name instead")
-    if path.exists():
-        if not path.stat().st_mode & stat.S_IWUSR:
-            raise PhonglabError(f"the {what} {path} is read-only; make it writable "
-                                f"(chmod u+w) or choose another output name")
+    if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
+        raise PhonglabError(f"the {what} {path} is read-only; make it writable "
+                            f"(chmod u+w) or choose another output name")
+
+
+def check_folder(path: Path, what: str = "output") -> None:
+    """Raise :class:`PhonglabError` unless a file can be created where ``path`` goes."""
+    path = Path(path)
     folder = path.parent
     while not folder.exists():
         folder = folder.parent
@@ -74,10 +78,11 @@ class RenderOutputs:
 
     def check(self) -> None:
         """Every file of the set can be written (see the module docstring)."""
-        check_writable(self.image, "output image")
-        check_writable(self.stderr, "standard-error image")
+        check_file(self.image, "output image")
+        check_file(self.stderr, "standard-error image")
         if self.png is not None:
-            check_writable(self.png, "PNG preview")
+            check_file(self.png, "PNG preview")
+        check_folder(self.image, "output image")     # the three files share one folder
 
     def write(self, image: np.ndarray, stderr: np.ndarray | None, metadata: dict[str, Any],
               exposure: float = 0.0) -> str:
