@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phonglab import cli, exr
+from phonglab import cli, exr, planner
 from phonglab.errors import SceneError
 from phonglab.render import render_scene
 from phonglab.scenes import load_scene
@@ -213,3 +213,13 @@ def test_a_plugin_error_during_the_render_is_the_plugins_sentence(tmp_path, caps
         '<rgb name="ambient_reflectance_nope" value="0.3"/>'))
     _fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "w.exr")],
                            "ambient_reflectance_nope")
+
+
+def test_a_planned_render_checks_its_outputs_before_the_pilot(tmp_path, capsys, monkeypatch):
+    def no_pilot(*args, **kwargs):
+        raise AssertionError("the plan was made although the output cannot be written")
+
+    monkeypatch.setattr(planner, "plan", no_pilot)
+    (tmp_path / "x.png").mkdir()
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--target-error", "0.05", "-o",
+                                    str(tmp_path / "x.exr")], "is a folder")

@@ -64,8 +64,10 @@ def run(args) -> int:
 def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan, report predicted and achieved error and time."""
     from .. import metrics, planner, references
+    from ..outputs import RenderOutputs
     from ..render import render_file
 
+    RenderOutputs.beside(out).check()       # before the pilot, not only before the render
     plan = planner.plan(path, args.target_error, variant=args.variant,
                         max_depth=args.max_depth, spp=args.spp,
                         max_seconds=args.max_seconds)
