@@ -138,10 +138,10 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
         p = two_sided_p(z)
     else:
         z, p = float("nan"), float("nan")
+    norms = metrics.errors(a, b, eps=eps)         # both images are finite (checked above)
     return Comparison(
         shape=tuple(int(s) for s in a.shape),
-        rmse=metrics.rmse(a, b),
-        rel_mse=metrics.rel_mse(a, b, eps),
+        rmse=norms["rmse"], rel_mse=norms["rel_mse"],
         mean_diff=mean_diff, mean_diff_stderr=se, stderr_source=source, z=float(z), p_value=p,
         max_abs_diff=float(np.max(np.abs(d))), mean_a=float(a.mean()), mean_b=float(b.mean()),
         channel_mean_diff=[float(x) for x in d.mean(axis=(0, 1))], eps=eps)
