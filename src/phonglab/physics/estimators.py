@@ -68,7 +68,17 @@ from .. import probe, registration
 from ..errors import PhonglabError
 
 #: Estimator names, in the order charts and tables list them.
-METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis")
+METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis", "mis_optimal")
+#: Estimators whose N samples are independent and identically distributed (all but the
+#: two-stage ``mis_optimal``, whose samples follow a pilot-chosen allocation).
+IID_METHODS: tuple[str, ...] = METHODS[:5]
+#: ``mis_optimal``: the pilot's share of the N samples (discarded after it chose α and c).
+PILOT_FRACTION = 1.0 / 32.0
+#: ``mis_optimal``: the candidate BSDF shares c_b of the main samples (c_l = 1 − c_b).
+ALLOCATIONS = tuple(k / 16.0 for k in range(17))
+#: ``mis_optimal``: a pure strategy (c_b = 0 or 1) is preferred over a mixture whose pilot
+#: variance is not below (1 − this) times the pure strategy's.
+PURE_PREFERENCE = 0.02
 LIGHTS: tuple[str, ...] = ("constant", "disk")
 
 #: Gauss–Legendre quadrature: panels × nodes per panel on each 1-D integral.
@@ -390,9 +400,82 @@ def _mis(f: Integrand, u1, u2, rng):
     return value + f_l * _safe_ratio(f.light.radiance * w_l, p_l)
 
 
+def _technique(f: Integrand, is_b, u1, u2):
+    """(f, p_b, p_l) at one sample of BSDF sampling where ``is_b``, else of light sampling.
+
+    A symbolic ``if``: a lane runs only its own technique (the LLVM backend skips a branch
+    that no lane of a packet takes).  A BSDF sample the plugin rejects (pdf 0, e.g. a lobe
+    direction below the horizon) is the *null point* of that technique: f = 0, p_l = 0 and
+    p_b := 1 (any positive value; it cancels, module docstring).
+    """
+    def by_bsdf(u1, u2):
+        bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
+        valid = bs.pdf > 0
+        value = _channel_mean(weight) * bs.pdf * f.light.emitted(bs.wo)     # eval · L
+        return (dr.select(valid, value, 0.0), dr.select(valid, bs.pdf, 1.0),
+                dr.select(valid, f.light.pdf(bs.wo), 0.0))
+
+    def by_light(u1, u2):
+        wo, p_l = f.light.sample(u2)
+        value, p_b = f.bsdf.eval_pdf(f.ctx, f.si, wo)
+        return _channel_mean(value) * f.light.radiance, p_b, p_l
+
+    return dr.if_stmt((u1, u2), is_b, by_bsdf, by_light)
+
+
+def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
+                      allocations=ALLOCATIONS) -> tuple[np.ndarray, ...]:
+    """The pilot's choice of (c_b, α_b, α_l, σ²(c_b)) for each row (one estimate's pilot).
+
+    Args:
+        fv, pb, pl: (B, M) float64 f, p_b, p_l at the pilot samples of B independent pilots;
+            the first M/2 of each row drawn by BSDF sampling, the rest by light sampling
+            (the mixture q = (p_b + p_l)/2; null points carry p_b = 1, p_l = 0, f = 0).
+        allocations: candidate BSDF shares c_b (c_l = 1 − c_b).
+
+    For each c the 2×2 system A α = b with A = Σ w p pᵀ/M, b = Σ w f p/M, w = 1/((c·p) q) is
+    the pilot's estimate of Kondapaneni et al.'s moment matrix and vector, and
+    σ²(c) = Σ w f²/M − αᵀ b the per-sample variance of the optimally weighted estimator
+    (module docstring).  At c_b = 0 or 1 only the present technique's α is fitted (the
+    other is 0) and σ² is infinite when a pilot sample has f ≠ 0 where that technique's
+    density is 0.  The smallest σ² wins, a pure strategy (c_b ∈ {0, 1}) when it is within
+    :data:`PURE_PREFERENCE` of the best.
+    """
+    c = np.asarray(allocations, np.float64)[None, :, None]
+    q = 0.5 * (pb + pl)
+    d = c * pb[:, None, :] + (1.0 - c) * pl[:, None, :]                      # (B, G, M)
+    covered = d > 0
+    w = np.where(covered, 1.0 / np.where(covered, d, 1.0), 0.0) / q[:, None, :]
+    feats = np.stack([pb * pb, pb * pl, pl * pl, fv * pb, fv * pl, fv * fv], axis=-1)
+    mom = np.matmul(w, feats) / fv.shape[1]                                  # (B, G, 6)
+    abb, abl, all_, bb, bl, sff = np.moveaxis(mom, -1, 0)
+    det = abb * all_ - abl * abl
+    good = det > 1e-9 * abb * all_
+    safe = np.where(good, det, 1.0)
+    alpha_b = np.where(good, (bb * all_ - bl * abl) / safe, bb / np.where(abb > 0, abb, 1.0))
+    alpha_l = np.where(good, (bl * abb - bb * abl) / safe, 0.0)
+    ends = c[0, :, 0]
+    pure_b, pure_l = ends == 1.0, ends == 0.0
+    alpha_b = np.where(pure_b, bb / np.where(abb > 0, abb, 1.0), np.where(pure_l, 0.0, alpha_b))
+    alpha_l = np.where(pure_l, bl / np.where(all_ > 0, all_, 1.0), np.where(pure_b, 0.0, alpha_l))
+    sigma2 = np.maximum(sff - alpha_b * bb - alpha_l * bl, 0.0)
+    uncovered = np.any(~covered & (fv[:, None, :] != 0), axis=-1)
+    sigma2 = np.where(uncovered, np.inf, sigma2)
+    best = np.argmin(sigma2, axis=1)
+    rows = np.arange(len(best))
+    for end in (np.flatnonzero(pure_b), np.flatnonzero(pure_l)):
+        if end.size:
+            e = int(end[0])
+            near = sigma2[:, e] * (1.0 - PURE_PREFERENCE) <= sigma2[rows, best]
+            best = np.where(near, e, best)
+    return (ends[best], alpha_b[rows, best], alpha_l[rows, best], sigma2[rows, best])
+
+
 #: The estimators by name (the order of :data:`METHODS`).
 _ESTIMATORS = {"uniform": _uniform, "cosine": _cosine, "bsdf": _bsdf, "light": _light,
                "mis": _mis}
+#: A seed offset that keeps ``mis_optimal``'s pilot streams apart from its main streams.
+_PILOT_KEY = 0x6A09E667
 
 
 def _load_bsdf(problem: Problem):
@@ -465,6 +548,16 @@ class ReflectionEstimators:
     def exact(self) -> float:
         return exact_value(self.problem)
 
+    @staticmethod
+    def _uniforms(n_total: int, seed: int):
+        """(lane index, u1, u2) of n_total lanes; lane k draws from PCG32 stream TEA(seed, k)."""
+        idx = dr.arange(mi.UInt32, n_total)
+        v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
+        rng = mi.PCG32(size=n_total)
+        rng.seed(mi.UInt64(v0), mi.UInt64(v1))
+        u1 = rng.next_float32()
+        return idx, u1, mi.Point2f(rng.next_float32(), rng.next_float32()), rng
+
     def _samples(self, method: str, n_total: int, seed: int):
         """Per-sample values X (a Dr.Jit Float of n_total entries; MIS: of pairs).
 
@@ -472,13 +565,64 @@ class ReflectionEstimators:
         """
         if method not in _ESTIMATORS:
             raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
-        idx = dr.arange(mi.UInt32, n_total)
-        v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
-        rng = mi.PCG32(size=n_total)
-        rng.seed(mi.UInt64(v0), mi.UInt64(v1))
-        u1 = rng.next_float32()
-        u2 = mi.Point2f(rng.next_float32(), rng.next_float32())
+        _, u1, u2, rng = self._uniforms(n_total, seed)
         return _channel_mean(_ESTIMATORS[method](self.integrand, u1, u2, rng))
+
+    def _pilot(self, m: int, batches: int, seed: int) -> list[np.ndarray]:
+        """(f, p_b, p_l) as (batches, m) float64 arrays: m/2 BSDF then m/2 light samples a row."""
+        idx, u1, u2, _ = self._uniforms(m * batches, seed ^ _PILOT_KEY)
+        per = dr.opaque(mi.UInt32, m)
+        j = idx - (idx // per) * per
+        out = _technique(self.integrand, j < dr.opaque(mi.UInt32, m // 2), u1, u2)
+        dr.eval(*out)
+        return [np.array(x, dtype=np.float64).reshape(batches, m) for x in out]
+
+    def _optimal_values(self, per: int, n_b: np.ndarray, alpha_b: np.ndarray,
+                        alpha_l: np.ndarray, seed: int) -> np.ndarray:
+        """(batches, per) main-stage values X of ``mis_optimal``: row s draws n_b[s] BSDF
+        samples then per − n_b[s] light samples, weighted with its own α (module docstring)."""
+        batches = len(n_b)
+        idx, u1, u2, _ = self._uniforms(per * batches, seed)
+        width = dr.opaque(mi.UInt32, per)
+        row = idx // width
+        is_b = (idx - row * width) < dr.gather(mi.UInt32, mi.UInt32(n_b.astype(np.uint32)), row)
+        fv, pb, pl = _technique(self.integrand, is_b, u1, u2)
+        a_b = dr.gather(mi.Float, mi.Float(alpha_b.astype(np.float32)), row)
+        a_l = dr.gather(mi.Float, mi.Float(alpha_l.astype(np.float32)), row)
+        c_b = dr.gather(mi.Float, mi.Float((n_b / per).astype(np.float32)), row)
+        x = a_b + a_l + _safe_ratio(fv - a_b * pb - a_l * pl, c_b * pb + (1.0 - c_b) * pl)
+        dr.eval(x)
+        return np.array(x, dtype=np.float64).reshape(batches, per)
+
+    @staticmethod
+    def pilot_size(n: int) -> int:
+        """Pilot samples of an n-sample ``mis_optimal`` estimate: n·PILOT_FRACTION, even, >= 32."""
+        return max(32, 2 * int(round(n * PILOT_FRACTION / 2)))
+
+    def _run_optimal(self, n: int, batches: int, seed: int) -> tuple[np.ndarray, ...]:
+        """(values, stderr, X) of ``batches`` mis_optimal estimates, in chunks of <= CHUNK."""
+        m = self.pilot_size(n)
+        per = n - m
+        rows = max(1, self.CHUNK // n)
+        values, stderr, xs = [], [], []
+        for c, b0 in enumerate(range(0, batches, rows)):
+            b = min(rows, batches - b0)
+            chunk_seed = seed if c == 0 else (seed * 0x9E3779B1 + c) & 0xFFFFFFFF
+            c_b, alpha_b, alpha_l, _ = choose_allocation(*self._pilot(m, b, chunk_seed))
+            n_b = np.rint(c_b * per).astype(np.int64)
+            x = self._optimal_values(per, n_b, alpha_b, alpha_l, chunk_seed)
+            values.append(x.mean(axis=1))
+            # Stratified: Var = Σ_t n_t s_t² / per², s_t² the variance within technique t.
+            is_b = np.arange(per)[None, :] < n_b[:, None]
+            var = np.zeros(b)
+            for mask in (is_b, ~is_b):
+                k = mask.sum(axis=1)
+                mean_t = np.where(mask, x, 0.0).sum(axis=1) / np.maximum(k, 1)
+                ss = np.where(mask, (x - mean_t[:, None]) ** 2, 0.0).sum(axis=1)
+                var += ss / np.maximum(k - 1, 1) * k
+            stderr.append(np.sqrt(var) / per)
+            xs.append(x)
+        return np.concatenate(values), np.concatenate(stderr), np.concatenate(xs)
 
     def _values(self, method: str, per: int, batches: int, seed: int) -> np.ndarray:
         """(batches, per) float64 per-sample values, launched in chunks of <= CHUNK samples."""
@@ -505,28 +649,40 @@ class ReflectionEstimators:
             raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
         if n < 2 or batches < 1:
             raise PhonglabError(f"need n >= 2 samples and batches >= 1, got n={n}, batches={batches}")
-        per = n // 2 if method == "mis" else n          # MIS: n/2 pairs of 2 samples
+        if method == "mis_optimal" and n < 2 * self.pilot_size(n):
+            raise PhonglabError(f"mis_optimal needs n >= {2 * self.pilot_size(n)} samples (a pilot of "
+                                f"{self.pilot_size(n)} and a main stage), got n={n}")
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         dr.kernel_history()                              # clear
         t0 = time.perf_counter()
-        arr = self._values(method, per, batches, seed)
+        if method == "mis_optimal":
+            values, stderr, arr = self._run_optimal(n, batches, seed)
+        else:
+            per = n // 2 if method == "mis" else n      # MIS: n/2 pairs of 2 samples
+            arr = self._values(method, per, batches, seed)
+            values = arr.mean(axis=1)
+            dev = arr - values[:, None]
+            stderr = np.sqrt(np.einsum("ij,ij->i", dev, dev) / max(per - 1, 1) / per)
         seconds = time.perf_counter() - t0
         hashes: list[str] = []
         compile_ms, kernels, hits = kernel_stats(hashes)
         nan_count = int(np.isnan(arr).sum())
         inf_count = int(np.isinf(arr).sum())
-        values = arr.mean(axis=1)
-        dev = arr - values[:, None]
-        var_b = np.einsum("ij,ij->i", dev, dev) / max(per - 1, 1)
-        return Estimate(method, n, values, np.sqrt(var_b / per), nan_count, inf_count, seconds,
-                        compile_ms, kernels, hits, float(var_b.mean()), hashes)
+        # Per-sample variance in the units of n: an n-sample estimate has variance σ²/n.
+        per_n = n // 2 if method == "mis" else n
+        return Estimate(method, n, values, stderr, nan_count, inf_count, seconds,
+                        compile_ms, kernels, hits, float(np.mean(stderr ** 2)) * per_n, hashes)
 
     def moments(self, method: str, n: int = 1 << 22, seed: int = 0xC0FFEE) -> tuple[float, float, float]:
         """(mean, variance σ², excess kurtosis γ₂) of the per-sample value X, from n samples.
 
         For MIS, X is the value of one pair (two samples), so that an n-sample estimate
-        has variance σ²/(n/2).
+        has variance σ²/(n/2).  ``mis_optimal``'s samples are not identically distributed:
+        σ² is n times the variance of one n-sample estimate (stratified), γ₂ is NaN.
         """
+        if method == "mis_optimal":
+            e = self.run(method, n, seed=seed)
+            return e.value, e.sample_variance, float("nan")
         per = n // 2 if method == "mis" else n
         arr = self._values(method, per, 1, seed).ravel()
         mean = float(arr.mean())
