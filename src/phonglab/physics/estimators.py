@@ -75,10 +75,10 @@ IID_METHODS: tuple[str, ...] = METHODS[:5]
 #: ``mis_optimal``: the pilot's share of the N samples (discarded after it chose α and c).
 PILOT_FRACTION = 1.0 / 32.0
 #: ``mis_optimal``: the candidate BSDF shares c_b of the main samples (c_l = 1 − c_b).
-ALLOCATIONS = tuple(k / 16.0 for k in range(17))
+ALLOCATIONS = tuple(k / 8.0 for k in range(9))
 #: ``mis_optimal``: a pure strategy (c_b = 0 or 1) is preferred over a mixture whose pilot
 #: variance is not below (1 − this) times the pure strategy's.
-PURE_PREFERENCE = 0.02
+PURE_PREFERENCE = 0.1
 LIGHTS: tuple[str, ...] = ("constant", "disk")
 
 #: Gauss–Legendre quadrature: panels × nodes per panel on each 1-D integral.
@@ -444,8 +444,8 @@ def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
     c = np.asarray(allocations, np.float64)[None, :, None]
     q = 0.5 * (pb + pl)
     d = c * pb[:, None, :] + (1.0 - c) * pl[:, None, :]                      # (B, G, M)
-    covered = d > 0
-    w = np.where(covered, 1.0 / np.where(covered, d, 1.0), 0.0) / q[:, None, :]
+    d *= q[:, None, :]
+    w = np.divide(1.0, d, out=np.zeros_like(d), where=d > 0)
     feats = np.stack([pb * pb, pb * pl, pl * pl, fv * pb, fv * pl, fv * fv], axis=-1)
     mom = np.matmul(w, feats) / fv.shape[1]                                  # (B, G, 6)
     abb, abl, all_, bb, bl, sff = np.moveaxis(mom, -1, 0)
@@ -459,8 +459,12 @@ def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
     alpha_b = np.where(pure_b, bb / np.where(abb > 0, abb, 1.0), np.where(pure_l, 0.0, alpha_b))
     alpha_l = np.where(pure_l, bl / np.where(all_ > 0, all_, 1.0), np.where(pure_b, 0.0, alpha_l))
     sigma2 = np.maximum(sff - alpha_b * bb - alpha_l * bl, 0.0)
-    uncovered = np.any(~covered & (fv[:, None, :] != 0), axis=-1)
-    sigma2 = np.where(uncovered, np.inf, sigma2)
+    # Inside (0, 1) c·p > 0 at every sample (each has p_b > 0 or p_l > 0); at an end a sample
+    # with f ≠ 0 where the one density used is 0 means that strategy alone misses part of f.
+    sigma2[:, pure_b] = np.where(np.any((pb == 0) & (fv != 0), axis=1)[:, None], np.inf,
+                                 sigma2[:, pure_b])
+    sigma2[:, pure_l] = np.where(np.any((pl == 0) & (fv != 0), axis=1)[:, None], np.inf,
+                                 sigma2[:, pure_l])
     best = np.argmin(sigma2, axis=1)
     rows = np.arange(len(best))
     for end in (np.flatnonzero(pure_b), np.flatnonzero(pure_l)):
@@ -499,6 +503,23 @@ def _channel_mean(spectrum):
     """Mean over colour channels (the problems are grey, so all channels agree)."""
     channels = [spectrum[k] for k in range(len(spectrum))]
     return sum(channels[1:], channels[0]) * (1.0 / len(channels))
+
+
+def _stratified(x: np.ndarray, n_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row means of x (B, per) and their standard errors when row s holds n_b[s] samples of
+    one technique then per − n_b[s] of the other: Var = Σ_t k_t s_t² / per² (s_t² within t)."""
+    rows, per = x.shape
+    center = x[:, :1]                        # a shift against cancellation in Σx²
+    dev = (x - center).ravel()
+    starts = np.stack([np.arange(rows) * per, np.arange(rows) * per + n_b], axis=1).ravel()
+    counts = np.stack([n_b, per - n_b], axis=1).ravel()
+    keep = counts > 0                       # reduceat needs non-empty segments
+    sums, sq = np.zeros(2 * rows), np.zeros(2 * rows)
+    sums[keep] = np.add.reduceat(dev, starts[keep])
+    sq[keep] = np.add.reduceat(dev * dev, starts[keep])
+    ss = np.maximum(sq - sums * sums / np.maximum(counts, 1), 0.0)
+    var = (ss / np.maximum(counts - 1, 1) * counts).reshape(rows, 2).sum(axis=1)
+    return center[:, 0] + sums.reshape(rows, 2).sum(axis=1) / per, np.sqrt(var) / per
 
 
 class ReflectionEstimators:
@@ -611,16 +632,9 @@ class ReflectionEstimators:
             c_b, alpha_b, alpha_l, _ = choose_allocation(*self._pilot(m, b, chunk_seed))
             n_b = np.rint(c_b * per).astype(np.int64)
             x = self._optimal_values(per, n_b, alpha_b, alpha_l, chunk_seed)
-            values.append(x.mean(axis=1))
-            # Stratified: Var = Σ_t n_t s_t² / per², s_t² the variance within technique t.
-            is_b = np.arange(per)[None, :] < n_b[:, None]
-            var = np.zeros(b)
-            for mask in (is_b, ~is_b):
-                k = mask.sum(axis=1)
-                mean_t = np.where(mask, x, 0.0).sum(axis=1) / np.maximum(k, 1)
-                ss = np.where(mask, (x - mean_t[:, None]) ** 2, 0.0).sum(axis=1)
-                var += ss / np.maximum(k - 1, 1) * k
-            stderr.append(np.sqrt(var) / per)
+            mean, se = _stratified(x, n_b)
+            values.append(mean)
+            stderr.append(se)
             xs.append(x)
         return np.concatenate(values), np.concatenate(stderr), np.concatenate(xs)
 
