@@ -23,9 +23,38 @@ standard deviation)::
               constant: ω ~ uniform sphere, p = 1/(4π)    (the constant emitter's own sampling)
     mis       N/2 pairs (one bsdf + one light sample), power heuristic β = 2 [Veach 1997, §9.2]:
               X = f_b L_b/p_b · p_b²/(p_b²+p_l(ω_b)²) + f_l L_e/p_l · p_l²/(p_l²+p_b(ω_l)²)
+    mis_optimal  pilot-chosen allocation n_b + n_l = N − M and optimal weights (below)
 
 so every estimator draws N directions in total (MIS's N/2 pairs keep equal sample
 counts; its standard error comes from the N/2 pair values).
+
+``mis_optimal``: optimal MIS weights for the two strategies t ∈ {b, l} (BSDF and light
+sampling) [Kondapaneni, Vévoda, Grittmann, Skřivan, Slusallek, Křivánek, "Optimal Multiple
+Importance Sampling", ACM TOG 38(4), SIGGRAPH 2019, §4–5] with the allocation c_t = n_t/n
+between them chosen from a pilot [Sbert, Havran, Szirmay-Kalos, "Multiple importance
+sampling revisited: breaking the bounds", EURASIP J. Adv. Signal Process. 2018].  For a fixed
+allocation the optimal weights are w_t = α_t p_t/f + (c_t p_t/Σ c p)(1 − Σ_k α_k p_k/f), and the
+estimator they give is the balance heuristic applied to f − α·p plus the control variates
+∫ p_t = 1::
+
+    F = Σ_t α_t + (1/n) Σ_t Σ_{j ≤ n_t} (f(x_tj) − α·p(x_tj)) / (c·p(x_tj)),      x_tj ~ p_t
+    A α = b,   A_tk = ∫ p_t p_k / (c·p) dx,   b_t = ∫ f p_t / (c·p) dx              (2×2)
+    n·Var F = σ²(c) = ∫ (f − α·p)² / (c·p) dx       (at the solution: ∫ (f − α·p) p_t/(c·p) = 0)
+
+F is unbiased for *any* α that does not depend on its own samples.  So the estimate spends
+a pilot of M = n·:data:`PILOT_FRACTION` samples (M/2 per strategy, i.e. drawn from q =
+(p_b + p_l)/2) on choosing c and α, and *discards* it: for each candidate c_b in
+:data:`ALLOCATIONS` (c_l = 1 − c_b) the pilot estimates A, b and ∫ f²/(c·p) by importance
+sampling, Â = (1/M) Σ_m p pᵀ/((c·p) q) etc., solves the 2×2 system (a 1×1 one at c_b ∈ {0, 1},
+where the absent strategy's α is 0) and keeps the c with the smallest σ̂²(c) = ∫̂ f²/(c·p) −
+α̂·b̂ (the pure strategy when within :data:`PURE_PREFERENCE` of it: heavy tails make the
+pilot optimistic about mixtures).  The other n − M samples, drawn from fresh streams, give F.
+Its standard error is stratified: Var F = Σ_t n_t s_t²/n², s_t² the sample variance within
+strategy t.  A BSDF sample that the plugin rejects (pdf 0, a lobe direction below the
+horizon) is a point of its own with probability 1 − ∫_{H²} p_b; giving it p_b := 1, p_l = 0,
+f = 0 makes its value −α_b/c_b, which is what keeps ∫ p_b = 1 (the control variate) true,
+and the "1" cancels in every term above.  With f = α·p exactly (a pure lobe inside the
+light, a pure light under a wide lobe) σ² = 0 for every c, so no split is penalized.
 
 Exact values come from deterministic quadrature in float64 (:func:`exact_value`).
 Around the lobe axis R write ω_o = cos α R + sin α (cos φ e₁ + sin φ e₂), e₁ in the
@@ -458,7 +487,9 @@ def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
     pure_b, pure_l = ends == 1.0, ends == 0.0
     alpha_b = np.where(pure_b, bb / np.where(abb > 0, abb, 1.0), np.where(pure_l, 0.0, alpha_b))
     alpha_l = np.where(pure_l, bl / np.where(all_ > 0, all_, 1.0), np.where(pure_b, 0.0, alpha_l))
-    sigma2 = np.maximum(sff - alpha_b * bb - alpha_l * bl, 0.0)
+    sigma2 = sff - alpha_b * bb - alpha_l * bl
+    # Below 10⁻¹² of the second moment it is float64 rounding of an exact fit (σ² = 0).
+    sigma2 = np.where(sigma2 <= 1e-12 * sff, 0.0, sigma2)
     # Inside (0, 1) c·p > 0 at every sample (each has p_b > 0 or p_l > 0); at an end a sample
     # with f ≠ 0 where the one density used is 0 means that strategy alone misses part of f.
     sigma2[:, pure_b] = np.where(np.any((pb == 0) & (fv != 0), axis=1)[:, None], np.inf,
@@ -606,11 +637,15 @@ class ReflectionEstimators:
         idx, u1, u2, _ = self._uniforms(per * batches, seed)
         width = dr.opaque(mi.UInt32, per)
         row = idx // width
-        is_b = (idx - row * width) < dr.gather(mi.UInt32, mi.UInt32(n_b.astype(np.uint32)), row)
+        def table(kind, values, dtype):
+            # Padded to >= 2 entries: a 1-entry gather source compiles a different kernel.
+            return dr.gather(kind, kind(np.append(values, values[-1:]).astype(dtype)), row)
+
+        is_b = (idx - row * width) < table(mi.UInt32, n_b, np.uint32)
         fv, pb, pl = _technique(self.integrand, is_b, u1, u2)
-        a_b = dr.gather(mi.Float, mi.Float(alpha_b.astype(np.float32)), row)
-        a_l = dr.gather(mi.Float, mi.Float(alpha_l.astype(np.float32)), row)
-        c_b = dr.gather(mi.Float, mi.Float((n_b / per).astype(np.float32)), row)
+        a_b = table(mi.Float, alpha_b, np.float32)
+        a_l = table(mi.Float, alpha_l, np.float32)
+        c_b = table(mi.Float, n_b / per, np.float32)
         x = a_b + a_l + _safe_ratio(fv - a_b * pb - a_l * pl, c_b * pb + (1.0 - c_b) * pl)
         dr.eval(x)
         return np.array(x, dtype=np.float64).reshape(batches, per)
