@@ -6,7 +6,8 @@ r"""Sweeps of the reflection-equation estimators: error and time against N, and 
   steady-state wall time of one N-sample estimate (median of repeats after a warm-up call,
   whose own time and JIT statistics go to ``jit.csv``); then :func:`sweep_cost`, the cost
   per estimate at the largest N with the methods interleaved.
-* :func:`sweep_stability` — every estimator × exponent × θ_i × light of the stability grid,
+* :func:`sweep_stability` — every estimator (``mis_optimal`` included) × exponent × θ_i × light
+  of the stability grid (the estimators interleaved cell by cell),
   pure specular lobe (k_d = 0, k_s = 1), N = :data:`~phonglab.bench.config.STABILITY_N`;
   the verdict is :func:`phonglab.bench.analysis.stability_verdict`.  The bias z-score is
   mean error / (pooled standard error / √S); with a zero standard error it is 0 when the
@@ -127,8 +128,10 @@ def sweep_stability(out: Path, cfg: Config, progress: bool = True) -> None:
         for light in STABILITY_LIGHTS.values():
             est.set(Problem(**base, **light))
             est.run(method, STABILITY_N, seed=1)
-    cells = [(lt, m, p, t) for lt in STABILITY_LIGHTS for m in METHODS
-             for p in STABILITY_EXPONENTS for t in STABILITY_ANGLES]
+    # Methods innermost: the per-(light, method) median time that the MIS comparison uses
+    # (analysis.mis_ratios) then sees the same load drift for every method.
+    cells = [(lt, m, p, t) for lt in STABILITY_LIGHTS for p in STABILITY_EXPONENTS
+             for t in STABILITY_ANGLES for m in METHODS]
     bar = progress_bar(len(cells), "stability", progress)
     for i, (light, method, p, theta) in enumerate(cells):
         bar.update()

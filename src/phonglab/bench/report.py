@@ -19,7 +19,8 @@ from typing import Any
 
 from ..physics.estimators import METHODS
 from ..planner import benchmark_table
-from .analysis import (efficiency_ratios, loglog_slope, mis_ratios, ratio_summary, stability_z_crit)
+from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
+                       stability_z_crit)
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES)
 from .cornell import beckmann_alpha
@@ -49,6 +50,7 @@ class RunData:
     rs: dict = field(default_factory=dict)     #: ratio_summary
     eff: dict = field(default_factory=dict)    #: efficiency_ratios
     mis: dict = field(default_factory=dict)    #: mis_ratios
+    mis_opt: dict = field(default_factory=dict)  #: mis_ratios of mis_optimal
 
     @classmethod
     def read(cls, out: Path, md_path: Path, quick_run: Path | None = None) -> "RunData":
@@ -61,6 +63,7 @@ class RunData:
         data.rs = ratio_summary(data.ratios)
         data.eff = efficiency_ratios(data.results, open_log(out, "cost").rows)
         data.mis = mis_ratios(data.stab)
+        data.mis_opt = mis_ratios(data.stab, "mis_optimal")
         return data
 
 
@@ -120,6 +123,26 @@ def _mis_target_rows(mis: dict) -> list[str]:
     ]
 
 
+def _mis_optimal_target_rows(d: RunData) -> list[str]:
+    o = d.mis_opt
+    table = mis_cell_table(d.stab)
+    better = sum(c["vs_base"] <= 1.0 for c in table)
+    return [
+        f"| `mis_optimal` (optimal weights + pilot allocation) ≤ 1.2× worse than the better of "
+        f"BSDF/light sampling (equal time, {o['cells']} cells) | max {o['equal_time_max']:.3g}× at "
+        f"{_cell_label(o['equal_time_cell'])}; median {o['equal_time_median']:.3g}×; "
+        f"{o['within_1_2']}/{o['cells']} cells within 1.2× | {fmt_met(o['equal_time_max'] <= 1.2)} |",
+        f"| (same, equal sample count N vs N, the pilot counted) | max {o['equal_samples_max']:.3g}× "
+        f"at {_cell_label(o['equal_samples_cell'])}; median {o['equal_samples_median']:.3g}×; "
+        f"{o['within_1_2_samples']}/{o['cells']} cells within 1.2× | "
+        f"{fmt_met(o['equal_samples_max'] <= 1.2)} |",
+        f"| `mis_optimal` never worse than power-heuristic `mis` (equal time) | "
+        f"{better}/{len(table)} cells at or below; max "
+        f"{fmt_g(max((c['vs_base'] for c in table), default=math.nan))}× | "
+        f"{fmt_met(better == len(table))} |",
+    ]
+
+
 def targets_section(d: RunData) -> list[str]:
     """The target table: render-time ratios, BSDF IS speed-up, MIS, the quick run's time."""
     L = ["## Targets: render-time ratios, importance sampling, MIS, quick-run time\n",
@@ -138,6 +161,8 @@ def targets_section(d: RunData) -> list[str]:
                  f"{fmt_met(e['uniform_over_bsdf'] >= 20)} |")
     if d.mis["cells"]:
         L += _mis_target_rows(d.mis)
+    if d.mis_opt["cells"]:
+        L += _mis_optimal_target_rows(d)
     if d.quick:
         q = d.quick
         whole = q.get("process_seconds") or q["seconds"]
@@ -337,6 +362,32 @@ def stability_section(d: RunData) -> list[str]:
     return L
 
 
+def mis_section(d: RunData) -> list[str]:
+    """The MIS chart and, cell by cell, where ``mis_optimal`` misses 1.2× at equal time."""
+    table = mis_cell_table(d.stab)
+    if not table:
+        return []
+    t = d.mis_opt["time_per_estimate"]
+    cost = ", ".join(f"{k}: {v * 1e3:.3g} ms" for k, v in sorted(t.items())
+                     if k.split("/")[1] in ("bsdf", "light", "mis", "mis_optimal"))
+    L = ["## Optimal MIS against the better single strategy\n",
+         f"![MIS ratios]({d.rel}/mis.png)\n",
+         "`mis_optimal` ([physics/estimators.py](src/phonglab/physics/estimators.py)): a pilot of "
+         "N/32 samples (half BSDF, half light sampling, then discarded) chooses the BSDF share "
+         "c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a 2×2 solve); "
+         "the other 31N/32 samples give the estimate. Ratios are errors at equal time "
+         "(√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the target "
+         f"table. Median time per estimate (N = {STABILITY_N}, interleaved cells): {cost}.\n",
+         "| light | p | θ_i | mis_optimal, equal time | equal samples | power mis, equal time | "
+         "near-zero-variance |", "|---|---|---|---|---|---|---|"]
+    for c in table:
+        if c["rt"] > 1.2 or c["rn"] > 1.2:
+            L.append(f"| {c['light']} | {c['exponent']:g} | {c['theta_i']:g} | {c['rt']:.3g} | "
+                     f"{c['rn']:.3g} | {fmt_g(c['rt_base'])} | {'yes' if c['near_zero'] else 'no'} |")
+    L.append("")
+    return L
+
+
 def planner_section(d: RunData) -> list[str]:
     planner_json = d.out / "planner.json"
     if not planner_json.is_file():
@@ -360,7 +411,8 @@ def reproduce_section(d: RunData) -> list[str]:
 
 #: The report's sections, in order.
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
-            jit_section, renders_section, variants_section, stability_section, planner_section,
+            jit_section, renders_section, variants_section, stability_section, mis_section,
+            planner_section,
             reproduce_section)
 
 

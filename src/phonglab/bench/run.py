@@ -21,7 +21,7 @@ import mitsuba as mi
 
 from .. import __version__, registration
 from ..errors import PhonglabError
-from .charts import chart_error_time, chart_stability
+from .charts import chart_error_time, chart_mis, chart_stability
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
@@ -120,6 +120,9 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
     stability_png = chart_stability(out, out)
     if stability_png:
         charts.append(str(stability_png))
+    mis_png = chart_mis(out, out)
+    if mis_png:
+        charts.append(str(mis_png))
     record = {"mode": "quick" if quick else "full", "seconds": round(time.perf_counter() - t0, 2),
               "process_seconds": process_age(), "parts": timings,
               "machine": machine_info(), "load_before": load_before,
