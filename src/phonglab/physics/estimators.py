@@ -455,19 +455,21 @@ def _technique(f: Integrand, is_b, u1, u2):
 
 
 def _row_sums(values: list, row, rows: int) -> np.ndarray:
-    """(rows, len(values)) float64 sums of each Dr.Jit array over the lanes of each row.
+    """(rows, K) float64 sums of K Dr.Jit arrays over the lanes of each row.
 
-    A scatter-add inside the kernel (Dr.Jit reduces within each SIMD packet first) at the
-    opaque row index, not ``dr.block_sum``, whose block size is a kernel literal (a new N
-    would recompile); the targets have one spare entry (a 1-entry target compiles
-    differently).
+    A scatter-add inside the kernel (``ReduceMode.Local``: reduced within each SIMD packet
+    first) into one (rows + 1)·K buffer at the opaque index row·K + k, read back at once.  Not
+    ``dr.block_sum``, whose block size is a kernel literal (a new N would recompile), nor the
+    automatic mode, which compiles a kernel per buffer size.
     """
-    targets = [dr.zeros(mi.Float64, rows + 1) for _ in values]
-    for target, value in zip(targets, values):
-        dr.scatter_reduce(dr.ReduceOp.Add, target, mi.Float64(value), row,
+    k = len(values)
+    target = dr.zeros(mi.Float64, (rows + 1) * k)
+    base = row * dr.opaque(mi.UInt32, k)
+    for i, value in enumerate(values):
+        dr.scatter_reduce(dr.ReduceOp.Add, target, mi.Float64(value), base + i,
                           mode=dr.ReduceMode.Local)
-    dr.eval(*targets)
-    return np.stack([np.array(t, dtype=np.float64)[:rows] for t in targets], axis=1)
+    dr.eval(target)
+    return np.array(target, dtype=np.float64)[:rows * k].reshape(rows, k)
 
 
 def weighted_moments(fv, pb, pl, c_b: float, select):
