@@ -10,6 +10,9 @@ r"""Sweeps of full renders: error against time per BSDF, variants, and render-ti
 * :func:`sweep_ratios` — render-time ratios lambert/diffuse, phong/plastic,
   phong/roughplastic on the same scene, spp and variant: A/B pairs in alternating order
   (ABBA), the median of the per-pair ratios (:func:`phonglab.bench.analysis.ratio_summary`).
+* :func:`sweep_whitted_units` — ``whitted`` in graphics against radiance units on
+  :data:`~phonglab.bench.config.WHITTED_SCENES` (their own settings, only ``units`` swapped):
+  ABBA pairs of steady renders, and the JIT kernels each render launches.
 
 Every render goes through :func:`phonglab.render.render_scene` (one pass; its
 ``pass_seconds[0]`` is the timed wall time, image evaluated and copied).
@@ -21,13 +24,16 @@ import math
 from pathlib import Path
 
 import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from .. import registration
 from ..metrics import errors
 from ..references import Reference
 from ..render import render_scene
-from .config import RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, Config
+from ..scenes import load_scene
+from .config import (RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, WHITTED_SCENES, WHITTED_SPP,
+                     Config)
 from .cornell import CornellSpec, ratio_spec, render_jit, render_setups, timed_render
 from .csvlog import open_log, progress_bar
 
@@ -133,3 +139,38 @@ def sweep_ratios(out: Path, cfg: Config, progress: bool = True) -> None:
             log.add(dict(comparison=name, a=a, b=b, pair=pair, scene=f"cornell {RATIO_RES}px {which}",
                          variant=VARIANT, spp=spp, t_a=t[a], t_b=t[b], ratio=t[a] / t[b]))
     bar.close()
+
+
+def sweep_whitted_units(out: Path, cfg: Config, progress: bool = True) -> None:
+    """ABBA pairs of ``whitted`` renders in graphics and in radiance units, same scene and spp
+    (the kernels compiled beforehand); each row also records the kernels each render launched."""
+    registration.register(VARIANT)
+    log = open_log(out, "whitted")
+    bar = progress_bar(len(WHITTED_SCENES) * cfg.ratio_pairs, "whitted units", progress)
+    for name in WHITTED_SCENES:
+        scene = load_scene(name, VARIANT)
+        settings = scene.integrator().parameters()
+        units = {u: mi.load_dict(dict(settings, units=u)) for u in ("graphics", "radiance")}
+        kernels = {}
+        for u, integrator in units.items():       # warm-up: tracing and JIT excluded
+            kernels[u] = render_jit_integrator(scene, integrator)
+        for pair in range(cfg.ratio_pairs):
+            bar.update()
+            if log.has(scene=name, pair=pair):
+                continue
+            order = ("graphics", "radiance") if pair % 2 == 0 else ("radiance", "graphics")
+            t = {u: render_scene(scene, WHITTED_SPP, seed=1000 + pair,
+                                 integrator=units[u]).pass_seconds[0] for u in order}
+            log.add(dict(scene=name, pair=pair, spp=WHITTED_SPP, t_graphics=t["graphics"],
+                         t_radiance=t["radiance"], ratio=t["graphics"] / t["radiance"],
+                         kernels_graphics=kernels["graphics"], kernels_radiance=kernels["radiance"]))
+    bar.close()
+
+
+def render_jit_integrator(scene, integrator) -> int:
+    """JIT kernels launched by one render of ``scene`` with ``integrator`` (after a warm-up)."""
+    render_scene(scene, WHITTED_SPP, seed=1, integrator=integrator)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()
+    render_scene(scene, WHITTED_SPP, seed=2, integrator=integrator)
+    return sum(1 for k in dr.kernel_history() if str(k.get("type", "")).endswith("JIT"))

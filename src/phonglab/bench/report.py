@@ -17,12 +17,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..physics.estimators import METHODS
 from ..planner import benchmark_table
 from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
                        stability_z_crit)
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
-                     RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES)
+                     RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
+                     WHITTED_TARGET)
 from .cornell import beckmann_alpha
 from .csvlog import number, open_log
 
@@ -123,6 +126,20 @@ def _mis_target_rows(mis: dict) -> list[str]:
     ]
 
 
+def _whitted_target_rows(d: RunData) -> list[str]:
+    rows = open_log(d.out, "whitted").rows
+    out = []
+    for scene in sorted({r["scene"] for r in rows}):
+        sel = [r for r in rows if r["scene"] == scene]
+        ratio = np.array([number(r, "ratio") for r in sel])
+        out.append(f"| `whitted` graphics units ≤ {WHITTED_TARGET}× radiance units ({scene}, "
+                   f"{sel[0]['spp']} spp) | {np.median(ratio):.3f}× (median of {ratio.size} ABBA "
+                   f"pairs, IQR {np.percentile(ratio, 25):.3f}–{np.percentile(ratio, 75):.3f}; "
+                   f"{sel[0]['kernels_graphics']} vs {sel[0]['kernels_radiance']} kernels per render) | "
+                   f"{fmt_met(float(np.median(ratio)) <= WHITTED_TARGET)} |")
+    return out
+
+
 def _mis_optimal_target_rows(d: RunData) -> list[str]:
     o = d.mis_opt
     table = mis_cell_table(d.stab)
@@ -159,6 +176,7 @@ def targets_section(d: RunData) -> list[str]:
                  f"{e['uniform_over_bsdf']:.3g}× (σ²·t per sample; σ² from N = {e['samples']} × S "
                  f"seeds, t the median of interleaved timing rounds) | "
                  f"{fmt_met(e['uniform_over_bsdf'] >= 20)} |")
+    L += _whitted_target_rows(d)
     if d.mis["cells"]:
         L += _mis_target_rows(d.mis)
     if d.mis_opt["cells"]:

@@ -25,7 +25,7 @@ from .charts import chart_error_time, chart_mis, chart_stability
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
-from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants
+from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants, sweep_whitted_units
 from .report import write_markdown
 
 
@@ -73,7 +73,8 @@ def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, pro
              "stability": lambda: sweep_stability(out, cfg, progress),
              "renders": lambda: sweep_renders(out, cfg, cache, progress),
              "variants": lambda: notes.extend(sweep_variants(out, cfg, cache, progress)),
-             "ratios": lambda: sweep_ratios(out, cfg, progress),
+             "ratios": lambda: (sweep_ratios(out, cfg, progress),
+                                sweep_whitted_units(out, cfg, progress)),
              "jit": lambda: sweep_cold_compile(out, progress)}
     for name in PARTS:
         if name in parts:
