@@ -172,7 +172,7 @@ def chart_mis(out: Path, figdir: Path) -> Path | None:
                 a = STABILITY_ANGLES.index(c["theta_i"])
                 p = STABILITY_EXPONENTS.index(c["exponent"])
                 grid[a, p] = c[key]
-                ax.text(p, a, f"{c[key]:.2g}", ha="center", va="center", fontsize=5.5,
+                ax.text(p, a, f"{c[key]:.2f}" if c[key] < 10 else f"{c[key]:.2g}", ha="center", va="center", fontsize=5.5,
                         color="white" if abs(math.log2(max(c[key], 1e-9))) > 1.5 else "black",
                         fontweight="bold" if c["near_zero"] else "normal")
             im = ax.imshow(np.log2(np.clip(grid, 0.25, 4.0)), origin="lower", cmap="coolwarm",

@@ -391,17 +391,28 @@ def mis_section(d: RunData) -> list[str]:
     L = ["## Optimal MIS against the better single strategy\n",
          f"![MIS ratios]({d.rel}/mis.png)\n",
          "`mis_optimal` ([physics/estimators.py](src/phonglab/physics/estimators.py)): a pilot of "
-         "N/32 samples (half BSDF, half light sampling, then discarded) chooses the BSDF share "
-         "c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a 2×2 solve); "
-         "the other 31N/32 samples give the estimate. Ratios are errors at equal time "
-         "(√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the target "
-         f"table. Median time per estimate (N = {STABILITY_N}, interleaved cells): {cost}.\n",
-         "| light | p | θ_i | mis_optimal, equal time | equal samples | power mis, equal time | "
-         "near-zero-variance |", "|---|---|---|---|---|---|---|"]
-    for c in table:
-        if c["rt"] > 1.2 or c["rn"] > 1.2:
-            L.append(f"| {c['light']} | {c['exponent']:g} | {c['theta_i']:g} | {c['rt']:.3g} | "
-                     f"{c['rn']:.3g} | {fmt_g(c['rt_base'])} | {'yes' if c['near_zero'] else 'no'} |")
+         "N/32 samples (at most 2048; half BSDF, half light sampling, then discarded) chooses the "
+         "BSDF share c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a "
+         "2×2 solve per candidate); the other samples give the estimate. Ratios are errors at "
+         "equal time (√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the "
+         f"target table. Median time per estimate (N = {STABILITY_N}, interleaved cells): {cost}.\n"]
+    shown = [c for c in table if c["rt"] > 1.2 or c["rn"] > 1.2 or c["vs_base"] > 1.0]
+    if not shown:
+        return L + ["In every cell `mis_optimal` is within 1.2× of the better strategy and at or "
+                    "below power-heuristic `mis`, at equal time.\n"]
+    lower = sum(c["rn"] <= c["rn_base"] for c in shown)
+    L += [f"The cells where `mis_optimal` misses 1.2× or takes longer than power-heuristic `mis` "
+          f"to equal error. At equal samples it is the better of the two in {lower} of these "
+          f"{len(shown)} cells: the rest of the gap is its cost per estimate (a second kernel "
+          f"launch for the pilot and the 2×2 solves on the host, against one launch for `mis`; "
+          f"see the medians above), which a loaded machine inflates most.\n",
+          "| light | p | θ_i | mis_optimal, equal time | equal samples | power mis, equal time | "
+          "power mis, equal samples | optimal / power (equal time) | near-zero-variance |",
+          "|---|---|---|---|---|---|---|---|---|"]
+    for c in shown:
+        L.append(f"| {c['light']} | {c['exponent']:g} | {c['theta_i']:g} | {c['rt']:.3g} | "
+                 f"{c['rn']:.3g} | {fmt_g(c['rt_base'])} | {fmt_g(c['rn_base'])} | "
+                 f"{fmt_g(c['vs_base'])} | {'yes' if c['near_zero'] else 'no'} |")
     L.append("")
     return L
 
