@@ -50,3 +50,8 @@ notebook-figures: setup
 # Planner: planned vs default configuration at equal error (docs/planner.md).
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+
+# docs/fitting.md's table: phong fitted to Beckmann/GGX roughconductor and roughplastic (~20 s).
+.PHONY: fitting-table
+fitting-table: setup
+	$(BIN)/python -m phonglab.fit.table --json docs/fitting.json --markdown docs/fitting.md

@@ -203,9 +203,13 @@ def minimize_objective(objective: Objective, x0: np.ndarray, maxiter: int = 200)
                     options={"maxiter": maxiter, "ftol": 1e-12, "gtol": 1e-9})
 
 
-def fit(target: str, params: dict | None = None, model: str = "phong",
-        maxiter: int = 200) -> FitResult:
-    """Fit ``model`` to the BSDF ``{"type": target, **params}`` (the active variant's plugins)."""
+def fit(target: str, params: dict | None = None, model: str = "phong", maxiter: int = 200,
+        start=None) -> FitResult:
+    """Fit ``model`` to the BSDF ``{"type": target, **params}`` (the active variant's plugins).
+
+    ``start``: physical parameters ((k_d, k_s, p) or (k_d,)) to start from instead of the
+    folk rule.
+    """
     if model not in MODELS:
         raise PhonglabError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}")
     t0 = time.perf_counter()
@@ -225,7 +229,10 @@ def fit(target: str, params: dict | None = None, model: str = "phong",
         raise PhonglabError(f"{target} reflects nothing that eval can see (a pure delta or "
                             f"transmissive BSDF); fit a rough one, e.g. roughconductor")
     objective = Objective(m, dirs, g_t)
-    x0, rule = _start(m, bsdf, objective, alpha)
+    if start is None:
+        x0, rule = _start(m, bsdf, objective, alpha)
+    else:
+        x0, rule = m.variables(tuple(float(v) for v in start)), "given"
     res = minimize_objective(objective, x0, maxiter)
     x = np.clip(res.x, *np.array(m.bounds).T)
     g_m = objective.values(x)
