@@ -129,12 +129,14 @@ def batch_means_se(samples: np.ndarray, batches: int = 5) -> np.ndarray:
 
 
 def fit_image(target: np.ndarray, start, res: int = 32, spp: int = 16, iterations: int = 150,
-              lr: float = 0.05, seed: int = 0, average: int = 50) -> ImageFit:
+              lr: float = 0.05, seed: int = 0, average: int = 50,
+              image_spp: int | None = None) -> ImageFit:
     """Fit phong to ``target`` (H, W, 3) with mi.ad.Adam from ``start`` = (k_d, k_s, p).
 
     Every iteration renders with fresh seeds; the learning rate decays as
     lr / (1 + 4 i / iterations) and the result is the mean of the last ``average`` iterates
-    (in x), whose standard error ``batch_se`` comes from batch means.
+    (in x), whose standard error ``batch_se`` comes from batch means.  ``image`` is the fitted
+    phong rendered at ``image_spp`` (default 16 spp) with another seed.
     """
     scene = sphere_scene(phong_dict(*start), res)
     params = mi.traverse(scene)
@@ -164,5 +166,5 @@ def fit_image(target: np.ndarray, start, res: int = 32, spp: int = 16, iteration
     out.fitted = [float(v) for v in PHONG.physical(out.x)]
     with dr.suspend_grad():
         _set(params, [dr.opaque(mi.Float, float(v)) for v in out.x])
-        out.image = render(scene, spp, seed)
+        out.image = render(scene, image_spp or 16 * spp, seed + 2 * iterations)
     return out

@@ -5,7 +5,8 @@ fitted exponent against the two folk rules, the residual r(θ_i) at normal (0°)
 (:data:`~phonglab.fit.optimize.GRAZING_DEG`) incidence, the overall relative L2 and the albedo
 difference a_fit − a_target at both angles.  ``python -m phonglab.fit.table --json J --markdown M``
 (``make fitting-table``) writes the numbers (JSON) and the page that shows them; every number on
-the page comes from that JSON.
+the page comes from that run (the table from the JSON's rows, and the example report of
+``phonglab fit roughconductor --set alpha=0.2``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import json
 from pathlib import Path
 
 from .. import registration
-from .optimize import GRAZING_DEG, blinn_phong_exponent, fit, phong_exponent
+from .optimize import GRAZING_DEG, blinn_phong_exponent, fit, format_result, phong_exponent
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)
 #: (target plugin, distribution)
@@ -45,14 +46,16 @@ def rows(alphas=ALPHAS, materials=MATERIALS) -> list[dict]:
 
 def markdown_table(table: list[dict]) -> str:
     """The rows as a Markdown table."""
-    head = ("| target | D | α | fitted p | p = (1/α²−1)/2 | p_h = 2/α²−2 | k_d | k_s | rel. L2 "
-            f"| r(0°) | r({GRAZING_DEG:g}°) | Δa(0°) | Δa({GRAZING_DEG:g}°) |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = ("| target | D | α | fitted p | p = (1/α²−1)/2 | fitted ÷ rule | p_h = 2/α²−2 | k_d | k_s "
+            f"| rel. L2 | r(0°) | r({GRAZING_DEG:g}°) | Δa(0°) | Δa({GRAZING_DEG:g}°) | worst θ_i, θ_o |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines = [f"| {r['target']} | {r['distribution']} | {r['alpha']:g} | {r['p']:.1f} "
-             f"| {r['p_phong_rule']:.1f} | {r['p_blinn_rule']:.1f} | {r['k_d']:.3f} "
+             f"| {r['p_phong_rule']:.1f} | {r['p'] / r['p_phong_rule']:.2f} "
+             f"| {r['p_blinn_rule']:.1f} | {r['k_d']:.3f} "
              f"| {r['k_s']:.3f} | {r['rel_l2']:.3f} | {r['residual_normal']:.3f} "
              f"| {r['residual_grazing']:.3f} | {r['albedo_diff_normal']:+.3f} "
-             f"| {r['albedo_diff_grazing']:+.3f} |" for r in table]
+             f"| {r['albedo_diff_grazing']:+.3f} "
+             f"| {r['worst']['theta_i_deg']:.0f}°, {r['worst']['theta_o_deg']:.0f}° |" for r in table]
     return head + "\n".join(lines) + "\n"
 
 
@@ -67,17 +70,22 @@ def main(argv=None) -> int:
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps(table, indent=1) + "\n")
     if args.markdown:
+        example = format_result(fit(*EXAMPLE))
         replace_table(Path(args.markdown), markdown_table(table))
+        replace_table(Path(args.markdown), "```\n" + example + "\n```\n", EXAMPLE_MARKERS)
     return 0
 
 
 BEGIN, END = "<!-- fitting-table: begin -->", "<!-- fitting-table: end -->"
+#: The example report the page shows (``phonglab fit roughconductor --set alpha=0.2``).
+EXAMPLE = ("roughconductor", {"alpha": 0.2})
+EXAMPLE_MARKERS = ("<!-- fitting-example: begin -->", "<!-- fitting-example: end -->")
 
 
-def replace_table(path: Path, table: str) -> None:
-    """Replace the text between :data:`BEGIN` and :data:`END` in ``path`` with ``table``."""
+def replace_table(path: Path, table: str, markers: tuple[str, str] = (BEGIN, END)) -> None:
+    """Replace the text between the two markers in ``path`` with ``table``."""
     text = path.read_text()
-    start, stop = text.index(BEGIN) + len(BEGIN), text.index(END)
+    start, stop = text.index(markers[0]) + len(markers[0]), text.index(markers[1])
     path.write_text(text[:start] + "\n" + table + text[stop:])
 
 
