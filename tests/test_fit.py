@@ -194,3 +194,18 @@ def test_docs_table_is_the_command_output(variant_llvm_rgb):
     from phonglab.fit import table
     doc = (Path(__file__).resolve().parents[1] / "docs" / "fitting.md").read_text()
     assert table.markdown_table(table.rows()) in doc
+
+
+def test_timing_record_and_bench_section(tmp_path):
+    """The benchmark of `phonglab fit roughconductor --set alpha=0.2`, at one repeat."""
+    from types import SimpleNamespace
+
+    from phonglab.bench.report import fitting_section
+    from phonglab.fit import timing
+    assert timing.main(["--repeats", "1", "--out", str(tmp_path / "fit.json")]) == 0
+    record = json.loads((tmp_path / "fit.json").read_text())
+    assert record["repeats"] == 1 and record["wall_min_s"] == record["wall_median_s"] > 0
+    assert record["met"] == (record["wall_median_s"] < 60)
+    text = "\n".join(fitting_section(SimpleNamespace(out=tmp_path)))
+    assert record["command"] in text and f"{record['wall_median_s']:.2f}" in text
+    assert fitting_section(SimpleNamespace(out=tmp_path / "none")) == []
