@@ -68,11 +68,12 @@ def run(args) -> int:
     registration.register(variant)
     result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
     text = format_result(result)
-    print(text)
+    # Files first: a closed stdout (`| head`) must not lose them.
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         Path(args.report).write_text(text + "\n")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(result.as_dict(), indent=1) + "\n")
+    print(text)
     return 0
