@@ -17,12 +17,13 @@ the primal and the adjoint pass with independent ones (``seed_grad``), so the gr
 unbiased estimate of the gradient of |E[image] − target|², and the result is the mean of
 the last iterates (Polyak averaging).
 
-Noise.  The target's pixel noise ε (variance σ_T², measured from independent renders by
-:func:`pixel_variance`) moves the minimizer of |E[image](x) − target|² by
+Noise.  The target's pixel noise ε (per-pixel RGB covariance C_T, measured from independent
+renders by :func:`pixel_covariance`) moves the minimizer of |E[image](x) − target|² by
 (JᵀJ)⁻¹Jᵀ ε to first order, J = ∂image/∂x (forward-mode AD through ``prb``,
-:func:`jacobian`), so Cov(x̂) = (JᵀJ)⁻¹Jᵀ diag(σ_T²) J (JᵀJ)⁻¹ (:func:`parameter_covariance`);
-the stochastic optimizer adds the standard error of its averaged iterates (batch means,
-:func:`batch_means_se`).
+:func:`jacobian`), so Cov(x̂) = (JᵀJ)⁻¹ Jᵀ C_T J (JᵀJ)⁻¹ (:func:`parameter_covariance`);
+Adam stops short along the valley k_s (p + 2) ≈ const, so Gauss–Newton steps with J and a
+render at x̂ finish the fit (:func:`gauss_newton_step`); after the last one the covariance is
+the same expression with C_T + C_P (C_P the noise of that render), to first order.
 """
 
 from __future__ import annotations
@@ -69,10 +70,14 @@ def render(scene, spp: int, seed: int = 0, params=None) -> np.ndarray:
     return np.array(mi.render(scene, params, spp=spp, seed=seed), dtype=np.float64)
 
 
-def pixel_variance(scene, spp: int, renders: int = 8, seed: int = 1000) -> np.ndarray:
-    """Per-pixel variance (H, W, 3) of an spp render, from ``renders`` independent seeds."""
+def pixel_covariance(scene, spp: int, renders: int = 8, seed: int = 1000) -> np.ndarray:
+    """Per-pixel 3 x 3 covariance of the RGB noise of an spp render, (H, W, 3, 3), from
+    ``renders`` independent seeds.  The channels of a pixel share their paths, so their noise
+    is correlated (identical in a grey scene): a per-channel variance alone would understate
+    the parameters' noise by up to √3."""
     images = np.stack([render(scene, spp, seed + k) for k in range(renders)])
-    return images.var(axis=0, ddof=1)
+    dev = images - images.mean(axis=0)
+    return np.einsum("khwc,khwd->hwcd", dev, dev) / (renders - 1)
 
 
 def _set(params, x) -> None:
@@ -102,10 +107,14 @@ def jacobian(scene, x, spp: int, seed: int = 0) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
-def parameter_covariance(J: np.ndarray, variance: np.ndarray) -> np.ndarray:
-    """(JᵀJ)⁻¹ Jᵀ diag(σ²) J (JᵀJ)⁻¹: the covariance of least-squares x̂ under pixel noise σ²."""
+def parameter_covariance(J: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """(JᵀJ)⁻¹ (Σ_pixels J_pᵀ C_p J_p) (JᵀJ)⁻¹: the covariance of least-squares x̂ under pixel
+    noise with per-pixel channel covariance C_p ((H, W, 3, 3), :func:`pixel_covariance`);
+    J is (pixels·3, 3) as :func:`jacobian` returns it."""
     A = np.linalg.inv(J.T @ J)
-    return A @ (J.T * variance.ravel()) @ J @ A
+    Jp = J.reshape(-1, 3, J.shape[1])                      # (pixel, channel, parameter)
+    M = np.einsum("pci,pcd,pdj->ij", Jp, covariance.reshape(-1, 3, 3), Jp)
+    return A @ M @ A
 
 
 @dataclass
@@ -117,6 +126,7 @@ class ImageFit:
     x: np.ndarray
     gradient: np.ndarray
     batch_se: np.ndarray | None = None
+    x_adam: np.ndarray | None = None                #: Adam's averaged iterates, before polishing
     losses: list = field(default_factory=list)
     history: list = field(default_factory=list)     #: physical parameters per iteration
     image: np.ndarray | None = None
@@ -128,25 +138,65 @@ def batch_means_se(samples: np.ndarray, batches: int = 5) -> np.ndarray:
     return means.std(axis=0, ddof=1) / np.sqrt(batches)
 
 
-def fit_image(target: np.ndarray, start, res: int = 32, spp: int = 16, iterations: int = 150,
-              lr: float = 0.05, seed: int = 0, average: int = 50,
-              image_spp: int | None = None) -> ImageFit:
+def learning_rate(i: int, iterations: int, lr: float, final: float) -> float:
+    """lr for the first half of the iterations, then falling geometrically to ``final`` x lr.
+
+    Adam's steps have the size of the learning rate whatever the gradient's noise, so the
+    iterates jitter by about that much around the optimum; the fall makes that jitter small
+    against the target's noise before the iterates are averaged.
+    """
+    return lr * final ** max(0.0, 2.0 * i / iterations - 1.0)
+
+
+def gauss_newton_step(scene, x, target: np.ndarray, spp: int, seed: int) -> np.ndarray:
+    """x − (JᵀJ)⁻¹Jᵀ(image(x) − target), J by forward-mode AD and the image at ``spp``, in the box."""
+    J = jacobian(scene, x, spp, seed)
+    with dr.suspend_grad():
+        _set(mi.traverse(scene), [dr.opaque(mi.Float, float(v)) for v in _box(x)])
+        residual = (render(scene, spp, seed + 1) - target).ravel()
+    return _box(np.asarray(x) - np.linalg.lstsq(J, residual, rcond=None)[0])
+
+
+def fit_image(target: np.ndarray, start, res: int = 32, spp: int = 16, iterations: int = 100,
+              lr: float = 0.05, seed: int = 0, average: int = 30, final_lr: float = 0.1,
+              polish_spp: int = 256, polish_steps: int = 2) -> ImageFit:
     """Fit phong to ``target`` (H, W, 3) with mi.ad.Adam from ``start`` = (k_d, k_s, p).
 
-    Every iteration renders with fresh seeds; the learning rate decays as
-    lr / (1 + 4 i / iterations) and the result is the mean of the last ``average`` iterates
-    (in x), whose standard error ``batch_se`` comes from batch means.  ``image`` is the fitted
-    phong rendered at ``image_spp`` (default 16 spp) with another seed.
+    Every Adam iteration renders with fresh seeds; the learning rate follows
+    :func:`learning_rate`; ``x_adam`` is the mean of the last ``average`` iterates (in x, with
+    the batch-means standard error ``batch_se``).  Adam creeps along the ill-conditioned
+    valley k_s (p + 2) ≈ const (the highlight's peak), so ``polish_steps`` Gauss–Newton steps
+    (:func:`gauss_newton_step`, renders at ``polish_spp``) finish the fit: after the last one
+    the error is, to first order, the least-squares response to the target's noise and the
+    last polish render's noise alone (:func:`parameter_covariance` with C_T + C_P).
+    ``image`` is the fitted phong rendered at ``polish_spp``.
     """
     scene = sphere_scene(phong_dict(*start), res)
+    out = _adam(scene, target, start, spp, iterations, lr, final_lr, seed)
+    tail = np.array([PHONG.variables(h) for h in out.history[-average:]])
+    out.x_adam = _box(tail.mean(axis=0))
+    out.batch_se = batch_means_se(tail)
+    out.x = out.x_adam
+    for k in range(polish_steps):
+        out.x = gauss_newton_step(scene, out.x, target, polish_spp, seed + 2 * iterations + 2 * k)
+    out.fitted = [float(v) for v in PHONG.physical(out.x)]
+    with dr.suspend_grad():
+        _set(mi.traverse(scene), [dr.opaque(mi.Float, float(v)) for v in out.x])
+        out.image = render(scene, polish_spp, seed + 2 * iterations + 2 * polish_steps)
+    return out
+
+
+def _adam(scene, target, start, spp, iterations, lr, final_lr, seed) -> ImageFit:
+    """The Adam loop of :func:`fit_image` (projected steps, fresh seeds, seed_grad)."""
     params = mi.traverse(scene)
     ref = mi.TensorXf(np.asarray(target, dtype=np.float32))
     opt = mi.ad.Adam(lr=lr)
     for k, v in enumerate(PHONG.variables(start)):
         opt[f"x{k}"] = mi.Float(float(v))
     out = ImageFit(list(start), [], np.zeros(3), np.zeros(3))
+    lo, hi = np.array(PHONG.bounds).T
     for i in range(iterations):
-        opt.set_learning_rate(lr / (1.0 + 4.0 * i / iterations))
+        opt.set_learning_rate(learning_rate(i, iterations, lr, final_lr))
         _set(params, [opt[f"x{k}"] for k in range(3)])
         # Primal and adjoint from independent samples: an unbiased gradient of |E[image] - target|².
         img = mi.render(scene, params, spp=spp, seed=seed + 2 * i, seed_grad=seed + 2 * i + 1)
@@ -154,17 +204,9 @@ def fit_image(target: np.ndarray, start, res: int = 32, spp: int = 16, iteration
         dr.backward(loss)
         out.gradient = np.array([float(dr.grad(opt[f"x{k}"])[0]) for k in range(3)])
         opt.step()
-        lo, hi = np.array(PHONG.bounds).T
         for k in range(3):   # projected step: stay in the energy-conserving box
             opt[f"x{k}"] = dr.clip(opt[f"x{k}"], float(lo[k]), float(hi[k]))
         out.losses.append(float(loss.array[0]))
         out.history.append([float(v) for v in PHONG.physical(
             [float(opt[f"x{k}"][0]) for k in range(3)])])
-    tail = np.array([PHONG.variables(h) for h in out.history[-average:]])
-    out.x = _box(tail.mean(axis=0))
-    out.batch_se = batch_means_se(tail)
-    out.fitted = [float(v) for v in PHONG.physical(out.x)]
-    with dr.suspend_grad():
-        _set(params, [dr.opaque(mi.Float, float(v)) for v in out.x])
-        out.image = render(scene, image_spp or 16 * spp, seed + 2 * iterations)
     return out
