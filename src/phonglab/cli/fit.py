@@ -7,7 +7,6 @@ import json
 from pathlib import Path
 
 from ..errors import PhonglabError
-from ..outputs import check_file, check_folder
 
 
 def add_parser(sub) -> None:
@@ -51,6 +50,9 @@ def run(args) -> int:
     settings = parse_settings(args.settings)
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
+    # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
+    from ..outputs import check_file, check_folder
+
     for path, what in ((args.json, "JSON file"), (args.report, "report")):
         if path:
             check_file(Path(path), what)
