@@ -35,7 +35,7 @@ from .. import probe
 from ..bench.cornell import beckmann_alpha
 from ..errors import PhonglabError
 from ..physics.quadrature import lobe_width
-from .objective import (MODELS, PHONG, Directions, Model, Objective, fit_directions,
+from .objective import (MODELS, P_MAX, PHONG, Directions, Model, Objective, fit_directions,
                         luminance_eval, report_directions)
 
 #: Incidence angles [deg] of the per-angle report (normal and grazing included).
@@ -245,6 +245,9 @@ def fit(target: str, params: dict | None = None, model: str = "phong", maxiter: 
     if has_delta(bsdf):
         notes.append(f"{target} has a delta lobe (a smooth coating or mirror) that eval never "
                      f"sees: the fit is to its non-delta part only")
+    if model == "phong" and x[2] >= m.bounds[2][1] - 1e-9:
+        notes.append(f"p reached its upper bound {P_MAX:g}: the target's lobe is sharper than "
+                     f"the fit allows")
     if res.status == 1:
         notes.append(f"L-BFGS-B stopped after {res.nit} iterations (--maxiter) before converging")
     return FitResult(
