@@ -4,7 +4,7 @@ Tolerances.  The data of a BRDF-space fit carry no Monte Carlo noise: target and
 evaluated on the same quadrature nodes, so the quadrature error cancels and the true
 parameters x* minimize the discrete objective exactly (loss 0).  What is left is float32
 round-off of ``eval`` (relative ε₃₂ = 2⁻²⁴ per operation, at most C = 64 operations deep:
-loss floor (C ε₃₂)² ≈ 1.5e-10) and the optimizer's stopping rule (ftol = 1e-12 absolute for a
+loss floor (C ε₃₂)² ≈ 1.5e-11) and the optimizer's stopping rule (ftol = 1e-12 absolute for a
 loss below 1).  So a fit is accepted when its loss is at most L_max = 1e-9, and near x* the
 loss is the quadratic ½ dᵀ H d (d = x − x*, H its Hessian), whence the largest |d_k| with
 loss ≤ L_max is √(2 L_max (H⁻¹)_kk): that is each parameter's tolerance, H measured by a
