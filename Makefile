@@ -29,6 +29,7 @@ test-all: setup
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
+	$(BIN)/python -m phonglab.fit.timing --repeats 5 --out docs/bench/fit.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
@@ -50,3 +51,8 @@ notebook-figures: setup
 # Planner: planned vs default configuration at equal error (docs/planner.md).
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+
+# docs/fitting.md's table: phong fitted to Beckmann/GGX roughconductor and roughplastic (~20 s).
+.PHONY: fitting-table
+fitting-table: setup
+	$(BIN)/python -m phonglab.fit.table --json docs/fitting.json --markdown docs/fitting.md

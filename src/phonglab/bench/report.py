@@ -432,6 +432,22 @@ def planner_section(d: RunData) -> list[str]:
             benchmark_table(rows), ""]
 
 
+def fitting_section(d: RunData) -> list[str]:
+    fit_json = d.out / "fit.json"
+    if not fit_json.is_file():
+        return []
+    r = json.loads(fit_json.read_text())
+    return ["\n## Fitting: `phonglab fit`\n",
+            f"`python -m phonglab.fit.timing` (run by `make bench`): `{r['command']}` as a fresh "
+            f"process (import, JIT compilation and fit), {r['repeats']} runs on {r['cores']} cores, "
+            f"load average {r['load_before']} before and {r['load_after']} after.\n",
+            "| median wall [s] | min | max | median CPU [s] | target | |",
+            "|---|---|---|---|---|---|",
+            f"| {r['wall_median_s']:.2f} | {r['wall_min_s']:.2f} | {r['wall_max_s']:.2f} "
+            f"| {r['cpu_median_s']:.2f} | < {r['limit_s']:g} s | {fmt_met(r['met'])} |",
+            "\nThe table of fitted exponents: [docs/fitting.md](docs/fitting.md).\n"]
+
+
 def reproduce_section(d: RunData) -> list[str]:
     minutes = fmt_g(d.run.get("seconds", float("nan")) / 60, 2)
     return [f"\n## Reproduce\n\n```\nmake bench            # full run (about {minutes} min here) + this file\n"
@@ -441,8 +457,7 @@ def reproduce_section(d: RunData) -> list[str]:
 #: The report's sections, in order.
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
             jit_section, renders_section, variants_section, stability_section, mis_section,
-            planner_section,
-            reproduce_section)
+            planner_section, fitting_section, reproduce_section)
 
 
 def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> Path:
