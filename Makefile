@@ -50,3 +50,9 @@ notebook-figures: setup
 # Planner: planned vs default configuration at equal error (docs/planner.md).
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+
+# docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
+# (phonglab.validate.builtins); CONFORMANCE_ARGS=--quick for the fast sizes.
+.PHONY: conformance
+conformance: setup
+	$(BIN)/python scripts/conformance.py $(CONFORMANCE_ARGS) --json docs/conformance.json --markdown docs/conformance.md

@@ -19,12 +19,14 @@ report per case, the schema of ``phonglab.validate``) into the conformance table
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .. import runtime
+from .report import TOPICS
 
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"
@@ -88,10 +90,156 @@ def _rgb(*v) -> dict:
     return {"type": "rgb", "value": list(v)}
 
 
-# ----------------------------------------------------------------------------- known causes
-# label -> {topic: cause}.  Each cause names the Mitsuba 3.9.1 source line behind the row's
-# failure (docs/conformance.md has the measurement, tests/repro/ a minimal reproducer).
-KNOWN: dict[str, dict[str, str]] = {}
+# ----------------------------------------------------------------------------- findings
+@dataclass(frozen=True)
+class Finding:
+    """A row that fails for a reason in Mitsuba 3.9.1 itself, pinned to its source line."""
+
+    key: str                 #: short id, e.g. ``roughplastic-pdf-below-horizon``
+    topic: str               #: the validator topic that fails
+    labels: tuple[str, ...]  #: the cases it affects
+    source: str              #: ``path/in/mitsuba3.cpp:LINE`` at tag v3.9.1
+    cause: str               #: one sentence: what that line does wrong (or why it is by design)
+    measured: str            #: what the probe measures
+    expected: str            #: what a correct plugin gives
+    reproducer: str          #: tests/repro/<script>.py: exits 1 while the behaviour is present
+    bug: bool = True         #: False: intended behaviour of the model, documented as KNOWN
+
+    def known_text(self) -> str:
+        """The ``known`` entry of a case: ``file:line: cause``."""
+        return f"{self.source}: {self.cause}"
+
+
+#: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
+#: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).
+_MICROFACET_NAN = ("roughconductor/beckmann-a0.2", "roughconductor/ggx-a0.3-Cu",
+                   "roughconductor/ggx-aniso", "roughconductor/ggx-Cu-spectral",
+                   "roughconductor/polarized", "roughdielectric/ggx-a0.3",
+                   "roughdielectric/ggx-aniso-inverted", "roughplastic/ggx-a0.25",
+                   "roughplastic/ggx-a0.5-nonlinear", "principled/default", "principled/metal",
+                   "principledthin/all-lobes", "twosided/diffuse|roughconductor",
+                   "bumpmap/roughconductor", "normalmap/roughconductor",
+                   "mask/roughconductor-0.8", "pplastic/rough-ggx")
+
+#: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
+FINDINGS: tuple[Finding, ...] = (
+    Finding("roughplastic-pdf-below-horizon", "chi2",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:422",
+            "pdf() returns `result` without masking it by `active` (cos_theta_o > 0, line 391; "
+            "eval_pdf() likewise at line 501), so in vectorized variants wo below the horizon "
+            "gets the specular density that sample() never produces",
+            "pdf(wo below horizon) = 0.0677 (alpha 0.25, 45 deg); the pdf integrates to 1.0045 "
+            "while 99.8 % of samples are valid; chi2 p = 0 at 45-87 deg (and at 0 deg for GGX)",
+            "pdf = 0 below the horizon (scalar_rgb gives 0); chi2 passes when the pdf is masked "
+            "to wo.z > 0 (p = 0.09-0.78 at 0-85 deg, both distributions)",
+            "tests/repro/roughplastic_pdf_below_horizon.py"),
+    Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
+            "src/bsdfs/hair.cpp:267",
+            "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
+            "residual lobe p = P_MAX, so its samples keep sin/cos_theta_ip = 0 (line 265) and "
+            "land exactly in the fiber's normal plane (line 287: sin_theta_o = 0), unlike "
+            "pdf()/eval() (lines 437, 389)",
+            "3.5 % of samples have wo.y == 0 exactly (blond, 85 deg); chi2 p = 0 at 70-87 deg "
+            "(res 201, ires 16)",
+            "P(wo.y == 0) ~ 1e-7 for a continuous density; sampling consistent with pdf",
+            "tests/repro/hair_residual_lobe_sampling.py"),
+    Finding("principled-component-ids", "component",
+            ("principled/default", "principled/metal"),
+            "src/bsdfs/principled.cpp:423",
+            "sample() hard-codes the all-lobes indices (3 = specular here, 2 = spec_trans at "
+            "line 440, 1 = clearcoat at line 463) while m_components (lines 241-265) only holds "
+            "the lobes that are on",
+            "sampled_component 3 with component_count() = 2",
+            "sampled_component < component_count() and flags(i) containing sampled_type",
+            "tests/repro/principled_component_ids.py"),
+    Finding("principled-ignores-component", "component",
+            ("principled/default", "principled/all-lobes", "principled/metal",
+             "principledthin/default", "principledthin/all-lobes"),
+            "src/bsdfs/principled.cpp:377",
+            "the lobe probabilities (principled.cpp:377-393, principledthin.cpp:291-299) and "
+            "eval/pdf never consult ctx.component or ctx.is_enabled(), so a context "
+            "restricted to one component still samples and evaluates every lobe",
+            "BSDFContext(component=0) samples components [0, 1, 2, 3]",
+            "only component 0",
+            "tests/repro/principled_ignores_component.py"),
+    Finding("blendbsdf-component-ids", "component",
+            ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
+            "src/bsdfs/blendbsdf.cpp:154",
+            "`dr::masked(bs, m1) = bs1` keeps bsdf_1's own component index instead of adding "
+            "bsdf_0->component_count() (the numbering of lines 94-97; line 123 likewise)",
+            "GlossyReflection samples of bsdf_1 report component 0 (flags(0) = "
+            "DiffuseReflection)",
+            "component 1",
+            "tests/repro/blendbsdf_component_ids.py"),
+    Finding("pplastic-component-ids", "component", ("pplastic/default", "pplastic/rough-ggx"),
+            "src/bsdfs/pplastic.cpp:210",
+            "one component (Glossy|Diffuse) is declared but sample() reports components 0 and 1 "
+            "(lines 278, 284) and the lobes are enabled with ctx.is_enabled(..., 0/1) "
+            "(lines 251-252)",
+            "sampled_component 1 with component_count() = 1",
+            "sampled_component < component_count()",
+            "tests/repro/pplastic_component_ids.py"),
+    Finding("mask-restricted-context", "component",
+            ("mask/diffuse-0.5", "mask/roughconductor-0.8"),
+            "src/bsdfs/mask.cpp:140",
+            "`opacity = sample_transmission ? 1.f : 0.f` is inverted (opacity is the "
+            "probability of the NESTED lobe, line 157): a context without the Null lobe returns "
+            "only pass-through samples, one with only the Null lobe samples the nested BSDF",
+            "context = DiffuseReflection: 100 % of the samples are Null (wo = -wi)",
+            "0 % Null samples (pdf() at line 177 already treats the context the right way)",
+            "tests/repro/mask_restricted_context.py"),
+    Finding("microfacet-sample-nan", "finite", _MICROFACET_NAN,
+            "include/mitsuba/render/microfacet.h:418",
+            "GGX visible-normal sampling divides by 0 for sample2.x = 0 (the concentric disk "
+            "point lies on the circle: `norm = rcp(sin_theta_i * y + cos_theta_i * z)` with "
+            "y = z = 0), and Beckmann visible sampling (line 375) returns an infinite normal "
+            "for wi below the horizon; roughconductor.cpp:250 and the other callers keep the "
+            "NaN wo and bs.pdf (only the weight is masked to 0)",
+            "wo = NaN and bs.pdf = NaN (weight 0) for sample2 = (0, 0.5), or for any sample "
+            "with wi below the horizon (Beckmann)",
+            "finite wo and pdf for every sample in [0, 1)^2 (an invalid sample: weight 0, "
+            "pdf 0)",
+            "tests/repro/microfacet_sample_nan.py"),
+    Finding("blendbsdf-nan-weight", "finite",
+            ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
+            "src/bsdfs/blendbsdf.cpp:149",
+            "sample() evaluates the other BSDF (eval_pdf at bs.wo, lines 137 and 149) and mixes "
+            "it into the weight even when the nested sample is invalid, so a NaN wo from the "
+            "nested sampler becomes a NaN sample weight",
+            "weight = NaN for sample1 = 0, sample2 = (0, 0.5) (GGX) or wi below the horizon",
+            "weight 0 for an invalid sample",
+            "tests/repro/microfacet_sample_nan.py"),
+    Finding("shading-normal-reciprocity", "reciprocity",
+            ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
+             "bumpmap/roughconductor"),
+            "src/bsdfs/normalmap.cpp:171",
+            "by design: eval() is the nested BSDF in the perturbed frame, f(wi', wo') cos theta'_o, "
+            "zeroed where wo and wo' lie on different sides (line 168; bumpmap.cpp:174-177 "
+            "alike); shading normals are not reciprocal w.r.t. the geometric normal "
+            "(Veach 1997, sec. 5.3)",
+            "eval(a, b) / cos b != eval(b, a) / cos a; 12 % of random pairs are 0 one way only",
+            "f(a, b) = f(b, a) for a reciprocal BRDF",
+            "tests/repro/shading_normal_reciprocity.py", bug=False),
+    Finding("hair-reciprocity", "reciprocity", ("hair/default", "hair/blond-rough"),
+            "src/bsdfs/hair.cpp:349",
+            "by design: eval() takes the fiber offset h = sin(gamma_i) from wi alone "
+            "(near-field model at the offset where the ray hit), so swapping wi and wo changes h",
+            "f(a, b) and f(b, a) differ for > 99 % of random pairs",
+            "f(a, b) = f(b, a) for a reciprocal BSDF",
+            "tests/repro/hair_reciprocity.py", bug=False),
+)
+
+
+def known_causes() -> dict[str, dict[str, str]]:
+    """label -> {topic: cause} from :data:`FINDINGS` (several causes of one row joined)."""
+    out: dict[str, dict[str, str]] = {}
+    for f in FINDINGS:
+        for label in f.labels:
+            topics = out.setdefault(label, {})
+            topics[f.topic] = "; ".join(filter(None, (topics.get(f.topic), f.known_text())))
+    return out
 
 
 # ----------------------------------------------------------------------------- the catalogue
@@ -132,10 +280,10 @@ def _rough() -> list[Case]:
         Case("roughconductor/beckmann-a0.2", {"type": "roughconductor",
                                               "distribution": "beckmann", "alpha": 0.2},
              note="Beckmann, perfect conductor"),
-        Case("roughconductor/ggx-a0.3-Cu", {"type": "roughconductor", "alpha": 0.3,
-                                            "material": "Cu"}, note="GGX, copper"),
-        Case("roughconductor/ggx-aniso", {"type": "roughconductor", "alpha_u": 0.05,
-                                          "alpha_v": 0.4, "material": "Al"},
+        Case("roughconductor/ggx-a0.3-Cu", {"type": "roughconductor", "distribution": "ggx",
+                                            "alpha": 0.3, "material": "Cu"}, note="GGX, copper"),
+        Case("roughconductor/ggx-aniso", {"type": "roughconductor", "distribution": "ggx",
+                                          "alpha_u": 0.05, "alpha_v": 0.4, "material": "Al"},
              note="anisotropic"),
         Case("roughconductor/beckmann-novisible",
              {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
@@ -173,9 +321,9 @@ def _wrappers() -> list[Case]:
              {"type": "blendbsdf", "weight": 0.3,
               "bsdf_0": {"type": "diffuse"}, "bsdf_1": rough_metal},
              note="two different lobes (PR#1681 class)"),
-        Case("blendbsdf/roughplastic+roughdielectric",
+        Case("blendbsdf/roughconductor+roughdielectric",
              {"type": "blendbsdf", "weight": 0.6,
-              "bsdf_0": {"type": "roughplastic", "alpha": 0.3},
+              "bsdf_0": {"type": "roughconductor", "alpha": 0.3},
               "bsdf_1": {"type": "roughdielectric", "alpha": 0.2}},
              note="reflection + transmission"),
         Case("twosided/diffuse", {"type": "twosided", "bsdf": {"type": "diffuse"}},
@@ -208,8 +356,8 @@ def _hair_spectral_polarized() -> list[Case]:
                                   "scale_tilt": 3.0}, note="light, rough"),
         Case("conductor/Au-spectral", {"type": "conductor", "material": "Au"}, SPECTRAL,
              delta=True, note="spectral IOR"),
-        Case("roughconductor/ggx-Cu-spectral", {"type": "roughconductor", "alpha": 0.3,
-                                                "material": "Cu"}, SPECTRAL,
+        Case("roughconductor/ggx-Cu-spectral", {"type": "roughconductor", "distribution": "ggx",
+                                                "alpha": 0.3, "material": "Cu"}, SPECTRAL,
              note="spectral IOR"),
         Case("polarizer/0deg", {"type": "polarizer"}, POLARIZED, delta=True,
              note="linear polarizer"),
@@ -249,7 +397,8 @@ def cases() -> list[Case]:
     """Every case of the conformance table, Mitsuba's built-ins first, phonglab's own last."""
     out = (_smooth_and_diffuse() + _rough() + _principled() + _wrappers()
            + _hair_spectral_polarized() + _phonglab())
-    return [Case(c.label, c.spec, c.variant, {**c.known, **KNOWN.get(c.label, {})}, c.delta,
+    known = known_causes()
+    return [Case(c.label, c.spec, c.variant, {**c.known, **known.get(c.label, {})}, c.delta,
                  c.note) for c in out]
 
 
@@ -261,3 +410,147 @@ LEFT_OUT: dict[str, str] = {
     "null": "has no lobe (BSDFFlags.Null only: rays pass straight through); eval, pdf and "
             "sample are identically zero by design, so no topic has anything to check",
 }
+
+
+# ----------------------------------------------------------------------------- running all
+def run_all(*, quick: bool = False, seed: int = 0, labels=None, progress=None) -> dict:
+    """Validate every case (or those in ``labels``); the JSON document of the conformance table.
+
+    ``{"meta": {...}, "cases": [{"label", "plugin", "variant", "note", "delta", "known",
+    "meta", "results"}], "left_out": {plugin: why}}`` -- each case entry is a
+    :class:`~phonglab.validate.report.Report` dict (``Report.from_dict`` reads it back) plus
+    the case's own fields.  ``progress(label, report)`` is called after each case.
+    """
+    from . import validate_bsdf
+    chosen = cases() if labels is None else [c for c in cases() if c.label in set(labels)]
+    entries, t0 = [], time.perf_counter()
+    for case in chosen:
+        t = time.perf_counter()
+        report = validate_bsdf(case.spec, variant=case.resolved_variant(), known=case.known,
+                               quick=quick, seed=seed)
+        entry = {"label": case.label, "plugin": case.plugin, "variant": case.resolved_variant(),
+                 "note": case.note, "delta": case.delta, "known": dict(case.known),
+                 "seconds": round(time.perf_counter() - t, 2), **report.to_dict()}
+        entries.append(entry)
+        if progress is not None:
+            progress(case.label, report)
+    meta = {"mitsuba": MITSUBA_VERSION, "mitsuba_commit": MITSUBA_COMMIT, "quick": quick,
+            "seed": seed, "cases": len(entries),
+            "seconds": round(time.perf_counter() - t0, 1)}
+    return {"meta": meta, "cases": entries, "left_out": dict(LEFT_OUT)}
+
+
+# ----------------------------------------------------------------------------- markdown
+def cell_status(rows: list[dict]) -> str:
+    """One table cell for a topic's rows: fail > KNOWN > pass > skipped ('' when no row)."""
+    statuses = {r["status"] for r in rows}
+    for s in ("fail", "KNOWN", "pass", "skipped"):
+        if s in statuses:
+            return s
+    return ""
+
+
+def _num(x) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    return str(x)
+
+
+def _md(text) -> str:
+    """Text safe inside a markdown table cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _source_link(source: str) -> str:
+    path, _, line = source.partition(":")
+    return f"[`{source}`]({SOURCE_URL}{path}#L{line})"
+
+
+def _table(data: dict) -> list[str]:
+    head = "| case | variant | " + " | ".join(TOPICS) + " |"
+    lines = [head, "|" + "---|" * (len(TOPICS) + 2)]
+    for entry in data["cases"]:
+        by_topic = {t: [r for r in entry["results"] if r["topic"] == t] for t in TOPICS}
+        cells = [cell_status(by_topic[t]) or " " for t in TOPICS]
+        cells = [f"**{c}**" if c == "fail" else c for c in cells]
+        variant = entry["variant"].replace("llvm_ad_", "")
+        lines.append(f"| `{entry['label']}` | {variant} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _case_section(entry: dict) -> list[str]:
+    """The non-pass rows of one case (fail and KNOWN; skipped rows counted)."""
+    bad = [r for r in entry["results"] if r["status"] in ("fail", "KNOWN")]
+    if not bad:
+        return []
+    out = [f"### `{entry['label']}`", ""]
+    spec = {k: v for k, v in (entry.get("meta", {}).get("spec") or {}).items()}
+    if spec:
+        out += [f"Spec: `{_md(spec)}`; {entry['note']}.", ""]
+    out += ["| status | topic | check | measured | expected | tolerance | reason |",
+            "|---|---|---|---|---|---|---|"]
+    for r in bad:
+        out.append(f"| {r['status']} | {r['topic']} | {_md(r['name'])} | {_num(r['measured'])} "
+                   f"| {_num(r['expected'])} | {_num(r['tolerance'])} | {_md(r['reason'])} |")
+    causes = [f for f in FINDINGS if entry["label"] in f.labels
+              and any(r["topic"] == f.topic for r in bad)]
+    for f in causes:
+        out.append("")
+        out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
+                   f"`{f.reproducer}`")
+    unexplained = sorted({r["topic"] for r in bad if r["status"] == "fail"})
+    if unexplained:
+        out += ["", f"* **Unexplained fail** ({', '.join(unexplained)}): no documented cause "
+                "in `phonglab.validate.builtins.FINDINGS` yet."]
+    return out + [""]
+
+
+def _findings_section(data: dict) -> list[str]:
+    seen = {e["label"] for e in data["cases"]}
+    out = ["## Findings", "",
+           "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
+           f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
+           "while the behaviour is present.  Rows they cause are reported as KNOWN.", ""]
+    for f in FINDINGS:
+        labels = [label for label in f.labels if label in seen]
+        if not labels:
+            continue
+        kind = "bug" if f.bug else "by design"
+        out += [f"### {f.key}", "",
+                f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
+                f"* measured: {f.measured}", f"* expected: {f.expected}",
+                f"* reproducer: `{f.reproducer}`",
+                f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+    return out
+
+
+def render_markdown(data: dict) -> str:
+    """docs/conformance.md from the JSON of :func:`run_all` (or ``--all-builtins --json``)."""
+    meta = data.get("meta", {})
+    counts: dict[str, int] = {}
+    for entry in data["cases"]:
+        for r in entry["results"]:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+    mode = "--quick" if meta.get("quick") else "default settings"
+    lines = [
+        f"# Conformance of Mitsuba {meta.get('mitsuba', MITSUBA_VERSION)}'s built-in BSDFs", "",
+        "Generated by `make conformance` (`scripts/conformance.py`) from `docs/conformance.json`;"
+        " do not edit by hand.  Each case is one BSDF at one parameter setting "
+        "(`phonglab.validate.builtins.cases()`), validated by `phonglab.validate.validate_bsdf` "
+        f"with {mode}, seed {meta.get('seed', 0)}: {len(data['cases'])} cases, "
+        + ", ".join(f"{counts.get(s, 0)} {s}" for s in ("pass", "fail", "KNOWN", "skipped"))
+        + f" rows, {_num(meta.get('seconds'))} s wall time.", "",
+        "A cell is the worst status of the topic's rows (fail > KNOWN > pass > skipped; empty: no "
+        "row).  KNOWN means the row fails for a documented cause in Mitsuba (see Findings); "
+        "it is still reported, never hidden by a wider tolerance.", "",
+    ]
+    lines += _table(data) + ["", "## Rows that do not pass", ""]
+    for entry in data["cases"]:
+        lines += _case_section(entry)
+    lines += _findings_section(data)
+    lines += ["## Plugins left out", ""]
+    for name, why in (data.get("left_out") or LEFT_OUT).items():
+        lines.append(f"* `{name}`: {why}")
+    return "\n".join(lines) + "\n"

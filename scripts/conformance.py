@@ -1,0 +1,56 @@
+"""Regenerate docs/conformance.json and docs/conformance.md (``make conformance``).
+
+    python scripts/conformance.py [--quick] [--seed S] [--only LABEL ...]
+        [--json docs/conformance.json] [--markdown docs/conformance.md]
+    python scripts/conformance.py --from-json docs/conformance.json   # markdown only
+
+The cases, the findings and the markdown renderer live in phonglab.validate.builtins; this
+driver only runs them and writes the two files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from phonglab.validate import builtins
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="the validator's --quick sizes")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", nargs="+", metavar="LABEL", help="validate only these cases")
+    ap.add_argument("--json", type=Path, default=Path("docs/conformance.json"))
+    ap.add_argument("--markdown", type=Path, default=Path("docs/conformance.md"))
+    ap.add_argument("--from-json", type=Path, metavar="JSON",
+                    help="render the markdown from this JSON instead of validating")
+    args = ap.parse_args(argv)
+    labels = {c.label for c in builtins.cases()}
+    unknown = sorted(set(args.only or ()) - labels)
+    if unknown:
+        ap.error(f"unknown case {unknown[0]!r}; the labels are listed by "
+                 f"phonglab.validate.builtins.cases()")
+    if args.from_json:
+        data = json.loads(args.from_json.read_text())
+    else:
+        def progress(label, report):
+            bad = [r for r in report.rows if r.status in ("fail", "KNOWN")]
+            print(f"{label:42s} {report.meta.get('seconds', 0):6.1f} s  "
+                  f"{'ok' if not bad else ', '.join(sorted({f'{r.topic}:{r.status}' for r in bad}))}",
+                  flush=True)
+        data = builtins.run_all(quick=args.quick, seed=args.seed, labels=args.only,
+                                progress=progress)
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(data, indent=1) + "\n")
+        print(f"wrote {args.json} ({data['meta']['seconds']} s)")
+    args.markdown.parent.mkdir(parents=True, exist_ok=True)
+    args.markdown.write_text(builtins.render_markdown(data))
+    print(f"wrote {args.markdown}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
