@@ -25,9 +25,18 @@ def rng(seed: int, topic: str) -> np.random.Generator:
     return np.random.default_rng([seed, SEED_OFFSETS[topic]])
 
 
+def exact(v: np.ndarray) -> np.ndarray:
+    """Directions with |z| < 1e-12 snapped to z = 0 exactly (cos(π/2) is 6e-17 in floating point,
+    which float32 keeps: the grazing cell must be cos θ = 0 itself)."""
+    v = np.array(v, dtype=np.float64)
+    flat = np.abs(v[..., 2]) < 1e-12
+    v[..., 2] = np.where(flat, 0.0, v[..., 2])
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
 def incident(cells: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(wi (M·n, 3), cell index (M·n,)) for n lanes per (θ, φ) cell."""
-    wi = probe.direction(cells[:, 0], cells[:, 1])
+    wi = exact(probe.direction(cells[:, 0], cells[:, 1]))
     return np.repeat(wi, n, axis=0), np.repeat(np.arange(len(cells)), n)
 
 
@@ -46,7 +55,7 @@ def special_wo(wi: np.ndarray) -> np.ndarray:
     """
     mirror = wi * np.array([-1.0, -1.0, 1.0])
     through = -wi
-    graze = probe.direction(np.arccos(np.array([1e-4, 0.0, -1e-4])), 0.7)
+    graze = exact(probe.direction(np.arccos(np.array([1e-4, 0.0, -1e-4])), 0.7))
     out = [mirror, through, np.broadcast_to([0.0, 0.0, 1.0], wi.shape),
            np.broadcast_to([0.0, 0.0, -1.0], wi.shape)]
     out += [np.broadcast_to(g, wi.shape) for g in graze]
