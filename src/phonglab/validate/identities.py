@@ -32,6 +32,11 @@ from .report import Row
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
 
 
+SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
+               "finite pdf ≥ 0 and a unit wo, a rejected one (weight 0, which integrators "
+               "drop) may not: {} rejected samples carry NaN")
+
+
 def _row(topic, name, measured, tol, reason, details, expected=0.0) -> Row:
     ok = measured is not None and np.isfinite(measured) and measured <= tol
     return Row(topic, name, float(measured), expected, None, tol, "pass" if ok else "fail",
@@ -70,22 +75,27 @@ def finite(bsdf, opts) -> list[Row]:
         "eval": (~np.isfinite(ev) | (ev < 0)).any(axis=1),
         "pdf": ~np.isfinite(pd) | (pd < 0),
         "eval_pdf": (~np.isfinite(ev2) | (ev2 < 0)).any(axis=1) | ~np.isfinite(pd2) | (pd2 < 0),
-        "sample": ((~np.isfinite(s.weight) | (s.weight < 0)).any(axis=1) | ~np.isfinite(s.pdf)
-                   | (s.pdf < 0) | ~np.isfinite(s.wo).all(axis=1)
-                   | (live & (np.abs(norm - 1.0) > 1e-3))),
+        "sample": ((~np.isfinite(s.weight) | (s.weight < 0)).any(axis=1)
+                   | (live & (~np.isfinite(s.pdf) | (s.pdf < 0) | ~np.isfinite(s.wo).all(axis=1)
+                              | (np.abs(norm - 1.0) > 1e-3)))),
     }
+    # A rejected sample (weight 0) is not used by an integrator: NaN in its wo/pdf is noted only.
+    rejected_nan = int(np.sum(~live & (~np.isfinite(s.pdf) | ~np.isfinite(s.wo).all(axis=1))))
     rows = []
     for name, bad in checks.items():
         w_in, w_out = (wi, s.wo) if name == "sample" else (wi_all, wo)
         details = {"lanes": int(bad.size), "bad": int(bad.sum())}
+        if name == "sample":
+            details["rejected_samples_with_nan"] = rejected_nan
         if bad.any():
             k = np.flatnonzero(bad)[:5]
             details["examples"] = [{"wi": w_in[i].tolist(), "wo": w_out[i].tolist()} for i in k]
             details["cos_theta_i"] = sorted({round(float(w_in[i, 2]), 6) for i in k})
         rows.append(_row("finite", f"{name}: NaN/Inf/negative values", float(bad.sum()), 0.0,
-                         f"count of lanes with a NaN, Inf or negative {name} result "
-                         f"(wo unit length for sample) over random, mirror, grazing and "
-                         f"below-horizon directions and edge sample values", details))
+                         f"count of lanes with a NaN, Inf or negative {name} result over "
+                         f"random, mirror, grazing and below-horizon directions"
+                         + (SAMPLE_NOTE.format(rejected_nan) if name == "sample" else ""),
+                         details))
     return rows
 
 
