@@ -15,6 +15,16 @@ a few subtractions (1 − cos, Fresnel) that can lose up to ~10 bits to cancella
 :data:`REL_TOL` = 2¹⁴ u = 2⁻¹⁰ ≈ 9.8e-4 bounds the relative difference
 |a − b| / max(|a|, |b|), with :data:`ABS_FLOOR` for values that are both ≈ 0.  A planted
 defect that is off by a factor (×1.1, ×2u₁, ...) is off by ≥ 1e-2 on most lanes.
+
+Conditioning.  Where one side is evaluated at a direction another computation produced
+(``weight`` and ``pdf`` at the sampled wo, ``reciprocity`` with the roles swapped), the float32
+rounding of that direction (≤ u/2 per component) is amplified by the function's condition
+number, which is large at grazing configurations (a half vector ω_i + ω_o that cancels, a
+lobe's steep tail).  :func:`sensitivity` measures it per lane: the relative change of the
+compared value when both directions move by :data:`PERTURB` = 8u per component (absolute,
+about 16× the rounding of a computed unit vector), the largest over :data:`DRAWS` random sign patterns (one pattern can miss the
+ill-conditioned combination), and the lane's tolerance is REL_TOL + that sensitivity.  The row reports
+max_lanes rel_diff / (REL_TOL + sensitivity), which must be ≤ 1.
 """
 
 from __future__ import annotations
@@ -81,6 +91,46 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
                    energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
                    energy_samples=20_000, gradient_lanes=1024, cost_lanes=1 << 16,
                    cost_repeats=3)
+
+
+#: Relative perturbation of each direction component for :func:`sensitivity`: 8 unit round-offs.
+PERTURB = 8 * EPS32
+
+
+def perturb(v: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unit directions v moved by ±PERTURB per component (random signs), renormalized.
+
+    Absolute, not relative, per component: a direction computed in float32 (reflect(wi, m),
+    a warp) carries an absolute error of a few u in every component, also in a small one
+    (cos θ = 0.004 at grazing), where a relative model would understate it.
+    """
+    v = np.asarray(v, np.float64) + PERTURB * rng.choice([-1.0, 1.0], size=np.shape(v))
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+#: Random sign patterns of the perturbation per lane.
+DRAWS = 4
+
+
+def sensitivity(fn, wi: np.ndarray, wo: np.ndarray, rng: np.random.Generator,
+                value=None) -> np.ndarray:
+    """Per lane: max over DRAWS perturbations of the relative change of fn(wi, wo) (all channels).
+
+    ``fn`` maps (wi (N, 3), wo (N, 3)) to (N,) or (N, C); ``value`` is fn(wi, wo) if known.
+    One call of fn for all draws (the lanes are stacked).
+    """
+    n = len(wi)
+    value = fn(wi, wo) if value is None else value
+    moved = fn(perturb(np.tile(wi, (DRAWS, 1)), rng), perturb(np.tile(wo, (DRAWS, 1)), rng))
+    d = np.nan_to_num(rel_diff(np.tile(value, (DRAWS,) + (1,) * (np.ndim(value) - 1)), moved),
+                      nan=0.0)
+    d = d.max(axis=1) if d.ndim > 1 else d
+    return d.reshape(DRAWS, n).max(axis=0)
+
+
+def excess(rel: np.ndarray, sens: np.ndarray) -> np.ndarray:
+    """rel_diff measured against the lane's tolerance REL_TOL + sensitivity (≤ 1 passes)."""
+    return rel / (REL_TOL + sens)
 
 
 def rel_diff(a, b) -> np.ndarray:

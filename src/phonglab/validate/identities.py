@@ -26,10 +26,12 @@ import numpy as np
 
 from .. import probe
 from . import lanes
-from .config import REL_TOL, rel_diff
+from .config import DRAWS, REL_TOL, excess, perturb, rel_diff, sensitivity
 from .report import Row
 
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
+CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "
+               "8-ulp move of their input directions), must be ≤ 1 (config.sensitivity)")
 
 
 SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
@@ -118,14 +120,21 @@ def eval_pdf(bsdf, opts) -> list[Row]:
 
 
 def _samples(bsdf, opts):
-    """Random samples at every incidence cell (shared by ``weight`` and ``pdf``)."""
+    """Random samples at every incidence cell (shared by ``weight`` and ``pdf``), and the
+    sampler's own sensitivity: the same sample values at wi moved by 8 ulps (config.perturb)."""
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["weight"])
-    return wi, s
+    r = lanes.rng(opts.seed, "weight")
+    u1, u2 = r.random(len(wi)), r.random((len(wi), 2))
+    s = probe.sample(bsdf, wi, u1, u2)
+    draws = [probe.sample(bsdf, perturb(wi, r), u1, u2) for _ in range(DRAWS)]
+    sens_w = np.max([np.nan_to_num(np.max(rel_diff(s.weight, d.weight), axis=1), nan=0.0)
+                     for d in draws], axis=0)
+    sens_p = np.max([np.nan_to_num(rel_diff(s.pdf, d.pdf), nan=0.0) for d in draws], axis=0)
+    return wi, s, sens_w, sens_p
 
 
 def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
-    wi, s = _samples(bsdf, opts)
+    wi, s, sens_w, sens_p = _samples(bsdf, opts)
     live = np.any(s.weight != 0, axis=1) & (s.pdf > 0) & ~lanes.delta_mask(s.sampled_type)
     n_delta = int(np.sum(lanes.delta_mask(s.sampled_type) & np.any(s.weight != 0, axis=1)))
     rows = []
@@ -136,21 +145,29 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
                 for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))
                 if t in topics]
     wi, wo, w, bpdf = wi[live], s.wo[live], s.weight[live], s.pdf[live]
-    ev = probe.eval(bsdf, wi, wo)
-    pd = probe.pdf(bsdf, wi, wo)
+    sens_w, sens_p = sens_w[live], sens_p[live]
+    ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
+    r = lanes.rng(opts.seed, "weight")
     note = f"{int(live.sum())} non-delta samples (delta ones excluded: {n_delta})"
+
+    def ratio_of(a, b):
+        e, p = probe.eval(bsdf, a, b), probe.pdf(bsdf, a, b)
+        return np.where(p[:, None] > 0, e / np.where(p > 0, p, 1.0)[:, None], 0.0)
+
     if "weight" in topics:
-        ratio = ev / np.where(pd > 0, pd, np.nan)[:, None]
-        rel = np.max(rel_diff(w, np.where(pd[:, None] > 0, ratio, 0.0)), axis=1)
-        rows.append(_row("weight", "weight = eval/pdf per sample", _max(rel), REL_TOL,
-                         f"max relative |weight − eval/pdf(bs.wo)| per sample; {note}; "
-                         f"{ROUND_OFF}",
-                         _worst(rel, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0]})))
+        ratio = np.where(pd[:, None] > 0, ev / np.where(pd > 0, pd, 1.0)[:, None], 0.0)
+        rel = np.max(rel_diff(w, ratio), axis=1)
+        ex = excess(rel, sensitivity(ratio_of, wi, wo, r, ratio) + sens_w)
+        rows.append(_row("weight", "weight = eval/pdf per sample", _max(ex), 1.0,
+                         f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {CONDITIONED}",
+                         _worst(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
+                                             "rel_diff": rel})))
     if "pdf" in topics:
         rel = rel_diff(bpdf, pd)
-        rows.append(_row("pdf", "bs.pdf = pdf(bs.wo)", _max(rel), REL_TOL,
-                         f"max relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {ROUND_OFF}",
-                         _worst(rel, wi, wo, {"bs_pdf": bpdf, "pdf": pd})))
+        ex = excess(rel, sensitivity(lambda a, b: probe.pdf(bsdf, a, b), wi, wo, r, pd) + sens_p)
+        rows.append(_row("pdf", "bs.pdf = pdf(bs.wo)", _max(ex), 1.0,
+                         f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {CONDITIONED}",
+                         _worst(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel})))
     return rows
 
 
