@@ -15,28 +15,16 @@ from pathlib import Path
 import mitsuba as mi
 
 from .. import registration
-from ..errors import PhonglabError
 from . import lanes
 from .config import options as make_options
 from .cost import cost
 from .energy import energy
 from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
+from .inputs import ValidateError, check_topics
 from .reciprocity import reciprocity
 from .report import TOPICS, Report
 from .sampling import chi2
-
-
-class ValidateError(PhonglabError):
-    """A BSDF, plugin file, parameter or topic the validator cannot use."""
-
-
-def check_topics(topics) -> tuple[str, ...]:
-    topics = tuple(topics or TOPICS)
-    bad = [t for t in topics if t not in TOPICS]
-    if bad:
-        raise ValidateError(f"unknown topic {bad[0]!r}; choose from {', '.join(TOPICS)}")
-    return tuple(t for t in TOPICS if t in topics)
 
 
 def load_plugins(paths) -> None:
@@ -80,7 +68,9 @@ def _load(spec, params):
     try:
         bsdf = mi.load_dict(d)
     except Exception as exc:
-        raise ValidateError(f"cannot load BSDF {spec['type']!r}: {_first_line(exc)}") from exc
+        raise ValidateError(f"cannot load BSDF {spec['type']!r} ({_first_line(exc)}); check the "
+                            f"type name and --set values, or register it with --plugin FILE.py"
+                            ) from exc
     if not isinstance(bsdf, mi.BSDF):
         raise ValidateError(f"{spec['type']!r} is not a BSDF plugin")
     return bsdf, spec["type"], {k: (v if isinstance(v, (int, float, str, bool)) else repr(v))

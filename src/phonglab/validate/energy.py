@@ -72,7 +72,7 @@ def _nodes(theta, width, theta_t, n):
 def _quadrature(bsdf, thetas, layout, n, ctx):
     """Q_n per cell (channel mean) and its count of non-finite nodes, in one eval call."""
     parts = [_nodes(t, wdt, tt, n) for t, (wdt, tt) in zip(thetas, layout)]
-    wi = np.concatenate([np.repeat(probe.direction(t)[None], len(p[0]), 0)
+    wi = np.concatenate([np.repeat(lanes.exact(probe.direction(t))[None], len(p[0]), 0)
                          for t, p in zip(thetas, parts)])
     ev = probe.eval(bsdf, wi, np.concatenate([p[0] for p in parts]), ctx).mean(axis=1)
     out, start = [], 0
@@ -93,6 +93,27 @@ def _delta_part(bsdf, thetas, opts, ctx):
     x = np.where(lanes.delta_mask(s.sampled_type), s.weight.mean(axis=1), 0.0)
     x = np.where(np.isfinite(x), x, 0.0).reshape(len(thetas), n)
     return x.mean(axis=1), x.std(axis=1, ddof=1) / math.sqrt(n)
+
+
+#: Incidence angles (degrees) of the lobe slices the HTML report plots.
+SLICE_THETAS = (0.0, 30.0, 60.0, 80.0)
+
+
+def lobe_slices(bsdf) -> dict:
+    """eval (f cos θ_o, channel mean) and pdf in the plane of incidence, θ_o ∈ [−180°, 180°].
+
+    ω_o = (sin t, 0, cos t): t < 0 is the mirror side, |t| > 90° the transmission side.
+    """
+    t = np.radians(np.linspace(-180.0, 180.0, 361))
+    wo = lanes.exact(np.column_stack([np.sin(t), np.zeros_like(t), np.cos(t)]))
+    out = {"theta_o_deg": np.degrees(t).tolist(), "slices": []}
+    for theta in SLICE_THETAS:
+        wi = probe.direction(math.radians(theta))
+        ev = probe.eval(bsdf, wi, wo).mean(axis=1)
+        pd = probe.pdf(bsdf, wi, wo)
+        out["slices"].append({"theta_i_deg": theta, "eval": np.nan_to_num(ev).tolist(),
+                              "pdf": np.nan_to_num(pd).tolist()})
+    return out
 
 
 def energy(bsdf, opts, m_tests: int) -> list[Row]:
@@ -131,6 +152,7 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
                  if over.any() else loss_note))
     details = {"theta_deg": np.degrees(thetas).tolist(), "albedo": a.tolist(),
                "band": band.tolist(), "stderr": np.asarray(se).tolist(),
-               "quadrature_error": np.asarray(qerr).tolist(), "nonfinite_nodes": nonfinite}
+               "quadrature_error": np.asarray(qerr).tolist(), "nonfinite_nodes": nonfinite,
+               "lobes": lobe_slices(bsdf)}
     return [Row("energy", "directional albedo ≤ 1", float(a[k]), 1.0, float(np.asarray(se)[k]),
                 float(band[k]), "fail" if over.any() else "pass", reason, details)]

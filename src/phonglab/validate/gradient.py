@@ -6,7 +6,10 @@ over fixed random directions (ω_o on the whole sphere) and fixed weights c_l �
 
 * AD: forward mode from x along the direction v = (1, ..., 1) (``dr.forward``), the lanes'
   gradients summed in float64;
-* FD: D(h) = (S(x + h v) − S(x − h v)) / 2h with h = 2⁻⁷ max(|x|, 0.1), and D(h/2).
+* FD: D(h) = (S(x + h v) − S(x − h v)) / 2h with h = 2⁻⁷ max(|x|, 0.1), and D(h/2);
+  a parameter with 0 ≤ x < 2h (a weight or reflectance at 0, where x − h is outside its
+  domain and plugins may switch a lobe off) gets the second-order one-sided difference
+  (−3S(x) + 4S(x + hv) − S(x + 2hv))/2h instead.
 
 Tolerance, by analysis of float32: the FD truncation error of D(h/2) is about
 |D(h) − D(h/2)|/3 (Richardson: the error is O(h²)), taken ×12 (4 |D(h) − D(h/2)|); each eval
@@ -67,13 +70,17 @@ def _ad(bsdf, params, key, wi, wo, c) -> tuple[float, float]:
     return float(np.sum(c[:, None] * g)), float(np.sum(np.abs(c[:, None] * g)))
 
 
-def _fd(bsdf, params, key, x0, h, wi, wo, c) -> float:
-    _set(params, key, x0 + h)
-    plus, _ = _s(bsdf, wi, wo, c)
-    _set(params, key, x0 - h)
-    minus, _ = _s(bsdf, wi, wo, c)
+def _fd(bsdf, params, key, x0, h, wi, wo, c, one_sided: bool) -> float:
+    """Central difference, or the second-order one-sided (−3S(x) + 4S(x+h) − S(x+2h))/2h."""
+    steps = (0.0, 1.0, 2.0) if one_sided else (1.0, -1.0)
+    values = []
+    for k in steps:
+        _set(params, key, x0 + k * h)
+        values.append(_s(bsdf, wi, wo, c)[0])
     _set(params, key, x0)
-    return (plus - minus) / (2.0 * h)
+    if one_sided:
+        return (-3.0 * values[0] + 4.0 * values[1] - values[2]) / (2.0 * h)
+    return (values[0] - values[1]) / (2.0 * h)
 
 
 def _one(bsdf, params, key, opts, dirs) -> Row:
@@ -84,11 +91,13 @@ def _one(bsdf, params, key, opts, dirs) -> Row:
     x0 = type(x0)(x0)                                # a detached copy to restore
     scale = max(float(np.max(np.abs(np.array(x0)))) if dr.width(x0) else 0.0, 0.1)
     h = 2.0 ** -7 * scale
+    lo = float(np.min(np.array(x0))) if dr.width(x0) else 0.0
+    one_sided = 0.0 <= lo < 2.0 * h        # a non-negative parameter at (or near) 0: stay ≥ 0
     wi, wo, c = dirs
     try:
         ad, ad_abs = _ad(bsdf, params, key, wi, wo, c)
-        d1 = _fd(bsdf, params, key, x0, h, wi, wo, c)
-        d2 = _fd(bsdf, params, key, x0, h / 2, wi, wo, c)
+        d1 = _fd(bsdf, params, key, x0, h, wi, wo, c, one_sided)
+        d2 = _fd(bsdf, params, key, x0, h / 2, wi, wo, c, one_sided)
     except Exception as exc:   # a plugin refusing x ± h (its validation) is a skip, not a fail
         _set(params, key, x0)
         return Row("gradient", key, None, None, None, None, "skipped",
@@ -97,7 +106,8 @@ def _one(bsdf, params, key, opts, dirs) -> Row:
     tol = 4.0 * abs(d1 - d2) + ROUND_OFF * (s_abs / (h / 2) + ad_abs)
     ok = np.isfinite(ad) and abs(ad - d2) <= tol
     return Row("gradient", key, ad, d2, abs(d1 - d2) / 3.0, tol, "pass" if ok else "fail",
-               f"forward-mode AD of Σ c·eval along (1,...,1) vs central difference "
+               f"forward-mode AD of Σ c·eval along (1,...,1) vs "
+               f"{'one-sided (x ≥ 0 at 0)' if one_sided else 'central'} difference "
                f"h = {h / 2:.3g} over {len(wi)} lanes; tolerance 4|D(h)−D(h/2)| + "
                f"64u(Σ|eval|/h + Σ|∂eval|)",
                {"fd_h": d1, "fd_h2": d2, "h": h / 2})
