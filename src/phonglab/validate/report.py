@@ -69,7 +69,8 @@ class Row:
                    details=d.get("details") or {})
 
 
-def _num(x) -> str:
+def format_number(x) -> str:
+    """A cell of the table: 4 significant digits, "-" for None."""
     if x is None:
         return "-"
     if isinstance(x, str):
@@ -111,7 +112,7 @@ class Report:
 def table(rows: list[Row]) -> str:
     """Rows as aligned plain text: status, topic, name, measured, expected, tolerance, reason."""
     head = ("status", "topic", "name", "measured", "expected", "tolerance")
-    body = [(r.status, r.topic, r.name, _num(r.measured), _num(r.expected), _num(r.tolerance))
+    body = [(r.status, r.topic, r.name, format_number(r.measured), format_number(r.expected), format_number(r.tolerance))
             for r in rows]
     widths = [max(len(str(x)) for x in col) for col in zip(head, *body)] if body else \
         [len(h) for h in head]
