@@ -13,9 +13,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
-from phonglab.validate import builtins
+from phonglab.validate import batch, builtins
 
 
 def main(argv=None) -> int:
@@ -36,13 +37,15 @@ def main(argv=None) -> int:
     if args.from_json:
         data = json.loads(args.from_json.read_text())
     else:
-        def progress(label, report):
-            bad = [r for r in report.rows if r.status in ("fail", "KNOWN")]
-            print(f"{label:42s} {report.meta.get('seconds', 0):6.1f} s  "
-                  f"{'ok' if not bad else ', '.join(sorted({f'{r.topic}:{r.status}' for r in bad}))}",
-                  flush=True)
-        data = builtins.run_all(quick=args.quick, seed=args.seed, labels=args.only,
-                                progress=progress)
+        def progress(d):
+            bad = sorted({f"{r['topic']}:{r['status']}" for r in d["results"]
+                          if r["status"] in ("fail", "KNOWN")})
+            print(f"{d['meta']['case']:42s} {d['meta']['wall_seconds']:6.1f} s  "
+                  f"{', '.join(bad) or 'ok'}", flush=True)
+        chosen = [c for c in builtins.cases() if not args.only or c.label in args.only]
+        t0 = time.perf_counter()
+        data = batch.run_all(chosen, {"seed": args.seed, "quick": args.quick}, progress)
+        data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(data, indent=1) + "\n")
         print(f"wrote {args.json} ({data['meta']['seconds']} s)")

@@ -70,11 +70,11 @@ def test_markdown_renders_a_given_json():
     case = next(c for c in CASES if c.label == label)
     rows = [_row("finite", "pass"), _row("chi2", "KNOWN", "45 deg"), _row("energy", "fail"),
             _row("gradient", "skipped")]
-    entry = {"label": label, "plugin": case.plugin, "variant": "llvm_ad_rgb", "note": "n",
-             "delta": False, "known": case.known,
-             **Report({"spec": {"type": "roughplastic", "alpha": 0.25}}, rows).to_dict()}
-    data = {"meta": {"mitsuba": "3.9.1", "quick": True, "seed": 3, "seconds": 12.5},
-            "cases": [entry], "left_out": builtins.LEFT_OUT}
+    report = Report({"case": label, "variant": "llvm_ad_rgb", "note": case.note,
+                     "spec": {"type": "roughplastic", "alpha": 0.25}, "known": case.known},
+                    rows).to_dict()
+    data = {"meta": {"options": {"quick": True, "seed": 3}, "seconds": 12.5},
+            "reports": [report]}
     md = builtins.render_markdown(data)
     table_row = next(line for line in md.splitlines() if line.startswith(f"| `{label}`"))
     cells = [c.strip() for c in table_row.strip("|").split("|")][2:]
@@ -101,8 +101,7 @@ def test_script_renders_from_json(tmp_path):
     import json
     import subprocess
     import sys
-    data = {"meta": {"quick": True, "seed": 0, "seconds": 1.0}, "cases": [],
-            "left_out": builtins.LEFT_OUT}
+    data = {"meta": {"options": {"quick": True, "seed": 0}}, "reports": []}
     src = tmp_path / "c.json"
     src.write_text(json.dumps(data))
     out = tmp_path / "c.md"

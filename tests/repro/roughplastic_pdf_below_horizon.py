@@ -8,7 +8,9 @@ llvm_/cuda_ variants a direction wo below the horizon gets the specular density
 D(H) G1(wi, H) / (4 cos theta_i) whenever H = normalize(wi + wo) is above it, although
 sample() never returns such a wo (it zeroes the weight); mi.chi2 then sees a pdf that integrates to more
 than 1 and rejects (the "alpha = 0.25 fails chi2 at 45 degrees" finding).  roughconductor.cpp
-ends its pdf() with ``return dr::select(active, result, 0.f)``.
+ends its pdf() with ``return dr::select(active, result, 0.f)``.  The same unmasked return
+gives pdf = NaN at exactly grazing incidence (cos_theta_i = 0: the specular term divides by
+4 cos_theta_i, line 414) when another lane of the call is active.
 
 Run: python tests/repro/roughplastic_pdf_below_horizon.py  -> exit 1 while the bug is present.
 """
@@ -47,8 +49,18 @@ def pdfs(variant):
     return out, None
 
 
+def grazing_pdf():
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f([1.0, s], [0, 0], [0.0, c])          # lane 0 exactly grazing
+    si.sh_frame = mi.Frame3f(mi.Vector3f([0, 0], [0, 0], [1, 1]))
+    wo = mi.Vector3f([0.6, 0.6], [0, 0], [0.8, 0.8])
+    return float(mi.load_dict(SPEC).pdf(mi.BSDFContext(), si, wo)[0])
+
+
 scalar, _ = pdfs("scalar_rgb")
 vector, vector_eval_pdf = pdfs("llvm_ad_rgb")
 print(f"pdf(wo below horizon): scalar_rgb {scalar[1]:.6g}, llvm_ad_rgb pdf {vector[1]:.6g}, "
       f"eval_pdf {vector_eval_pdf[1]:.6g} (expected 0)")
-sys.exit(1 if vector[1] != 0 or vector_eval_pdf[1] != 0 else 0)
+graze = grazing_pdf()
+print(f"pdf at cos_theta_i = 0: {graze} (expected 0)")
+sys.exit(1 if vector[1] != 0 or vector_eval_pdf[1] != 0 or math.isnan(graze) else 0)

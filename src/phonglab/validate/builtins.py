@@ -12,14 +12,13 @@ A KNOWN row is still reported; it only does not make the run fail.  :data:`LEFT_
 Specs are plain dicts except for textures: a bitmap texture takes a ``mi.Bitmap`` (which exists
 in every variant) built from a numpy array, so the same spec loads in any variant.
 
-:func:`render_markdown` turns the JSON of ``phonglab validate --all-builtins --json`` (one
-report per case, the schema of ``phonglab.validate``) into the conformance table; the numbers in
-``docs/conformance.md`` come from that JSON only.
+:func:`render_markdown` turns the JSON of ``phonglab validate --all-builtins --json``
+(:func:`phonglab.validate.batch.run_all`: one report per case) into the conformance table; the
+numbers in ``docs/conformance.md`` come from that JSON only.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -135,6 +134,28 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = 0 below the horizon (scalar_rgb gives 0); chi2 passes when the pdf is masked "
             "to wo.z > 0 (p = 0.09-0.78 at 0-85 deg, both distributions)",
             "tests/repro/roughplastic_pdf_below_horizon.py"),
+    Finding("roughplastic-pdf-nan-grazing", "finite",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:422",
+            "the same unmasked `return result;`: at cos_theta_i = 0 the specular term divides by "
+            "4 cos_theta_i (line 414) and the NaN is returned whenever another lane is active "
+            "(eval_pdf() likewise, line 501)",
+            "pdf = NaN for wi = (1, 0, 0) in a call with other, valid lanes",
+            "pdf = 0 for an inactive lane",
+            "tests/repro/roughplastic_pdf_below_horizon.py"),
+    Finding("roughplastic-gradient-detached", "gradient",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:235",
+            "parameters_changed() builds the rough transmittance table and internal reflectance "
+            "(lines 232-251) from `dr::slice(m_eta)` and `dr::slice(m_alpha)`, plain scalars, so "
+            "AD misses the derivative of the diffuse term through them although both "
+            "parameters are exposed as Differentiable (lines 210-211)",
+            "d eval/d alpha: AD -96.3 vs central difference -106.2; d/d eta: AD 2.67 vs 23.8 "
+            "(validator, alpha 0.25)",
+            "AD equal to the central difference within its error",
+            "tests/repro/roughplastic_gradient_detached.py"),
     Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
             "src/bsdfs/hair.cpp:267",
             "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
@@ -412,34 +433,6 @@ LEFT_OUT: dict[str, str] = {
 }
 
 
-# ----------------------------------------------------------------------------- running all
-def run_all(*, quick: bool = False, seed: int = 0, labels=None, progress=None) -> dict:
-    """Validate every case (or those in ``labels``); the JSON document of the conformance table.
-
-    ``{"meta": {...}, "cases": [{"label", "plugin", "variant", "note", "delta", "known",
-    "meta", "results"}], "left_out": {plugin: why}}`` -- each case entry is a
-    :class:`~phonglab.validate.report.Report` dict (``Report.from_dict`` reads it back) plus
-    the case's own fields.  ``progress(label, report)`` is called after each case.
-    """
-    from . import validate_bsdf
-    chosen = cases() if labels is None else [c for c in cases() if c.label in set(labels)]
-    entries, t0 = [], time.perf_counter()
-    for case in chosen:
-        t = time.perf_counter()
-        report = validate_bsdf(case.spec, variant=case.resolved_variant(), known=case.known,
-                               quick=quick, seed=seed)
-        entry = {"label": case.label, "plugin": case.plugin, "variant": case.resolved_variant(),
-                 "note": case.note, "delta": case.delta, "known": dict(case.known),
-                 "seconds": round(time.perf_counter() - t, 2), **report.to_dict()}
-        entries.append(entry)
-        if progress is not None:
-            progress(case.label, report)
-    meta = {"mitsuba": MITSUBA_VERSION, "mitsuba_commit": MITSUBA_COMMIT, "quick": quick,
-            "seed": seed, "cases": len(entries),
-            "seconds": round(time.perf_counter() - t0, 1)}
-    return {"meta": meta, "cases": entries, "left_out": dict(LEFT_OUT)}
-
-
 # ----------------------------------------------------------------------------- markdown
 def cell_status(rows: list[dict]) -> str:
     """One table cell for a topic's rows: fail > KNOWN > pass > skipped ('' when no row)."""
@@ -468,34 +461,38 @@ def _source_link(source: str) -> str:
     return f"[`{source}`]({SOURCE_URL}{path}#L{line})"
 
 
+def _label(report: dict) -> str:
+    return report["meta"]["case"]
+
+
 def _table(data: dict) -> list[str]:
     head = "| case | variant | " + " | ".join(TOPICS) + " |"
     lines = [head, "|" + "---|" * (len(TOPICS) + 2)]
-    for entry in data["cases"]:
-        by_topic = {t: [r for r in entry["results"] if r["topic"] == t] for t in TOPICS}
+    for report in data["reports"]:
+        by_topic = {t: [r for r in report["results"] if r["topic"] == t] for t in TOPICS}
         cells = [cell_status(by_topic[t]) or " " for t in TOPICS]
         cells = [f"**{c}**" if c == "fail" else c for c in cells]
-        variant = entry["variant"].replace("llvm_ad_", "")
-        lines.append(f"| `{entry['label']}` | {variant} | " + " | ".join(cells) + " |")
+        variant = str(report["meta"].get("variant", "")).replace("llvm_ad_", "")
+        lines.append(f"| `{_label(report)}` | {variant} | " + " | ".join(cells) + " |")
     return lines
 
 
-def _case_section(entry: dict) -> list[str]:
-    """The non-pass rows of one case (fail and KNOWN; skipped rows counted)."""
-    bad = [r for r in entry["results"] if r["status"] in ("fail", "KNOWN")]
+def _case_section(report: dict) -> list[str]:
+    """The fail and KNOWN rows of one case, with their documented causes."""
+    bad = [r for r in report["results"] if r["status"] in ("fail", "KNOWN")]
     if not bad:
         return []
-    out = [f"### `{entry['label']}`", ""]
-    spec = {k: v for k, v in (entry.get("meta", {}).get("spec") or {}).items()}
+    label = _label(report)
+    out = [f"### `{label}`", ""]
+    spec = report["meta"].get("spec")
     if spec:
-        out += [f"Spec: `{_md(spec)}`; {entry['note']}.", ""]
+        out += [f"Spec: `{_md(spec)}`; {report['meta'].get('note', '')}.", ""]
     out += ["| status | topic | check | measured | expected | tolerance | reason |",
             "|---|---|---|---|---|---|---|"]
     for r in bad:
         out.append(f"| {r['status']} | {r['topic']} | {_md(r['name'])} | {_num(r['measured'])} "
                    f"| {_num(r['expected'])} | {_num(r['tolerance'])} | {_md(r['reason'])} |")
-    causes = [f for f in FINDINGS if entry["label"] in f.labels
-              and any(r["topic"] == f.topic for r in bad)]
+    causes = [f for f in FINDINGS if label in f.labels and any(r["topic"] == f.topic for r in bad)]
     for f in causes:
         out.append("")
         out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
@@ -508,7 +505,7 @@ def _case_section(entry: dict) -> list[str]:
 
 
 def _findings_section(data: dict) -> list[str]:
-    seen = {e["label"] for e in data["cases"]}
+    seen = {_label(r) for r in data["reports"]}
     out = ["## Findings", "",
            "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
            f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
@@ -527,30 +524,37 @@ def _findings_section(data: dict) -> list[str]:
 
 
 def render_markdown(data: dict) -> str:
-    """docs/conformance.md from the JSON of :func:`run_all` (or ``--all-builtins --json``)."""
+    """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
+    (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``)."""
     meta = data.get("meta", {})
+    options = meta.get("options") or {}
     counts: dict[str, int] = {}
-    for entry in data["cases"]:
-        for r in entry["results"]:
+    for report in data["reports"]:
+        for r in report["results"]:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
-    mode = "--quick" if meta.get("quick") else "default settings"
+    if "seconds" in meta:
+        took = f"{_num(float(meta['seconds']))} s wall time"
+    else:
+        took = (f"{_num(float(sum(r['meta'].get('wall_seconds', 0) for r in data['reports'])))}"
+                " s (sum of the cases' wall times)")
+    mode = "--quick" if options.get("quick") else "default settings"
     lines = [
-        f"# Conformance of Mitsuba {meta.get('mitsuba', MITSUBA_VERSION)}'s built-in BSDFs", "",
+        f"# Conformance of Mitsuba {MITSUBA_VERSION}'s built-in BSDFs", "",
         "Generated by `make conformance` (`scripts/conformance.py`) from `docs/conformance.json`;"
         " do not edit by hand.  Each case is one BSDF at one parameter setting "
         "(`phonglab.validate.builtins.cases()`), validated by `phonglab.validate.validate_bsdf` "
-        f"with {mode}, seed {meta.get('seed', 0)}: {len(data['cases'])} cases, "
+        f"with {mode}, seed {options.get('seed', 0)}: {len(data['reports'])} cases, "
         + ", ".join(f"{counts.get(s, 0)} {s}" for s in ("pass", "fail", "KNOWN", "skipped"))
-        + f" rows, {_num(meta.get('seconds'))} s wall time.", "",
+        + f" rows, {took}.", "",
         "A cell is the worst status of the topic's rows (fail > KNOWN > pass > skipped; empty: no "
         "row).  KNOWN means the row fails for a documented cause in Mitsuba (see Findings); "
         "it is still reported, never hidden by a wider tolerance.", "",
     ]
     lines += _table(data) + ["", "## Rows that do not pass", ""]
-    for entry in data["cases"]:
-        lines += _case_section(entry)
+    for report in data["reports"]:
+        lines += _case_section(report)
     lines += _findings_section(data)
     lines += ["## Plugins left out", ""]
-    for name, why in (data.get("left_out") or LEFT_OUT).items():
+    for name, why in LEFT_OUT.items():
         lines.append(f"* `{name}`: {why}")
     return "\n".join(lines) + "\n"
