@@ -232,6 +232,54 @@ FINDINGS: tuple[Finding, ...] = (
             "weight = NaN for sample1 = 0, sample2 = (0, 0.5) (GGX) or wi below the horizon",
             "weight 0 for an invalid sample",
             "tests/repro/microfacet_sample_nan.py"),
+    Finding("conductor-eta0-gradient", "gradient",
+            ("roughconductor/beckmann-a0.2", "roughconductor/beckmann-novisible",
+             "blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric",
+             "twosided/diffuse|roughconductor", "bumpmap/roughconductor",
+             "normalmap/roughconductor", "mask/roughconductor-0.8"),
+            "include/mitsuba/render/fresnel.h:104",
+            "at the default material 'none' (eta = 0, k = 1, roughconductor.cpp:166-167) "
+            "`a = safe_sqrt(0.5 (a_2_pb_2 + temp_1))` is the square root of k^2 eta^2 / |t|, "
+            "so a = k eta / sqrt(|t|) has a finite slope, but AD differentiates safe_sqrt at 0 "
+            "as 0 (and the float32 sum a_2_pb_2 + temp_1 cancels, making differences noisy)",
+            "d eval/d eta by AD: 0 at eta = 0, -1.955 at eta = 1e-3, -1.970 at 2e-3 (one "
+            "lane); validator: AD 0 vs one-sided difference -450",
+            "a continuous derivative (about -1.95 at eta = 0)",
+            "tests/repro/conductor_eta0_gradient.py"),
+    Finding("principled-gradient-lobe-masks", "gradient",
+            ("principled/default", "principled/metal", "principledthin/default"),
+            "src/bsdfs/principled.cpp:559",
+            "lobes are switched on by strict inequalities on their weights (clearcoat > 0 at "
+            "line 559, bsdf > 0 at 563, brdf > 0 at 568, sheen > 0 and 1 - metallic > 0 at "
+            "571-572; principledthin.cpp:458-467 spec_trans > 0, diff_trans > 0), so at a "
+            "range end (0, the default of clearcoat/sheen/spec_trans, or metallic = 1) AD "
+            "returns the derivative of the model without that lobe, i.e. the derivative from "
+            "outside [0, 1]",
+            "d/d clearcoat at 0: AD 0 vs right-hand difference 0.614; d/d metallic at 1: AD "
+            "20.54 (= right-hand, outside the range) vs left-hand 1.42 (256 lanes)",
+            "the one-sided derivative from inside [0, 1]",
+            "tests/repro/principled_gradient_lobe_masks.py"),
+    Finding("principledthin-transmission-reciprocity", "reciprocity",
+            ("principledthin/all-lobes",),
+            "src/bsdfs/principledthin.cpp:463",
+            "the specular-transmission mask `mac_mic_compatibility(wh, wi, wo_t, wi.z(), false)` "
+            "tests the unmirrored wo_t against the half vector built from the mirrored wo_r "
+            "(lines 451-454), so whether the lobe is on depends on which direction is the "
+            "grazing one; the lobe value (lines 522-524) is symmetric",
+            "f(a, b) = 0 vs f(b, a) = 10.67 for a = (-0.49, 0.85, 0.2), b = (0.49, -0.87, "
+            "-0.0216)",
+            "f(a, b) = f(b, a) (a thin sheet transmits with eta = 1)",
+            "tests/repro/principledthin_transmission_reciprocity.py"),
+    Finding("pplastic-polarized-grazing", "reciprocity", ("pplastic/default", "pplastic/rough-ggx"),
+            "src/bsdfs/pplastic.cpp:377",
+            "the polarized diffuse term evaluates the second Fresnel transmission from the "
+            "internally refracted direction (lines 375-377); for grazing wi that direction is "
+            "at the critical angle, where cos = sqrt(1 - eta^2 sin^2) cancels in float32 (the "
+            "unpolarized branch, lines 429-432, uses 1 - R(cos_theta_i) directly)",
+            "f(a, b) = 0.0011334 vs f(b, a) = 0.0011194 (1.3 %) at cos = 0.0019; the spectral "
+            "(unpolarized) variant agrees to 1.5e-8",
+            "f(a, b) = f(b, a) to float32 precision",
+            "tests/repro/pplastic_polarized_grazing.py"),
     Finding("shading-normal-reciprocity", "reciprocity",
             ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
              "bumpmap/roughconductor"),
