@@ -110,3 +110,10 @@ def test_script_renders_from_json(tmp_path):
                    capture_output=True)
     assert out.read_text().startswith("# Conformance of Mitsuba 3.9.1")
     assert Path(out).stat().st_size > 0
+
+
+def test_validator_issues_name_existing_cases():
+    labels = {c.label for c in CASES}
+    for v in builtins.VALIDATOR_ISSUES:
+        assert set(v.labels) <= labels, v.key
+        assert v.topic in builtins.TOPICS
