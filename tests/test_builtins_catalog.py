@@ -117,3 +117,15 @@ def test_validator_issues_name_existing_cases():
     for v in builtins.VALIDATOR_ISSUES:
         assert set(v.labels) <= labels, v.key
         assert v.topic in builtins.TOPICS
+
+
+def test_without_plot_data_keeps_the_numbers():
+    data = {"meta": {}, "reports": [{"meta": {"case": "x"}, "results": [
+        {"topic": "energy", "details": {"albedo": [0.5], "lobes": {"theta": [1, 2]}}},
+        {"topic": "chi2", "details": {"cells": [{"p_value": 0.3, "histogram": [[1, 2]],
+                                                 "pdf": [[1.0, 2.0]]}]}}]}]}
+    out = builtins.without_plot_data(data)
+    energy, chi2 = out["reports"][0]["results"]
+    assert energy["details"] == {"albedo": [0.5]}
+    assert chi2["details"] == {"cells": [{"p_value": 0.3}]}
+    assert "lobes" in data["reports"][0]["results"][0]["details"]    # the input is untouched

@@ -549,6 +549,27 @@ LEFT_OUT: dict[str, str] = {
 }
 
 
+# ----------------------------------------------------------------------------- JSON
+#: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
+PLOT_ONLY = ("lobes", "histogram", "pdf")
+
+
+def without_plot_data(data: dict) -> dict:
+    """A copy of a ``--all-builtins`` JSON document without :data:`PLOT_ONLY` arrays.
+
+    docs/conformance.json keeps every number the table and the sections quote; the plot
+    arrays (megabytes) are what ``phonglab validate BSDF --report`` draws.
+    """
+    def strip(x):
+        if isinstance(x, dict):
+            return {k: strip(v) for k, v in x.items()
+                    if not (k in PLOT_ONLY and isinstance(v, (list, dict)))}
+        if isinstance(x, list):
+            return [strip(v) for v in x]
+        return x
+    return strip(data)
+
+
 # ----------------------------------------------------------------------------- markdown
 def cell_status(rows: list[dict]) -> str:
     """One table cell for a topic's rows: fail > KNOWN > pass > skipped ('' when no row)."""
