@@ -122,10 +122,13 @@ def test_validator_issues_name_existing_cases():
 def test_without_plot_data_keeps_the_numbers():
     data = {"meta": {}, "reports": [{"meta": {"case": "x"}, "results": [
         {"topic": "energy", "details": {"albedo": [0.5], "lobes": {"theta": [1, 2]}}},
-        {"topic": "chi2", "details": {"cells": [{"p_value": 0.3, "histogram": [[1, 2]],
-                                                 "pdf": [[1.0, 2.0]]}]}}]}]}
+        {"topic": "chi2", "details": {"cells": [
+            {"p_value": 0.3, "status": "pass", "messages": "Accepted", "histogram": [[1, 2]]},
+            {"p_value": 0.0, "status": "fail", "messages": "Rejected", "pdf": [[1.0, 2.0]]}]}}]}]}
     out = builtins.without_plot_data(data)
     energy, chi2 = out["reports"][0]["results"]
     assert energy["details"] == {"albedo": [0.5]}
-    assert chi2["details"] == {"cells": [{"p_value": 0.3}]}
+    assert chi2["details"] == {"cells": [{"p_value": 0.3, "status": "pass"},
+                                         {"p_value": 0.0, "status": "fail",
+                                          "messages": "Rejected"}]}
     assert "lobes" in data["reports"][0]["results"][0]["details"]    # the input is untouched

@@ -327,8 +327,27 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "pdf rows alike)"),
     ValidatorIssue(
         "grazing-half-vector-conditioning-pdf", "pdf",
-        ("roughconductor/beckmann-novisible", "roughdielectric/ggx-aniso-inverted"),
+        ("roughconductor/beckmann-novisible", "roughdielectric/beckmann-a0.1",
+         "roughdielectric/ggx-aniso-inverted"),
         "the same rounding as the weight row: bs.pdf vs pdf(bs.wo) at cos theta_i = 1e-4"),
+    ValidatorIssue(
+        "tail-conditioning-reciprocity", "reciprocity",
+        ("roughdielectric/beckmann-a0.1", "roughdielectric/ggx-a0.3",
+         "blendbsdf/roughconductor+roughdielectric"),
+        "the failing transmission pairs lie far in the microfacet tail (f = 0.0029 for "
+        "Beckmann alpha 0.1, 3.2e-6 for GGX alpha 0.3), where D changes by percent for a "
+        "1e-6 rad move of the half vector: moving both directions by 1e-6, 1e-5, 1e-4 and "
+        "1e-3 rad turns the relative asymmetry 0.023 into 0.0045, -0.0012, -0.0034 and "
+        "0.0107 (beckmann) -- rounding noise of both signs, not a systematic non-reciprocity; "
+        "the 4-draw sensitivity estimate (measured 1.13 and 2.07 against 1) under-samples it"),
+    ValidatorIssue(
+        "normalmap-data-discontinuous-fd", "gradient", ("normalmap/diffuse",),
+        "eval is discontinuous in the normal-map data: the nested diffuse BSDF is cut at "
+        "cos theta'_i = 0 (and the normal flipped where dot(wi, n) <= 0, normalmap.cpp:225), "
+        "and that perturbed horizon moves with the normal.  The central difference over lanes "
+        "that straddle it does not converge (D(h) = -260, D(h/2) = -250) and doubles when "
+        "flip_invalid_normals is off (-536, -512) while AD moves from -309 to -293: the "
+        "difference measures the jumps (a boundary term), not a wrong derivative"),
     ValidatorIssue(
         "discontinuous-parameter-fd", "gradient", ("roughdielectric/ggx-aniso-inverted",),
         "eta is flagged ParamFlags::Discontinuous (src/bsdfs/roughdielectric.cpp:223): with "
@@ -551,19 +570,24 @@ LEFT_OUT: dict[str, str] = {
 
 # ----------------------------------------------------------------------------- JSON
 #: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
-PLOT_ONLY = ("lobes", "histogram", "pdf")
+PLOT_ONLY = ("lobes", "histogram", "pdf", "expected")
 
 
 def without_plot_data(data: dict) -> dict:
-    """A copy of a ``--all-builtins`` JSON document without :data:`PLOT_ONLY` arrays.
+    """A copy of a ``--all-builtins`` JSON document without :data:`PLOT_ONLY` arrays, and
+    without mi.chi2's log text of ACCEPTED cells (their p-value and sums stay).
 
     docs/conformance.json keeps every number the table and the sections quote; the plot
     arrays (megabytes) are what ``phonglab validate BSDF --report`` draws.
     """
+    def drop(k, v, x) -> bool:
+        if k in PLOT_ONLY and isinstance(v, (list, dict)):
+            return True
+        return k == "messages" and x.get("status") == "pass" and "p_value" in x
+
     def strip(x):
         if isinstance(x, dict):
-            return {k: strip(v) for k, v in x.items()
-                    if not (k in PLOT_ONLY and isinstance(v, (list, dict)))}
+            return {k: strip(v) for k, v in x.items() if not drop(k, v, x)}
         if isinstance(x, list):
             return [strip(v) for v in x]
         return x
