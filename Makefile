@@ -50,3 +50,8 @@ notebook-figures: setup
 # Planner: planned vs default configuration at equal error (docs/planner.md).
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+
+# phonglab validate: false-failure rate of the correct plugins over 20 seeds (~5 min, docs/validate.md).
+.PHONY: validate-false-failures
+validate-false-failures: setup
+	$(BIN)/python scripts/false_failures.py --seeds 20
