@@ -51,6 +51,10 @@ def _s(bsdf, wi, wo, c) -> tuple[float, float]:
 
 
 def _set(params, key, value):
+    """Write x ± h as an opaque value: a kernel input, so the BSDF's kernels compile once
+    for all steps instead of once per baked-in literal."""
+    value = type(value)(value)
+    dr.make_opaque(value)
     params[key] = value
     params.update()
 
@@ -83,8 +87,16 @@ def _fd(bsdf, params, key, x0, h, wi, wo, c, one_sided: bool) -> float:
     return (values[0] - values[1]) / (2.0 * h)
 
 
+def _first(exc) -> str:
+    return (str(exc).splitlines() or [type(exc).__name__])[0][:160]
+
+
 def _one(bsdf, params, key, opts, dirs) -> Row:
-    x0 = params[key]
+    try:
+        x0 = params[key]
+    except TypeError as exc:   # e.g. hair's sigma_a is traversed as None when unused
+        return Row("gradient", key, None, None, None, None, "skipped",
+                   f"mi.traverse exposes a value that cannot be read ({_first(exc)})", {})
     if not dr.is_diff_v(x0) or dr.type_v(x0) not in (dr.VarType.Float32, dr.VarType.Float64):
         return Row("gradient", key, None, None, None, None, "skipped",
                    f"{type(x0).__name__} is not a differentiable floating-point value", {})
@@ -101,7 +113,7 @@ def _one(bsdf, params, key, opts, dirs) -> Row:
     except Exception as exc:   # a plugin refusing x ± h (its validation) is a skip, not a fail
         _set(params, key, x0)
         return Row("gradient", key, None, None, None, None, "skipped",
-                   f"the BSDF refused the update x ± {h:.3g}: {str(exc).splitlines()[0][:160]}", {})
+                   f"the BSDF refused the update x ± {h:.3g}: {_first(exc)}", {})
     _, s_abs = _s(bsdf, wi, wo, c)
     tol = 4.0 * abs(d1 - d2) + ROUND_OFF * (s_abs / (h / 2) + ad_abs)
     ok = np.isfinite(ad) and abs(ad - d2) <= tol
