@@ -29,6 +29,7 @@ test-all: setup
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
+	$(BIN)/python scripts/validate_timing.py --repeats 3 --json docs/bench/validate.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).

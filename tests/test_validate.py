@@ -177,3 +177,15 @@ def test_cli_all_builtins_with_a_small_catalogue(variant_llvm_rgb, tmp_path, cap
     job = pickle.loads(pickle.dumps(batch.run_case))
     d = job("conductor/test", {"quick": True, "topics": ["energy"]})
     assert d["meta"]["case"] == "conductor/test" and d["results"][0]["status"] == "pass"
+
+
+def test_bench_report_validate_section(tmp_path):
+    from types import SimpleNamespace
+
+    from phonglab.bench.report import validate_section
+    assert validate_section(SimpleNamespace(out=tmp_path)) == []
+    (tmp_path / "validate.json").write_text(json.dumps([
+        {"bsdf": "diffuse", "repeats": 3, "exit_codes": [0],
+         "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 2.5, 11.0]}]))
+    text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
+    assert "| diffuse | 6.0 [5.0, 7.0] |" in text and "2.5 [2.0, 11.0]" in text
