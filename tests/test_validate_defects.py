@@ -62,3 +62,17 @@ def test_defect_fails_its_topic_only_default_sizes(variant_llvm_rgb, name):
 def test_correct_bsdfs_pass_default_sizes(variant_llvm_rgb, bsdf):
     report = validate_bsdf(bsdf, seed=0)
     assert report.passed, report.table(report.failing)
+
+
+@pytest.mark.slow
+def test_false_failure_rate_quick(variant_llvm_rgb):
+    """lambert and phong (independent samplers) over 20 seeds each, quick sizes: 40 runs that
+    each fail with probability ≤ ALPHA = 0.01; P(≥ 3 failures) = 0.0075 < ALPHA, so ≥ 3 fails."""
+    from scipy import stats as scipy_stats
+
+    from phonglab import stats
+    from phonglab.validate.batch import false_failures
+    result = false_failures(["lambert", "phong"], 20, quick=True)
+    count = sum(len(v) for v in result.values())
+    assert scipy_stats.binom.sf(2, 40, stats.ALPHA) < stats.ALPHA
+    assert count <= 2, result
