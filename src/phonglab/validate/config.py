@@ -58,7 +58,7 @@ class Options:
     chi2_phi: tuple = (0.0, 1.0)
     chi2_samples: int = 1_000_000
     chi2_res: int = 101
-    chi2_ires: int = 16               #: pdf integration points per bin and axis (narrow lobes)
+    chi2_ires: int = 24               #: pdf integration points per bin and axis (narrow lobes)
     energy_cos: tuple = (1.0, 0.95, 0.85, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 1e-4, 0.0)
     energy_nodes: int = 16            #: Gauss-Legendre nodes per panel (error from n vs n/2)
     energy_samples: int = 100_000     #: samples per cell for the delta lobes' albedo
@@ -87,7 +87,7 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
                    cos_grid=(1.0, 0.6, 0.2, 1e-4, 0.0), phi_grid=(0.0, 2.1),
                    n_identity=1024, n_finite=512,
                    chi2_cos=(0.8, 0.5, 0.2), chi2_phi=(0.0,), chi2_samples=200_000,
-                   chi2_res=61, chi2_ires=12,
+                   chi2_res=61, chi2_ires=24,
                    energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
                    energy_samples=20_000, gradient_lanes=1024, cost_lanes=1 << 16,
                    cost_repeats=3)
