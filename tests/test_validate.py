@@ -189,3 +189,34 @@ def test_bench_report_validate_section(tmp_path):
          "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 2.5, 11.0]}]))
     text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
     assert "| diffuse | 6.0 [5.0, 7.0] |" in text and "2.5 [2.0, 11.0]" in text
+
+
+def test_lobe_quadrature_centre_anywhere():
+    import math
+
+    import numpy as np
+
+    from phonglab.physics.quadrature import lobe_quadrature
+    for theta in (0.0, 0.6, 1.5707):
+        for azimuth, symmetric in ((math.pi, True), (1.0, False), (4.0, False)):
+            wo, w = lobe_quadrature(theta, 0.05, 12, azimuth=azimuth, symmetric=symmetric)
+            assert np.sum(w) == pytest.approx(2 * math.pi, rel=1e-12)
+            assert np.sum(w * wo[:, 2]) == pytest.approx(math.pi, rel=1e-12)
+            assert wo[:, 2].min() >= 0.0
+
+
+def test_a_topic_that_raises_is_one_failing_row(variant_llvm_rgb, tmp_path):
+    plugin = tmp_path / "raising.py"
+    plugin.write_text((DEFECTS / "energy_gain.py").read_text()
+                      .replace("defect_energy_gain", "raises_in_eval_pdf")
+                      .replace("value = self.reflectance * mi.Frame3f.cos_theta(wo)",
+                               "value = self.reflectance * dr.inv_pi * mi.Frame3f.cos_theta(wo)")
+                      .replace("        return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)",
+                               "        raise RuntimeError('eval_pdf is not implemented')"))
+    report = validate_bsdf("raises_in_eval_pdf", plugins=[plugin], quick=True,
+                           topics=["finite", "eval_pdf", "energy", "weight"])
+    failing = {r.topic: r for r in report.failing}
+    assert set(failing) == {"finite", "eval_pdf"}
+    assert "raised RuntimeError" in failing["eval_pdf"].reason
+    assert "traceback" in failing["eval_pdf"].details
+    assert {r.topic for r in report.rows if r.status == "pass"} == {"energy", "weight"}
