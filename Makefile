@@ -29,6 +29,7 @@ test-all: setup
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
+	$(BIN)/python scripts/validate_timing.py --repeats 3 --json docs/bench/validate.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
@@ -50,6 +51,11 @@ notebook-figures: setup
 # Planner: planned vs default configuration at equal error (docs/planner.md).
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+
+# phonglab validate: false-failure rate of the correct plugins over 20 seeds (~5 min, docs/validate.md).
+.PHONY: validate-false-failures
+validate-false-failures: setup
+	$(BIN)/python scripts/false_failures.py --seeds 20
 
 # docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
 # (phonglab.validate.builtins); CONFORMANCE_ARGS=--quick for the fast sizes.

@@ -16,7 +16,7 @@ import traceback
 
 from . import builtins
 from .core import validate_bsdf
-from .report import Report, Row
+from .report import TOPICS, Report, Row
 
 
 def find_case(case):
@@ -64,3 +64,20 @@ def run_all(cases=None, options: dict | None = None, progress=None) -> dict:
               if any(x["status"] == "fail" for x in r["results"])]
     return {"meta": {"cases": len(reports), "failed": failed, "options": dict(options or {})},
             "reports": reports}
+
+
+def false_failures(bsdfs, seeds: int, quick: bool = False) -> dict:
+    """Run correct BSDFs over seeds 0..seeds−1: {bsdf: [(seed, failing topics), ...]}.
+
+    ``cost`` is left out (informational, it never fails).  For correct plugins every failing
+    run is a false failure; each run fails with probability ≤ ALPHA by construction.
+    """
+    topics = [t for t in TOPICS if t != "cost"]
+    out = {}
+    for name in bsdfs:
+        out[name] = []
+        for seed in range(seeds):
+            report = validate_bsdf(name, seed=seed, quick=quick, topics=topics)
+            if not report.passed:
+                out[name].append((seed, sorted({r.topic for r in report.failing})))
+    return out

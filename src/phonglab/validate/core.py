@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import runpy
 import time
+import traceback
 from pathlib import Path
 
 import mitsuba as mi
@@ -23,7 +24,7 @@ from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .inputs import ValidateError, check_topics
 from .reciprocity import reciprocity
-from .report import TOPICS, Report
+from .report import TOPICS, Report, Row
 from .sampling import chi2
 
 
@@ -108,6 +109,17 @@ def prepare(spec, *, variant=None, params=None, topics=None, plugins=()):
     return bsdf, label, desc, topics
 
 
+def _guarded(topic: str, runner) -> list[Row]:
+    """The topic's rows; an exception (from the BSDF or the validator) is one failing row of
+    that topic with the traceback in details, so the other topics still report."""
+    try:
+        return runner()
+    except Exception as exc:
+        return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
+                    "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
+                    {"traceback": traceback.format_exc()[-3000:]})]
+
+
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
                   known=None, plugins=()) -> Report:
     """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`."""
@@ -131,7 +143,7 @@ def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick
     t_all = time.perf_counter()
     for topic in topics:
         t0 = time.perf_counter()
-        rows += runners[topic]()
+        rows += _guarded(topic, runners[topic])
         seconds[topic] = round(time.perf_counter() - t0, 3)
     rows.sort(key=lambda r: TOPICS.index(r.topic))
     for r in rows:

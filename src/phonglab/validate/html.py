@@ -84,11 +84,12 @@ def _chi2_cells(d: dict) -> str:
         if cell.get("status") != "fail" or "histogram" not in cell:
             continue
         hist, exp = np.array(cell["histogram"]), np.array(cell["expected"])
-        fig, axes = plt.subplots(1, 2, figsize=(9, 3))
+        fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), layout="constrained")
         vmax = max(hist.max(), exp.max(), 1e-12)
         for ax, img, title in ((axes[0], hist, "histogram of samples"),
                                (axes[1], exp, "expected (integrated pdf)")):
-            im = ax.imshow(img, aspect="auto", origin="lower", vmin=0, vmax=vmax,
+            # mi.chi2.SphericalDomain's second coordinate is −cos θ_o: row 0 is cos θ_o = 1.
+            im = ax.imshow(img, aspect="auto", origin="upper", vmin=0, vmax=vmax,
                            extent=(-180, 180, -1, 1))
             ax.set_title(title, fontsize=9)
             ax.set_xlabel("φ_o (°)")

@@ -8,7 +8,7 @@ energy cells that use sample weights), so the BSDF as a whole fails by chance wi
 ALPHA = 0.01.
 
 Differences from ``mi.chi2.BSDFAdapter``: the BSDF is the given object (not re-loaded from a
-type name), ``wi`` is an opaque kernel input (one compiled kernel for all cells), and samples
+type name), ``wi`` is a kernel input array (one compiled kernel for all cells), and samples
 of a delta lobe get weight 0 -- ``pdf`` has no density for them; a mixture such as ``plastic``
 is histogrammed on its non-delta part only, whose ∫pdf is then < 1 in step with the histogram.
 
@@ -53,43 +53,30 @@ def _in_tempdir():
             os.chdir(old)
 
 
-def _adapters(bsdf, wi_holder):
-    """sample_func, pdf_func for ``mi.chi2.ChiSquareTest``; wi is read from ``wi_holder[0]``."""
+def _adapters(bsdf, wi: np.ndarray):
+    """sample_func, pdf_func for ``mi.chi2.ChiSquareTest`` at incidence wi (3,).
+
+    wi reaches the kernel as an array (probe.interaction), not a literal: one kernel for all
+    cells.
+    """
     delta = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
 
-    def si_for(n):
-        return _si(wi_holder[0], n)
-
     def sample_func(sample):
-        n = dr.width(sample)
-        bs, weight = bsdf.sample(probe.context(), si_for(n), sample[0],
-                                 mi.Point2f(sample[1], sample[2]))
+        si = probe.interaction(wi[None], n=dr.width(sample))
+        bs, weight = bsdf.sample(probe.context(), si, sample[0], mi.Point2f(sample[1], sample[2]))
         value = mi.unpolarized_spectrum(weight) if mi.is_polarized else weight
         keep = dr.any(value != 0) & ((mi.UInt32(bs.sampled_type) & delta) == 0)
         return bs.wo, dr.select(keep, mi.Float(1.0), mi.Float(0.0))
 
     def pdf_func(wo):
-        return bsdf.pdf(probe.context(), si_for(dr.width(wo)), wo)
+        return bsdf.pdf(probe.context(), probe.interaction(wi[None], n=dr.width(wo)), wo)
 
     return sample_func, pdf_func
 
 
-def _si(wi_opaque, n):
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.n = mi.Normal3f(0.0, 0.0, 1.0)
-    si.sh_frame = mi.Frame3f(si.n)
-    si.uv = mi.Point2f(0.5, 0.5)
-    si.wi = wi_opaque
-    if mi.is_spectral:
-        si.wavelengths = mi.UnpolarizedSpectrum(*(mi.Float(float(x))
-                                                   for x in probe.default_wavelengths()))
-    return si
-
-
 def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, seed: int) -> dict:
     """One χ² test at incidence wi; returns the cell's record (p-value, sums, verdict)."""
-    holder = [mi.Vector3f(*(dr.opaque(mi.Float, float(x)) for x in wi))]
-    sample_func, pdf_func = _adapters(bsdf, holder)
+    sample_func, pdf_func = _adapters(bsdf, np.asarray(wi, dtype=np.float64))
     test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
                                  pdf_func=pdf_func, sample_dim=3, sample_count=opts.chi2_samples,
                                  res=opts.chi2_res, ires=opts.chi2_ires, seed=seed)
