@@ -156,6 +156,14 @@ FINDINGS: tuple[Finding, ...] = (
             "(validator, alpha 0.25)",
             "AD equal to the central difference within its error",
             "tests/repro/roughplastic_gradient_detached.py"),
+    Finding("principledthin-pdf-nan-grazing", "finite", ("principledthin/all-lobes",),
+            "src/bsdfs/principledthin.cpp:704",
+            "pdf() sets `active &= cos_theta_i != 0` (line 606) but returns `pdf` unmasked, so a "
+            "lane at exactly grazing incidence gets the NaN of the microfacet densities (they "
+            "divide by cos_theta_i) whenever another lane is active -- roughplastic's pattern",
+            "pdf = NaN for wi = (1, 0, 0) next to a valid lane",
+            "pdf = 0 for an inactive lane",
+            "tests/repro/principledthin_pdf_nan_grazing.py"),
     Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
             "src/bsdfs/hair.cpp:267",
             "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
