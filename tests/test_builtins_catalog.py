@@ -132,3 +132,15 @@ def test_without_plot_data_keeps_the_numbers():
                                          {"p_value": 0.0, "status": "fail",
                                           "messages": "Rejected"}]}
     assert "lobes" in data["reports"][0]["results"][0]["details"]    # the input is untouched
+
+
+def test_validator_section_only_for_failing_rows():
+    issue = builtins.VALIDATOR_ISSUES[0]
+    label = issue.labels[0]
+
+    def data(status):
+        report = Report({"case": label, "variant": "llvm_ad_rgb"},
+                        [_row(issue.topic, status)]).to_dict()
+        return {"meta": {"options": {}}, "reports": [report]}
+    assert f"### {issue.key}" in builtins.render_markdown(data("fail"))
+    assert "because of the validator" not in builtins.render_markdown(data("pass"))

@@ -699,12 +699,17 @@ def _findings_section(data: dict) -> list[str]:
 
 
 def _validator_section(data: dict) -> list[str]:
-    seen = {_label(r) for r in data["reports"]}
+    failing = {(_label(rep), r["topic"]) for rep in data["reports"] for r in rep["results"]
+               if r["status"] == "fail"}
+    issues = [(v, [label for label in v.labels if (label, v.topic) in failing])
+              for v in VALIDATOR_ISSUES]
+    issues = [(v, labels) for v, labels in issues if labels]
+    if not issues:
+        return []
     out = ["## Rows that fail because of the validator", "",
            "These rows stay `fail` in the JSON (a tolerance is never widened to hide them); the "
            "fix belongs in `phonglab.validate`.", ""]
-    for v in VALIDATOR_ISSUES:
-        labels = [label for label in v.labels if label in seen]
+    for v, labels in issues:
         if labels:
             out += [f"### {v.key}", "", f"*{v.topic}* -- {v.explanation}.", "",
                     f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
