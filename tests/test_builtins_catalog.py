@@ -144,3 +144,23 @@ def test_validator_section_only_for_failing_rows():
         return {"meta": {"options": {}}, "reports": [report]}
     assert f"### {issue.key}" in builtins.render_markdown(data("fail"))
     assert "because of the validator" not in builtins.render_markdown(data("pass"))
+
+
+REPRODUCERS = sorted({f.reproducer for f in builtins.FINDINGS})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", REPRODUCERS)
+def test_reproducer_shows_its_finding_in_mitsuba_3_9_1(script):
+    """Each tests/repro script exits 1 while the behaviour it documents is present (3.9.1)."""
+    import subprocess
+    import sys
+
+    from phonglab import runtime
+    runtime.configure()      # pins libLLVM before Mitsuba (and Dr.Jit) load
+    import mitsuba as mi
+    if mi.__version__ != builtins.MITSUBA_VERSION:
+        pytest.skip(f"the findings are pinned to Mitsuba {builtins.MITSUBA_VERSION}")
+    done = subprocess.run([sys.executable, str(REPO_ROOT / script)], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 1, done.stdout + done.stderr
