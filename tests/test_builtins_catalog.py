@@ -144,6 +144,11 @@ def test_validator_section_only_for_failing_rows():
         return {"meta": {"options": {}}, "reports": [report]}
     assert f"### {issue.key}" in builtins.render_markdown(data("fail"))
     assert "because of the validator" not in builtins.render_markdown(data("pass"))
+    skipped = next(v for v in builtins.VALIDATOR_ISSUES if "skipped" in v.statuses)
+    report = Report({"case": skipped.labels[0], "variant": "llvm_ad_rgb"},
+                    [_row(skipped.topic, "skipped")]).to_dict()
+    md = builtins.render_markdown({"meta": {"options": {}}, "reports": [report]})
+    assert f"### {skipped.key}" in md
 
 
 REPRODUCERS = sorted({f.reproducer for f in builtins.FINDINGS})
