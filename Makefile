@@ -30,6 +30,7 @@ bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
 	$(BIN)/python -m phonglab.fit.timing --repeats 5 --out docs/bench/fit.json
+	$(BIN)/python scripts/validate_timing.py --repeats 3 --json docs/bench/validate.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
@@ -56,3 +57,14 @@ bench-planner: setup
 .PHONY: fitting-table
 fitting-table: setup
 	$(BIN)/python -m phonglab.fit.table --json docs/fitting.json --markdown docs/fitting.md
+
+# phonglab validate: false-failure rate of the correct plugins over 20 seeds (~5 min, docs/validate.md).
+.PHONY: validate-false-failures
+validate-false-failures: setup
+	$(BIN)/python scripts/false_failures.py --seeds 20
+
+# docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
+# (phonglab.validate.builtins); CONFORMANCE_ARGS=--quick for the fast sizes.
+.PHONY: conformance
+conformance: setup
+	$(BIN)/python scripts/conformance.py $(CONFORMANCE_ARGS) --json docs/conformance.json --markdown docs/conformance.md

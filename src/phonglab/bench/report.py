@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -448,6 +449,27 @@ def fitting_section(d: RunData) -> list[str]:
             "\nThe table of fitted exponents: [docs/fitting.md](docs/fitting.md).\n"]
 
 
+def validate_section(d: RunData) -> list[str]:
+    """``phonglab validate`` wall times per BSDF (``scripts/validate_timing.py --json``)."""
+    path = d.out / "validate.json"
+    if not path.is_file():
+        return []
+    rows = json.loads(path.read_text())
+    L = ["\n## `phonglab validate`: wall time per BSDF\n",
+         "`scripts/validate_timing.py` (run by `make bench`): a fresh `phonglab validate BSDF` "
+         "process per run (start-up, kernels, every topic), default and `--quick` alternately, "
+         "median [min, max]. Targets: default ≤ 60 s, `--quick` ≤ 10 s per BSDF on 2 cores.\n",
+         "| BSDF | default (s) | target met | --quick (s) | target met |", "|---|---|---|---|---|"]
+    for r in rows:
+        cells = []
+        for mode, limit in (("default", 60.0), ("quick", 10.0)):
+            v = r[f"{mode}_seconds"]
+            med = statistics.median(v)
+            cells += [f"{med:.1f} [{min(v):.1f}, {max(v):.1f}]", fmt_met(med <= limit)]
+        L.append(f"| {r['bsdf']} | " + " | ".join(cells) + " |")
+    return L + [""]
+
+
 def reproduce_section(d: RunData) -> list[str]:
     minutes = fmt_g(d.run.get("seconds", float("nan")) / 60, 2)
     return [f"\n## Reproduce\n\n```\nmake bench            # full run (about {minutes} min here) + this file\n"
@@ -457,7 +479,7 @@ def reproduce_section(d: RunData) -> list[str]:
 #: The report's sections, in order.
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
             jit_section, renders_section, variants_section, stability_section, mis_section,
-            planner_section, fitting_section, reproduce_section)
+            planner_section, validate_section, fitting_section, reproduce_section)
 
 
 def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> Path:

@@ -52,12 +52,19 @@ def lobe_width(p: float) -> float:
     return 1.0 / math.sqrt(p + 2.0)
 
 
-def lobe_quadrature(theta_i: float, width: float, n: int = 20) -> tuple[np.ndarray, np.ndarray]:
+def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = math.pi,
+                    symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
     r"""Nodes and weights for ∫_{H+} g(ω) dω, refined around the mirror direction R(ω_i).
 
     ``theta_i`` is the incidence angle (radians, ω_i in the xz-plane at φ = 0), ``width`` the
     angular width of the lobe around R, ``n`` the Gauss–Legendre nodes per panel (the module
     docstring states the rule).
+
+    A lobe centred elsewhere (a normal-mapped or measured BSDF): the centre is the direction
+    at polar angle ``theta_i`` and azimuth ``azimuth`` (default π, the mirror direction R);
+    ``symmetric=False`` integrates the whole circle φ ∈ [0, 2π] around it instead of doubling
+    the half φ ∈ [0, π] (which assumes g symmetric about the plane through the centre and the
+    normal).
 
     Returns:
         (wo (M, 3), weights (M,)) in float64.
@@ -68,8 +75,10 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20) -> tuple[np.ndarr
     T2 = np.array([0.0, 1.0, 0.0])
     dphi = max(c, 1e-4) / 4.0
     side = _geometric_edges(0.0, math.pi / 2, dphi)
-    phi_edges = np.array(sorted({0.0, math.pi, math.pi / 2} | {math.pi / 2 - e for e in side}
-                                | {math.pi / 2 + e for e in side}))
+    half = {0.0, math.pi, math.pi / 2} | {math.pi / 2 - e for e in side} | \
+        {math.pi / 2 + e for e in side}
+    phi_edges = np.array(sorted(half if symmetric else half | {2 * math.pi - e for e in half}))
+    fold = 2.0 if symmetric else 1.0
     x, w = np.polynomial.legendre.leggauss(n)
     # φ nodes: composite Gauss-Legendre over the φ panels.
     h = 0.5 * np.diff(phi_edges)
@@ -86,11 +95,15 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20) -> tuple[np.ndarr
     walpha = ha[..., None] * w
     keep = np.broadcast_to((ha > 0)[..., None], alpha.shape)
     al = alpha[keep]
-    wts = (2.0 * np.broadcast_to(wphi[:, None, None], alpha.shape)[keep] * walpha[keep]
+    wts = (fold * np.broadcast_to(wphi[:, None, None], alpha.shape)[keep] * walpha[keep]
            * np.sin(al))
     ph = np.broadcast_to(phi[:, None, None], alpha.shape)[keep]
     sa, ca = np.sin(al), np.cos(al)
     dirs = (ca[:, None] * R + sa[:, None] * (np.cos(ph)[:, None] * T1 + np.sin(ph)[:, None] * T2))
+    if azimuth != math.pi:                                 # rotate the centre about the normal
+        cr, sr = math.cos(azimuth - math.pi), math.sin(azimuth - math.pi)
+        dirs = np.column_stack([cr * dirs[:, 0] - sr * dirs[:, 1],
+                                sr * dirs[:, 0] + cr * dirs[:, 1], dirs[:, 2]])
     return dirs, wts
 
 

@@ -1,0 +1,60 @@
+"""Regenerate docs/conformance.json and docs/conformance.md (``make conformance``).
+
+    python scripts/conformance.py [--quick] [--seed S] [--only LABEL ...]
+        [--json docs/conformance.json] [--markdown docs/conformance.md]
+    python scripts/conformance.py --from-json docs/conformance.json   # markdown only
+
+The cases, the findings and the markdown renderer live in phonglab.validate.builtins; this
+driver only runs them and writes the two files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from phonglab.validate import batch, builtins
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="the validator's --quick sizes")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", nargs="+", metavar="LABEL", help="validate only these cases")
+    ap.add_argument("--json", type=Path, default=Path("docs/conformance.json"))
+    ap.add_argument("--markdown", type=Path, default=Path("docs/conformance.md"))
+    ap.add_argument("--from-json", type=Path, metavar="JSON",
+                    help="render the markdown from this JSON instead of validating")
+    args = ap.parse_args(argv)
+    labels = {c.label for c in builtins.cases()}
+    unknown = sorted(set(args.only or ()) - labels)
+    if unknown:
+        ap.error(f"unknown case {unknown[0]!r}; the labels are listed by "
+                 f"phonglab.validate.builtins.cases()")
+    if args.from_json:
+        data = json.loads(args.from_json.read_text())
+    else:
+        def progress(d):
+            bad = sorted({f"{r['topic']}:{r['status']}" for r in d["results"]
+                          if r["status"] in ("fail", "KNOWN")})
+            print(f"{d['meta']['case']:42s} {d['meta']['wall_seconds']:6.1f} s  "
+                  f"{', '.join(bad) or 'ok'}", flush=True)
+        chosen = [c for c in builtins.cases() if not args.only or c.label in args.only]
+        t0 = time.perf_counter()
+        data = batch.run_all(chosen, {"seed": args.seed, "quick": args.quick}, progress)
+        data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        data = builtins.without_plot_data(data)
+        args.json.write_text(json.dumps(data, separators=(",", ":")) + "\n")
+        print(f"wrote {args.json} ({data['meta']['seconds']} s)")
+    args.markdown.parent.mkdir(parents=True, exist_ok=True)
+    args.markdown.write_text(builtins.render_markdown(data))
+    print(f"wrote {args.markdown}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

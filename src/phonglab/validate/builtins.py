@@ -1,0 +1,775 @@
+r"""The catalogue of Mitsuba 3.9.1's built-in BSDFs (and phonglab's own) that ``phonglab validate
+--all-builtins`` checks, and the renderer of its conformance table (``docs/conformance.md``).
+
+:func:`cases` lists every BSDF plugin of Mitsuba 3.9.1 (``src/bsdfs/*.cpp`` at tag v3.9.1,
+commit a8c3ffd763c8) that can be built standalone, each at two or more parameter settings, plus
+phonglab's ``lambert`` and ``phong``.  A :class:`Case` holds a ``mi.load_dict`` spec, the variant
+it needs (polarized plugins need a ``*_polarized`` variant) and the rows that are KNOWN to fail
+with their documented cause: the Mitsuba source line (``file:line`` at v3.9.1) and one sentence.
+A KNOWN row is still reported; it only does not make the run fail.  :data:`LEFT_OUT` names the
+3.9.1 plugins that are not in the catalogue and why.
+
+Specs are plain dicts except for textures: a bitmap texture takes a ``mi.Bitmap`` (which exists
+in every variant) built from a numpy array, so the same spec loads in any variant.
+
+:func:`render_markdown` turns the JSON of ``phonglab validate --all-builtins --json``
+(:func:`phonglab.validate.batch.run_all`: one report per case) into the conformance table; the
+numbers in ``docs/conformance.md`` come from that JSON only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import runtime
+from .report import TOPICS
+
+#: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
+MITSUBA_VERSION = "3.9.1"
+MITSUBA_COMMIT = "a8c3ffd763c8e097a57e4fdb69befb78d5da2f2d"
+SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
+
+POLARIZED = "llvm_ad_spectral_polarized"
+SPECTRAL = "llvm_ad_spectral"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One BSDF at one parameter setting."""
+
+    label: str                       #: unique, e.g. ``roughplastic/beckmann-a0.25``
+    spec: dict[str, Any]             #: the ``mi.load_dict`` dictionary
+    variant: str | None = None       #: None: phonglab's default (``llvm_ad_rgb``)
+    #: topic -> "src/.../file.cpp:LINE: why" for rows known to fail in Mitsuba 3.9.1
+    known: dict[str, str] = field(default_factory=dict)
+    #: every lobe is a Dirac delta (no density to histogram): directions and energy only
+    delta: bool = False
+    note: str = ""                   #: what the setting exercises, for the table
+
+    @property
+    def plugin(self) -> str:
+        """The plugin type at the top of the spec."""
+        return self.spec["type"]
+
+    def resolved_variant(self) -> str:
+        """The variant the case runs in."""
+        return self.variant or runtime.default_variant()
+
+
+def load(case: Case):
+    """``mi.load_dict(case.spec)`` in the case's variant (set, phonglab plugins registered)."""
+    from .. import registration
+    registration.register(case.resolved_variant())
+    import mitsuba as mi
+    return mi.load_dict(case.spec)
+
+
+# ----------------------------------------------------------------------------- textures
+def bump_texture(res: int = 32) -> dict:
+    """A smooth height field h(u, v) = 0.5 + 0.5 sin(2πu) cos(2πv) as a raw bitmap texture."""
+    import mitsuba as mi
+    t = (np.arange(res) + 0.5) / res
+    h = 0.5 + 0.5 * np.sin(2 * np.pi * t)[None, :] * np.cos(2 * np.pi * t)[:, None]
+    return {"type": "bitmap", "bitmap": mi.Bitmap(h.astype(np.float32)[..., None]), "raw": True}
+
+
+def normal_texture(normal=(0.3, 0.2, 1.0)) -> dict:
+    """A constant tangent-space normal (normalised), encoded (n + 1) / 2 in a raw bitmap."""
+    import mitsuba as mi
+    n = np.asarray(normal, np.float64)
+    n = n / np.linalg.norm(n)
+    img = np.tile(((n + 1.0) / 2.0).astype(np.float32), (4, 4, 1))
+    return {"type": "bitmap", "bitmap": mi.Bitmap(img), "raw": True}
+
+
+def _rgb(*v) -> dict:
+    return {"type": "rgb", "value": list(v)}
+
+
+# ----------------------------------------------------------------------------- findings
+@dataclass(frozen=True)
+class Finding:
+    """A row that fails for a reason in Mitsuba 3.9.1 itself, pinned to its source line."""
+
+    key: str                 #: short id, e.g. ``roughplastic-pdf-below-horizon``
+    topic: str               #: the validator topic that fails
+    labels: tuple[str, ...]  #: the cases it affects
+    source: str              #: ``path/in/mitsuba3.cpp:LINE`` at tag v3.9.1
+    cause: str               #: one sentence: what that line does wrong (or why it is by design)
+    measured: str            #: what the probe measures
+    expected: str            #: what a correct plugin gives
+    reproducer: str          #: tests/repro/<script>.py: exits 1 while the behaviour is present
+    bug: bool = True         #: False: intended behaviour of the model, documented as KNOWN
+
+    def known_text(self) -> str:
+        """The ``known`` entry of a case: ``file:line: cause``."""
+        return f"{self.source}: {self.cause}"
+
+
+#: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
+#: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).
+_MICROFACET_NAN = ("roughconductor/beckmann-a0.2", "roughconductor/ggx-a0.3-Cu",
+                   "roughconductor/ggx-aniso", "roughconductor/ggx-Cu-spectral",
+                   "roughconductor/polarized", "roughdielectric/ggx-a0.3",
+                   "roughdielectric/ggx-aniso-inverted", "roughplastic/ggx-a0.25",
+                   "roughplastic/ggx-a0.5-nonlinear", "principled/default", "principled/metal",
+                   "principledthin/all-lobes", "twosided/diffuse|roughconductor",
+                   "bumpmap/roughconductor", "normalmap/roughconductor",
+                   "mask/roughconductor-0.8", "pplastic/rough-ggx")
+
+#: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
+FINDINGS: tuple[Finding, ...] = (
+    Finding("roughplastic-pdf-below-horizon", "chi2",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:422",
+            "pdf() returns `result` without masking it by `active` (cos_theta_o > 0, line 391; "
+            "eval_pdf() likewise at line 501), so in vectorized variants wo below the horizon "
+            "gets the specular density that sample() never produces",
+            "pdf(wo below horizon) = 0.0677 (alpha 0.25, 45 deg); the pdf integrates to 1.0045 "
+            "while 99.8 % of samples are valid; chi2 p = 0 at 45-87 deg (and at 0 deg for GGX)",
+            "pdf = 0 below the horizon (scalar_rgb gives 0); chi2 passes when the pdf is masked "
+            "to wo.z > 0 (p = 0.09-0.78 at 0-85 deg, both distributions)",
+            "tests/repro/roughplastic_pdf_below_horizon.py"),
+    Finding("roughplastic-pdf-nan-grazing", "finite",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:422",
+            "the same unmasked `return result;`: at cos_theta_i = 0 the specular term divides by "
+            "4 cos_theta_i (line 414) and the NaN is returned whenever another lane is active "
+            "(eval_pdf() likewise, line 501)",
+            "pdf = NaN for wi = (1, 0, 0) in a call with other, valid lanes",
+            "pdf = 0 for an inactive lane",
+            "tests/repro/roughplastic_pdf_below_horizon.py"),
+    Finding("roughplastic-gradient-detached", "gradient",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:235",
+            "parameters_changed() builds the rough transmittance table and internal reflectance "
+            "(lines 232-251) from `dr::slice(m_eta)` and `dr::slice(m_alpha)`, plain scalars, so "
+            "AD misses the derivative of the diffuse term through them although both "
+            "parameters are exposed as Differentiable (lines 210-211)",
+            "d eval/d alpha: AD 0.0633 vs central difference -0.0250; d/d eta: AD -0.108 vs "
+            "0.0265 (alpha 0.25, one lane off the specular peak)",
+            "AD equal to the central difference within its error",
+            "tests/repro/roughplastic_gradient_detached.py"),
+    Finding("principledthin-pdf-nan-grazing", "finite", ("principledthin/all-lobes",),
+            "src/bsdfs/principledthin.cpp:704",
+            "pdf() sets `active &= cos_theta_i != 0` (line 606) but returns `pdf` unmasked, so a "
+            "lane at exactly grazing incidence gets the NaN of the microfacet densities (they "
+            "divide by cos_theta_i) whenever another lane is active -- roughplastic's pattern",
+            "pdf = NaN for wi = (1, 0, 0) next to a valid lane",
+            "pdf = 0 for an inactive lane",
+            "tests/repro/principledthin_pdf_nan_grazing.py"),
+    Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
+            "src/bsdfs/hair.cpp:267",
+            "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
+            "residual lobe p = P_MAX, so its samples keep sin/cos_theta_ip = 0 (line 265) and "
+            "land exactly in the fiber's normal plane (line 287: sin_theta_o = 0), unlike "
+            "pdf()/eval() (lines 437, 389)",
+            "3.5 % of samples have wo.y == 0 exactly (blond, 85 deg); chi2 p = 0 at 70-87 deg "
+            "(res 201, ires 16)",
+            "P(wo.y == 0) ~ 1e-7 for a continuous density; sampling consistent with pdf",
+            "tests/repro/hair_residual_lobe_sampling.py"),
+    Finding("principled-component-ids", "component",
+            ("principled/default", "principled/metal"),
+            "src/bsdfs/principled.cpp:423",
+            "sample() hard-codes the all-lobes indices (3 = specular here, 2 = spec_trans at "
+            "line 440, 1 = clearcoat at line 463) while m_components (lines 241-265) only holds "
+            "the lobes that are on",
+            "sampled_component 3 with component_count() = 2",
+            "sampled_component < component_count() and flags(i) containing sampled_type",
+            "tests/repro/principled_component_ids.py"),
+    Finding("principled-ignores-component", "component",
+            ("principled/default", "principled/all-lobes", "principled/metal",
+             "principledthin/default", "principledthin/all-lobes"),
+            "src/bsdfs/principled.cpp:377",
+            "the lobe probabilities (principled.cpp:377-393, principledthin.cpp:291-299) and "
+            "eval/pdf never consult ctx.component or ctx.is_enabled(), so a context "
+            "restricted to one component still samples and evaluates every lobe",
+            "BSDFContext(component=0) samples components [0, 1, 2, 3]",
+            "only component 0",
+            "tests/repro/principled_ignores_component.py"),
+    Finding("blendbsdf-component-ids", "component",
+            ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
+            "src/bsdfs/blendbsdf.cpp:154",
+            "`dr::masked(bs, m1) = bs1` keeps bsdf_1's own component index instead of adding "
+            "bsdf_0->component_count() (the numbering of lines 94-97; line 123 likewise)",
+            "GlossyReflection samples of bsdf_1 report component 0 (flags(0) = "
+            "DiffuseReflection)",
+            "component 1",
+            "tests/repro/blendbsdf_component_ids.py"),
+    Finding("pplastic-component-ids", "component", ("pplastic/default", "pplastic/rough-ggx"),
+            "src/bsdfs/pplastic.cpp:210",
+            "one component (Glossy|Diffuse) is declared but sample() reports components 0 and 1 "
+            "(lines 278, 284) and the lobes are enabled with ctx.is_enabled(..., 0/1) "
+            "(lines 251-252)",
+            "sampled_component 1 with component_count() = 1",
+            "sampled_component < component_count()",
+            "tests/repro/pplastic_component_ids.py"),
+    Finding("mask-restricted-context", "component",
+            ("mask/diffuse-0.5", "mask/roughconductor-0.8"),
+            "src/bsdfs/mask.cpp:140",
+            "`opacity = sample_transmission ? 1.f : 0.f` is inverted (opacity is the "
+            "probability of the NESTED lobe, line 157): a context without the Null lobe returns "
+            "only pass-through samples, one with only the Null lobe samples the nested BSDF",
+            "context = DiffuseReflection: 100 % of the samples are Null (wo = -wi)",
+            "0 % Null samples (pdf() at line 177 already treats the context the right way)",
+            "tests/repro/mask_restricted_context.py"),
+    Finding("microfacet-sample-nan", "finite", _MICROFACET_NAN,
+            "include/mitsuba/render/microfacet.h:418",
+            "GGX visible-normal sampling divides by 0 for sample2.x = 0 (the concentric disk "
+            "point lies on the circle: `norm = rcp(sin_theta_i * y + cos_theta_i * z)` with "
+            "y = z = 0), and Beckmann visible sampling (line 375) returns an infinite normal "
+            "for wi below the horizon; roughconductor.cpp:250 and the other callers keep the "
+            "NaN wo and bs.pdf (only the weight is masked to 0)",
+            "wo = NaN and bs.pdf = NaN (weight 0) for sample2 = (0, 0.5), or for any sample "
+            "with wi below the horizon (Beckmann)",
+            "finite wo and pdf for every sample in [0, 1)^2 (an invalid sample: weight 0, "
+            "pdf 0)",
+            "tests/repro/microfacet_sample_nan.py"),
+    Finding("blendbsdf-nan-weight", "finite",
+            ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
+            "src/bsdfs/blendbsdf.cpp:149",
+            "sample() evaluates the other BSDF (eval_pdf at bs.wo, lines 137 and 149) and mixes "
+            "it into the weight even when the nested sample is invalid, so a NaN wo from the "
+            "nested sampler becomes a NaN sample weight",
+            "weight = NaN for sample1 = 0, sample2 = (0, 0.5) (GGX) or wi below the horizon",
+            "weight 0 for an invalid sample",
+            "tests/repro/microfacet_sample_nan.py"),
+    Finding("conductor-eta0-gradient", "gradient",
+            ("roughconductor/beckmann-a0.2", "roughconductor/beckmann-novisible",
+             "blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric",
+             "twosided/diffuse|roughconductor", "bumpmap/roughconductor",
+             "normalmap/roughconductor", "mask/roughconductor-0.8"),
+            "include/mitsuba/render/fresnel.h:104",
+            "at the default material 'none' (eta = 0, k = 1, roughconductor.cpp:166-167) "
+            "`a = safe_sqrt(0.5 (a_2_pb_2 + temp_1))` is the square root of k^2 eta^2 / |t|, "
+            "so a = k eta / sqrt(|t|) has a finite slope, but AD differentiates safe_sqrt at 0 "
+            "as 0 (and the float32 sum a_2_pb_2 + temp_1 cancels, making differences noisy)",
+            "d eval/d eta by AD: 0 at eta = 0, -1.955 at eta = 1e-3, -1.970 at 2e-3 (one "
+            "lane)",
+            "a continuous derivative (about -1.95 at eta = 0)",
+            "tests/repro/conductor_eta0_gradient.py"),
+    Finding("principled-gradient-lobe-masks", "gradient",
+            ("principled/default", "principled/metal", "principledthin/default"),
+            "src/bsdfs/principled.cpp:559",
+            "lobes are switched on by strict inequalities on their weights (clearcoat > 0 at "
+            "line 559, bsdf > 0 at 563, brdf > 0 at 568, sheen > 0 and 1 - metallic > 0 at "
+            "571-572; principledthin.cpp:458-467 spec_trans > 0, diff_trans > 0), so at a "
+            "range end (0, the default of clearcoat/sheen/spec_trans, or metallic = 1) AD "
+            "returns the derivative of the model without that lobe, i.e. the derivative from "
+            "outside [0, 1]",
+            "d/d clearcoat at 0: AD 0 vs right-hand difference 0.614; d/d metallic at 1: AD "
+            "20.54 (= right-hand, outside the range) vs left-hand 1.42 (256 lanes)",
+            "the one-sided derivative from inside [0, 1]",
+            "tests/repro/principled_gradient_lobe_masks.py"),
+    Finding("principledthin-transmission-reciprocity", "reciprocity",
+            ("principledthin/all-lobes",),
+            "src/bsdfs/principledthin.cpp:463",
+            "the specular-transmission mask `mac_mic_compatibility(wh, wi, wo_t, wi.z(), false)` "
+            "tests the unmirrored wo_t against the half vector built from the mirrored wo_r "
+            "(lines 451-454), so whether the lobe is on depends on which direction is the "
+            "grazing one; the lobe value (lines 522-524) is symmetric",
+            "f(a, b) = 0 vs f(b, a) = 10.67 for a = (-0.49, 0.85, 0.2), b = (0.49, -0.87, "
+            "-0.0216)",
+            "f(a, b) = f(b, a) (a thin sheet transmits with eta = 1)",
+            "tests/repro/principledthin_transmission_reciprocity.py"),
+    Finding("pplastic-polarized-grazing", "reciprocity", ("pplastic/default", "pplastic/rough-ggx"),
+            "src/bsdfs/pplastic.cpp:377",
+            "the polarized diffuse term evaluates the second Fresnel transmission from the "
+            "internally refracted direction (lines 375-377); for grazing wi that direction is "
+            "at the critical angle, where cos = sqrt(1 - eta^2 sin^2) cancels in float32 (the "
+            "unpolarized branch, lines 429-432, uses 1 - R(cos_theta_i) directly)",
+            "f(a, b) = 0.0011334 vs f(b, a) = 0.0011194 (1.3 %) at cos = 0.0019; the spectral "
+            "(unpolarized) variant agrees to 1.5e-8",
+            "f(a, b) = f(b, a) to float32 precision",
+            "tests/repro/pplastic_polarized_grazing.py"),
+    Finding("shading-normal-reciprocity", "reciprocity",
+            ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
+             "bumpmap/roughconductor"),
+            "src/bsdfs/normalmap.cpp:171",
+            "by design: eval() is the nested BSDF in the perturbed frame, f(wi', wo') cos theta'_o, "
+            "zeroed where wo and wo' lie on different sides (line 168; bumpmap.cpp:174-177 "
+            "alike); shading normals are not reciprocal w.r.t. the geometric normal "
+            "(Veach 1997, sec. 5.3)",
+            "eval(a, b) / cos b != eval(b, a) / cos a; 12 % of random pairs are 0 one way only",
+            "f(a, b) = f(b, a) for a reciprocal BRDF",
+            "tests/repro/shading_normal_reciprocity.py", bug=False),
+    Finding("hair-reciprocity", "reciprocity", ("hair/default", "hair/blond-rough"),
+            "src/bsdfs/hair.cpp:349",
+            "by design: eval() takes the fiber offset h = sin(gamma_i) from wi alone "
+            "(near-field model at the offset where the ray hit), so swapping wi and wo changes h",
+            "f(a, b) and f(b, a) differ for > 99 % of random pairs",
+            "f(a, b) = f(b, a) for a reciprocal BSDF",
+            "tests/repro/hair_reciprocity.py", bug=False),
+)
+
+
+@dataclass(frozen=True)
+class ValidatorIssue:
+    """A failing row traced to the validator itself, not to Mitsuba (stays a fail in the JSON)."""
+
+    key: str
+    topic: str
+    labels: tuple[str, ...]
+    explanation: str         #: what the validator does wrong, with the measurement showing it
+    statuses: tuple[str, ...] = ("fail",)   #: the row statuses it explains (or hides)
+
+
+#: Rows of the conformance run that fail because of the validator (to be fixed there).
+VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
+    ValidatorIssue(
+        "grazing-half-vector-conditioning", "weight",
+        ("roughconductor/beckmann-novisible", "roughdielectric/beckmann-a0.1",
+         "roughdielectric/ggx-aniso-inverted"),
+        "at cos theta_i = 1e-4 with a near-retro-reflected wo, pdf(wo) recomputes "
+        "m = normalize(wi + wo) from a float32 wo whose x component is about -1: moving wo.x by "
+        "ONE float32 ulp changes pdf from 1488.7 to 1078.1 or 2404.7 (-28 %/+62 %; beckmann, "
+        "alpha 0.4, no visible sampling), so bs.pdf (from the exact sampled m) and pdf(bs.wo) "
+        "differ by rounding alone.  config.perturb() moves every component by 8 u and then "
+        "renormalizes, which undoes the move of a component near +-1, so the sensitivity "
+        "misses exactly this rounding and the per-sample tolerance is too tight (weight and "
+        "pdf rows alike)"),
+    ValidatorIssue(
+        "grazing-half-vector-conditioning-pdf", "pdf",
+        ("roughconductor/beckmann-novisible", "roughdielectric/beckmann-a0.1",
+         "roughdielectric/ggx-aniso-inverted"),
+        "the same rounding as the weight row: bs.pdf vs pdf(bs.wo) at cos theta_i = 1e-4.  "
+        "With the validator's later perturbation (no renormalization) one lane still fails: "
+        "wi = (-0.50485, 0.86321, 1e-4), wo = (0.50489, -0.86318, 8.6e-6) is a grazing "
+        "retro-reflection, |wi + wo| = 1.2e-4, so m = normalize(wi + wo) carries a float32 "
+        "error of ~6e-8 / 1.2e-4 = 5e-4 rad and wo.m = (1 + wi.wo) / |wi + wo| cancels to "
+        "<= 0: pdf(bs.wo) = 0 against bs.pdf = 2348.7 from the exact sampled m.  Neither "
+        "value is wrong for its input; the 8-ulp sensitivity draws missed the flip"),
+    ValidatorIssue(
+        "bumpmap-without-surface-derivatives", "chi2",
+        ("bumpmap/diffuse", "bumpmap/roughconductor"),
+        "phonglab.probe.interaction() leaves si.dp_du = si.dp_dv = 0, which a real shape sets; "
+        "bumpmap builds its perturbed frame from them (src/bsdfs/bumpmap.cpp:229-234: "
+        "n = normalize(cross(dp_du', dp_dv')) with dp_du' = dp_du + n (grad_u - n.dp_du)), "
+        "i.e. from two parallel vectors: the frame is NaN, every sample is invalid (wo = NaN, "
+        "weight 0) and the chi2, weight and pdf rows are skipped as 'sampled nothing' -- the "
+        "case is not really validated.  With si.dp_du = (1, 0, 0) and si.dp_dv = (0, 1, 0) "
+        "both bumpmap cases sample finite directions with non-zero weights; the fix belongs "
+        "in probe.interaction", statuses=("skipped",)),
+    ValidatorIssue(
+        "tail-conditioning-reciprocity", "reciprocity",
+        ("roughdielectric/beckmann-a0.1", "roughdielectric/ggx-a0.3",
+         "blendbsdf/roughconductor+roughdielectric"),
+        "the failing transmission pairs lie far in the microfacet tail (f = 0.0029 for "
+        "Beckmann alpha 0.1, 3.2e-6 for GGX alpha 0.3), where D changes by percent for a "
+        "1e-6 rad move of the half vector: moving both directions by 1e-6, 1e-5, 1e-4 and "
+        "1e-3 rad turns the relative asymmetry 0.023 into 0.0045, -0.0012, -0.0034 and "
+        "0.0107 (beckmann) -- rounding noise of both signs, not a systematic non-reciprocity; "
+        "the 4-draw sensitivity estimate (measured 1.13 and 2.07 against 1) under-samples it"),
+    ValidatorIssue(
+        "normalmap-data-discontinuous-fd", "gradient", ("normalmap/diffuse",),
+        "eval is discontinuous in the normal-map data: the nested diffuse BSDF is cut at "
+        "cos theta'_i = 0 (and the normal flipped where dot(wi, n) <= 0, normalmap.cpp:225), "
+        "and that perturbed horizon moves with the normal.  The central difference over lanes "
+        "that straddle it does not converge (D(h) = -260, D(h/2) = -250) and doubles when "
+        "flip_invalid_normals is off (-536, -512) while AD moves from -309 to -293: the "
+        "difference measures the jumps (a boundary term), not a wrong derivative"),
+    ValidatorIssue(
+        "discontinuous-parameter-fd", "gradient", ("roughdielectric/ggx-aniso-inverted",),
+        "eta is flagged ParamFlags::Discontinuous (src/bsdfs/roughdielectric.cpp:223): with "
+        "eta < 1 the total-internal-reflection boundary moves with eta, so a central difference "
+        "over lanes that straddle it picks up the jump (D(h) = 144.7, D(h/2) = 132.0, not "
+        "converging) while AD (9.98) differentiates the continuous part; the topic should skip "
+        "Discontinuous parameters or use lanes away from the boundary"),
+    ValidatorIssue(
+        "spectral-rgb-coefficients-fd", "gradient", ("pplastic/rough-ggx",),
+        "in spectral variants an `rgb` texture's diffuse_reflectance.value holds the "
+        "sRGB-to-spectrum polynomial coefficients (here (-7.5e-5, 0.082, -22.55)); the step "
+        "h = 2^-7 max|x| = 0.18 along (1, 1, 1) adds 0.18 to the lambda^2 coefficient and "
+        "saturates the sigmoid, so D(h) = 750, D(h/2) = 1501 (not converging) vs AD 1.75e7: "
+        "the difference is not a derivative"),
+    ValidatorIssue(
+        "chi2-resolution", "chi2", ("principled/metal",),
+        "principled with roughness 0.2 is GGX alpha = 0.04; with --quick sizes (61x122 cells, "
+        "2e5 samples) the cell at 78.5 deg is rejected, while mi.chi2 with 201x402 cells, "
+        "ires 16 and 1e6 samples accepts the same incidence (p = 0.44, histogram 0.99037 vs "
+        "pdf 0.99018): the pdf integration of a sharp lobe on the coarse grid, not sampling"),
+    ValidatorIssue(
+        "energy-quadrature-off-lobe", "energy", ("normalmap/roughconductor",),
+        "the validator's albedo at theta_i = 0 is 1.282, but a 1600x800 midpoint rule over "
+        "the sphere gives 0.9004 and the mean sample weight of 4e5 samples 0.9001 +- 0.0004: "
+        "lobe_quadrature places its panels around the geometric mirror direction, while the "
+        "normal map moves the lobe (normal tilted 22 deg), and |Q10 - Q5| does not detect the "
+        "misplaced panels"),
+    ValidatorIssue(
+        "hair-gradient-crash", "finite", ("hair/default", "hair/blond-rough"),
+        "the gradient topic raises TypeError in collect_indices() for hair, and run_case turns "
+        "the whole case into one failing 'the case loads and runs' row, so no other hair row is "
+        "reported (hair samples, evaluates and passes chi2 standalone)"),
+)
+
+
+def validator_issues() -> dict[tuple[str, str], ValidatorIssue]:
+    """(label, topic) -> the validator issue that explains that row's fail."""
+    return {(label, v.topic): v for v in VALIDATOR_ISSUES for label in v.labels}
+
+
+def known_causes() -> dict[str, dict[str, str]]:
+    """label -> {topic: cause} from :data:`FINDINGS` (several causes of one row joined)."""
+    out: dict[str, dict[str, str]] = {}
+    for f in FINDINGS:
+        for label in f.labels:
+            topics = out.setdefault(label, {})
+            topics[f.topic] = "; ".join(filter(None, (topics.get(f.topic), f.known_text())))
+    return out
+
+
+# ----------------------------------------------------------------------------- the catalogue
+def _smooth_and_diffuse() -> list[Case]:
+    return [
+        Case("diffuse/0.5", {"type": "diffuse", "reflectance": 0.5}, note="grey"),
+        Case("diffuse/rgb", {"type": "diffuse", "reflectance": _rgb(0.2, 0.5, 0.9)},
+             note="coloured"),
+        Case("diffuse/white", {"type": "diffuse", "reflectance": 1.0},
+             note="albedo exactly 1"),
+        Case("plastic/default", {"type": "plastic"}, note="delta coat + diffuse base"),
+        Case("plastic/nonlinear-ior1.9", {"type": "plastic", "int_ior": 1.9, "nonlinear": True,
+                                          "diffuse_reflectance": _rgb(0.8, 0.3, 0.1)},
+             note="nonlinear, high IOR"),
+        Case("conductor/mirror", {"type": "conductor"}, delta=True, note="perfect mirror"),
+        Case("conductor/Au", {"type": "conductor", "material": "Au"}, delta=True,
+             note="gold (complex IOR)"),
+        Case("dielectric/1.5", {"type": "dielectric"}, delta=True, note="glass"),
+        Case("dielectric/inverted", {"type": "dielectric", "int_ior": 1.0, "ext_ior": 1.5},
+             delta=True, note="eta < 1"),
+        Case("thindielectric/1.5", {"type": "thindielectric"}, delta=True, note="thin glass"),
+        Case("thindielectric/1.9", {"type": "thindielectric", "int_ior": 1.9}, delta=True,
+             note="high IOR"),
+    ]
+
+
+def _rough() -> list[Case]:
+    plastic = {"specular_reflectance": 0.7, "diffuse_reflectance": 0.1}
+    return [
+        Case("roughplastic/beckmann-a0.1", {"type": "roughplastic"}, note="defaults"),
+        Case("roughplastic/beckmann-a0.25", {"type": "roughplastic", "alpha": 0.25, **plastic},
+             note="Mitsuba's own chi2 test setting"),
+        Case("roughplastic/ggx-a0.25", {"type": "roughplastic", "distribution": "ggx",
+                                        "alpha": 0.25, **plastic}, note="GGX"),
+        Case("roughplastic/ggx-a0.5-nonlinear",
+             {"type": "roughplastic", "distribution": "ggx", "alpha": 0.5, "nonlinear": True,
+              "diffuse_reflectance": _rgb(0.7, 0.4, 0.2)}, note="rough, nonlinear"),
+        Case("roughconductor/beckmann-a0.2", {"type": "roughconductor",
+                                              "distribution": "beckmann", "alpha": 0.2},
+             note="Beckmann, perfect conductor"),
+        Case("roughconductor/ggx-a0.3-Cu", {"type": "roughconductor", "distribution": "ggx",
+                                            "alpha": 0.3, "material": "Cu"}, note="GGX, copper"),
+        Case("roughconductor/ggx-aniso", {"type": "roughconductor", "distribution": "ggx",
+                                          "alpha_u": 0.05, "alpha_v": 0.4, "material": "Al"},
+             note="anisotropic"),
+        Case("roughconductor/beckmann-novisible",
+             {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
+              "sample_visible": False}, note="full-distribution sampling"),
+        Case("roughdielectric/beckmann-a0.1", {"type": "roughdielectric"}, note="defaults"),
+        Case("roughdielectric/ggx-a0.3", {"type": "roughdielectric", "distribution": "ggx",
+                                          "alpha": 0.3}, note="GGX"),
+        Case("roughdielectric/ggx-aniso-inverted",
+             {"type": "roughdielectric", "distribution": "ggx", "alpha_u": 0.1, "alpha_v": 0.3,
+              "int_ior": 1.0, "ext_ior": 1.33}, note="anisotropic, eta < 1"),
+    ]
+
+
+def _principled() -> list[Case]:
+    return [
+        Case("principled/default", {"type": "principled"}, note="defaults"),
+        Case("principled/all-lobes",
+             {"type": "principled", "base_color": _rgb(0.8, 0.5, 0.3), "metallic": 0.3,
+              "roughness": 0.4, "anisotropic": 0.5, "spec_trans": 0.4, "sheen": 0.5,
+              "clearcoat": 0.6, "clearcoat_gloss": 0.5, "specular": 0.6}, note="every lobe on"),
+        Case("principled/metal", {"type": "principled", "metallic": 1.0, "roughness": 0.2},
+             note="metallic"),
+        Case("principledthin/default", {"type": "principledthin"}, note="defaults"),
+        Case("principledthin/all-lobes",
+             {"type": "principledthin", "base_color": _rgb(0.6, 0.7, 0.3), "roughness": 0.4,
+              "anisotropic": 0.3, "spec_trans": 0.3, "diff_trans": 0.4, "sheen": 0.4,
+              "flatness": 0.5, "eta": 1.4}, note="every lobe on"),
+    ]
+
+
+def _wrappers() -> list[Case]:
+    rough_metal = {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2}
+    return [
+        Case("blendbsdf/diffuse+roughconductor",
+             {"type": "blendbsdf", "weight": 0.3,
+              "bsdf_0": {"type": "diffuse"}, "bsdf_1": rough_metal},
+             note="two different lobes (PR#1681 class)"),
+        Case("blendbsdf/roughconductor+roughdielectric",
+             {"type": "blendbsdf", "weight": 0.6,
+              "bsdf_0": {"type": "roughconductor", "alpha": 0.3},
+              "bsdf_1": {"type": "roughdielectric", "alpha": 0.2}},
+             note="reflection + transmission"),
+        Case("twosided/diffuse", {"type": "twosided", "bsdf": {"type": "diffuse"}},
+             note="one BSDF both sides"),
+        Case("twosided/diffuse|roughconductor",
+             {"type": "twosided", "bsdf_0": {"type": "diffuse"}, "bsdf_1": rough_metal},
+             note="different front and back"),
+        Case("bumpmap/diffuse", {"type": "bumpmap", "arbitrary": bump_texture(), "scale": 0.5,
+                                 "bsdf": {"type": "diffuse"}}, note="sinusoidal height"),
+        Case("bumpmap/roughconductor", {"type": "bumpmap", "arbitrary": bump_texture(),
+                                        "scale": 0.2, "bsdf": rough_metal},
+             note="sinusoidal height"),
+        Case("normalmap/diffuse", {"type": "normalmap", "normalmap": normal_texture(),
+                                   "bsdf": {"type": "diffuse"}}, note="tilted normal"),
+        Case("normalmap/roughconductor", {"type": "normalmap",
+                                          "normalmap": normal_texture((-0.4, 0.1, 1.0)),
+                                          "bsdf": rough_metal}, note="tilted normal"),
+        Case("mask/diffuse-0.5", {"type": "mask", "opacity": 0.5, "bsdf": {"type": "diffuse"}},
+             note="half transparent"),
+        Case("mask/roughconductor-0.8", {"type": "mask", "opacity": 0.8, "bsdf": rough_metal},
+             note="mostly opaque"),
+    ]
+
+
+def _hair_spectral_polarized() -> list[Case]:
+    return [
+        Case("hair/default", {"type": "hair"}, note="defaults (eumelanin 1.3)"),
+        Case("hair/blond-rough", {"type": "hair", "eumelanin": 0.3, "pheomelanin": 0.2,
+                                  "longitudinal_roughness": 0.5, "azimuthal_roughness": 0.6,
+                                  "scale_tilt": 3.0}, note="light, rough"),
+        Case("conductor/Au-spectral", {"type": "conductor", "material": "Au"}, SPECTRAL,
+             delta=True, note="spectral IOR"),
+        Case("roughconductor/ggx-Cu-spectral", {"type": "roughconductor", "distribution": "ggx",
+                                                "alpha": 0.3, "material": "Cu"}, SPECTRAL,
+             note="spectral IOR"),
+        Case("polarizer/0deg", {"type": "polarizer"}, POLARIZED, delta=True,
+             note="linear polarizer"),
+        Case("polarizer/45deg-0.5", {"type": "polarizer", "theta": 45.0,
+                                     "transmittance": 0.5}, POLARIZED, delta=True,
+             note="rotated, grey"),
+        Case("retarder/quarter", {"type": "retarder", "theta": 30.0, "delta": 90.0}, POLARIZED,
+             delta=True, note="quarter-wave plate"),
+        Case("retarder/half", {"type": "retarder", "delta": 180.0}, POLARIZED, delta=True,
+             note="half-wave plate"),
+        Case("circular/right", {"type": "circular"}, POLARIZED, delta=True,
+             note="right circular polarizer"),
+        Case("circular/left", {"type": "circular", "left_handed": True}, POLARIZED, delta=True,
+             note="left circular polarizer"),
+        Case("pplastic/default", {"type": "pplastic"}, POLARIZED, note="defaults"),
+        Case("pplastic/rough-ggx", {"type": "pplastic", "alpha": 0.3, "distribution": "ggx",
+                                    "diffuse_reflectance": _rgb(0.3, 0.5, 0.2)}, POLARIZED,
+             note="rough GGX"),
+        Case("roughconductor/polarized", {"type": "roughconductor", "alpha": 0.3}, POLARIZED,
+             note="Fresnel as Mueller matrix"),
+    ]
+
+
+def _phonglab() -> list[Case]:
+    return [
+        Case("lambert/0.5", {"type": "lambert"}, note="phonglab"),
+        Case("lambert/rgb", {"type": "lambert", "reflectance": _rgb(0.9, 0.4, 0.1)},
+             note="phonglab, coloured"),
+        Case("phong/default", {"type": "phong"}, note="phonglab, p = 30"),
+        Case("phong/glossy", {"type": "phong", "diffuse_reflectance": 0.2,
+                              "specular_reflectance": 0.7, "exponent": 200.0},
+             note="phonglab, p = 200"),
+    ]
+
+
+def cases() -> list[Case]:
+    """Every case of the conformance table, Mitsuba's built-ins first, phonglab's own last."""
+    out = (_smooth_and_diffuse() + _rough() + _principled() + _wrappers()
+           + _hair_spectral_polarized() + _phonglab())
+    known = known_causes()
+    return [Case(c.label, c.spec, c.variant, {**c.known, **known.get(c.label, {})}, c.delta,
+                 c.note) for c in out]
+
+
+#: Mitsuba 3.9.1 BSDF plugins (src/bsdfs/*.cpp) that are not in :func:`cases`, and why.
+LEFT_OUT: dict[str, str] = {
+    "measured": "needs a measured data file (RGL .bsdf, `filename`), none ships with Mitsuba",
+    "measured_polarized": "needs a measured pBSDF data file (`filename`), none ships with "
+                          "Mitsuba",
+    "null": "has no lobe (BSDFFlags.Null only: rays pass straight through); eval, pdf and "
+            "sample are identically zero by design, so no topic has anything to check",
+}
+
+
+# ----------------------------------------------------------------------------- JSON
+#: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
+PLOT_ONLY = ("lobes", "histogram", "pdf", "expected")
+
+
+def without_plot_data(data: dict) -> dict:
+    """A copy of a ``--all-builtins`` JSON document without :data:`PLOT_ONLY` arrays, and
+    without mi.chi2's log text of ACCEPTED cells (their p-value and sums stay).
+
+    docs/conformance.json keeps every number the table and the sections quote; the plot
+    arrays (megabytes) are what ``phonglab validate BSDF --report`` draws.
+    """
+    def drop(k, v, x) -> bool:
+        if k in PLOT_ONLY and isinstance(v, (list, dict)):
+            return True
+        return k == "messages" and x.get("status") == "pass" and "p_value" in x
+
+    def strip(x):
+        if isinstance(x, dict):
+            return {k: strip(v) for k, v in x.items() if not drop(k, v, x)}
+        if isinstance(x, list):
+            return [strip(v) for v in x]
+        return x
+    return strip(data)
+
+
+# ----------------------------------------------------------------------------- markdown
+def cell_status(rows: list[dict]) -> str:
+    """One table cell for a topic's rows: fail > KNOWN > pass > skipped ('' when no row)."""
+    statuses = {r["status"] for r in rows}
+    for s in ("fail", "KNOWN", "pass", "skipped"):
+        if s in statuses:
+            return s
+    return ""
+
+
+def _num(x) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    return str(x)
+
+
+def _md(text) -> str:
+    """Text safe inside a markdown table cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _source_link(source: str) -> str:
+    path, _, line = source.partition(":")
+    return f"[`{source}`]({SOURCE_URL}{path}#L{line})"
+
+
+def _label(report: dict) -> str:
+    return report["meta"]["case"]
+
+
+def _table(data: dict) -> list[str]:
+    head = "| case | variant | " + " | ".join(TOPICS) + " |"
+    lines = [head, "|" + "---|" * (len(TOPICS) + 2)]
+    for report in data["reports"]:
+        by_topic = {t: [r for r in report["results"] if r["topic"] == t] for t in TOPICS}
+        cells = [cell_status(by_topic[t]) or " " for t in TOPICS]
+        cells = [f"**{c}**" if c == "fail" else c for c in cells]
+        variant = str(report["meta"].get("variant", "")).replace("llvm_ad_", "")
+        lines.append(f"| `{_label(report)}` | {variant} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _case_section(report: dict) -> list[str]:
+    """The fail and KNOWN rows of one case, with their documented causes."""
+    bad = [r for r in report["results"] if r["status"] in ("fail", "KNOWN")]
+    if not bad:
+        return []
+    label = _label(report)
+    out = [f"### `{label}`", ""]
+    spec = report["meta"].get("spec")
+    if spec:
+        out += [f"Spec: `{_md(spec)}`; {report['meta'].get('note', '')}.", ""]
+    out += ["| status | topic | check | measured | expected | tolerance | reason |",
+            "|---|---|---|---|---|---|---|"]
+    for r in bad:
+        out.append(f"| {r['status']} | {r['topic']} | {_md(r['name'])} | {_num(r['measured'])} "
+                   f"| {_num(r['expected'])} | {_num(r['tolerance'])} | {_md(r['reason'])} |")
+    causes = [f for f in FINDINGS if label in f.labels and any(r["topic"] == f.topic for r in bad)]
+    for f in causes:
+        out.append("")
+        out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
+                   f"`{f.reproducer}`")
+    issues = validator_issues()
+    by_validator = {issues[(label, r["topic"])].key: issues[(label, r["topic"])]
+                    for r in bad if r["status"] == "fail" and (label, r["topic"]) in issues}
+    for v in by_validator.values():
+        out += ["", f"* {v.topic}: **validator**, [{v.key}](#{v.key}) -- not a Mitsuba finding"]
+    explained = {v.topic for v in by_validator.values()} | {f.topic for f in causes}
+    unexplained = sorted({r["topic"] for r in bad if r["status"] == "fail"} - explained)
+    if unexplained:
+        out += ["", f"* **Unexplained fail** ({', '.join(unexplained)}): no documented cause "
+                "in `phonglab.validate.builtins.FINDINGS` yet."]
+    return out + [""]
+
+
+def _findings_section(data: dict) -> list[str]:
+    seen = {_label(r) for r in data["reports"]}
+    out = ["## Findings", "",
+           "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
+           f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
+           "while the behaviour is present (`pytest -m slow tests/test_builtins_catalog.py` runs "
+           "them all).  Rows they cause are reported as KNOWN.  The *measured* lines are what "
+           "the reproducer (or the named mi.chi2 run) prints; the rows above are the JSON's.", ""]
+    for f in FINDINGS:
+        labels = [label for label in f.labels if label in seen]
+        if not labels:
+            continue
+        kind = "bug" if f.bug else "by design"
+        out += [f"### {f.key}", "",
+                f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
+                f"* measured: {f.measured}", f"* expected: {f.expected}",
+                f"* reproducer: `{f.reproducer}`",
+                f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+    return out
+
+
+def _validator_section(data: dict) -> list[str]:
+    shown = {(_label(rep), r["topic"], r["status"]) for rep in data["reports"]
+             for r in rep["results"]}
+    issues = [(v, [label for label in v.labels
+                   if any((label, v.topic, st) in shown for st in v.statuses)])
+              for v in VALIDATOR_ISSUES]
+    issues = [(v, labels) for v, labels in issues if labels]
+    if not issues:
+        return []
+    out = ["## Rows that fail (or are skipped) because of the validator", "",
+           "These rows keep their status in the JSON (a tolerance is never widened to hide "
+           "them); the fix belongs in `phonglab.validate` / `phonglab.probe`.", ""]
+    for v, labels in issues:
+        if labels:
+            out += [f"### {v.key}", "", f"*{v.topic}* -- {v.explanation}.", "",
+                    f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+    return out
+
+
+def render_markdown(data: dict) -> str:
+    """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
+    (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``)."""
+    meta = data.get("meta", {})
+    options = meta.get("options") or {}
+    counts: dict[str, int] = {}
+    for report in data["reports"]:
+        for r in report["results"]:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+    if "seconds" in meta:
+        took = f"{_num(float(meta['seconds']))} s wall time"
+    else:
+        took = (f"{_num(float(sum(r['meta'].get('wall_seconds', 0) for r in data['reports'])))}"
+                " s (sum of the cases' wall times)")
+    mode = "--quick" if options.get("quick") else "default settings"
+    lines = [
+        f"# Conformance of Mitsuba {MITSUBA_VERSION}'s built-in BSDFs", "",
+        "Generated by `make conformance` (`scripts/conformance.py`) from `docs/conformance.json`;"
+        " do not edit by hand.  Each case is one BSDF at one parameter setting "
+        "(`phonglab.validate.builtins.cases()`), validated by `phonglab.validate.validate_bsdf` "
+        f"with {mode}, seed {options.get('seed', 0)}: {len(data['reports'])} cases, "
+        + ", ".join(f"{counts.get(s, 0)} {s}" for s in ("pass", "fail", "KNOWN", "skipped"))
+        + f" rows, {took}.", "",
+        "A cell is the worst status of the topic's rows (fail > KNOWN > pass > skipped; empty: no "
+        "row).  KNOWN means the row fails for a documented cause in Mitsuba (see Findings); "
+        "it is still reported, never hidden by a wider tolerance.", "",
+    ]
+    lines += _table(data) + ["", "## Rows that do not pass", ""]
+    for report in data["reports"]:
+        lines += _case_section(report)
+    lines += _findings_section(data)
+    lines += _validator_section(data)
+    lines += ["## Plugins left out", ""]
+    for name, why in LEFT_OUT.items():
+        lines.append(f"* `{name}`: {why}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,171 @@
+"""The conformance catalogue (phonglab.validate.builtins): cases, documented causes, renderer."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from phonglab.scenes import REPO_ROOT
+from phonglab.validate import builtins
+from phonglab.validate.report import Report, Row
+
+CASES = builtins.cases()
+SOURCE_LINE = re.compile(r"^(src|include)/[\w/]+\.(cpp|h):\d+: \S")
+
+
+def test_labels_unique_and_every_plugin_twice():
+    labels = [c.label for c in CASES]
+    assert len(labels) == len(set(labels))
+    plugins = [c.plugin for c in CASES]
+    for name in {c.plugin for c in CASES}:
+        assert plugins.count(name) >= 2, name
+
+
+def test_every_3_9_1_plugin_is_covered_or_left_out():
+    # src/bsdfs/*.cpp at tag v3.9.1
+    mitsuba = {"blendbsdf", "bumpmap", "circular", "conductor", "dielectric", "diffuse", "hair",
+               "mask", "measured", "measured_polarized", "normalmap", "null", "plastic",
+               "polarizer", "pplastic", "principled", "principledthin", "retarder",
+               "roughconductor", "roughdielectric", "roughplastic", "thindielectric", "twosided"}
+    covered = {c.plugin for c in CASES} | set(builtins.LEFT_OUT)
+    assert mitsuba <= covered
+    assert {"lambert", "phong"} <= covered
+
+
+def test_every_known_entry_names_a_source_line():
+    assert any(c.known for c in CASES)
+    for case in CASES:
+        for topic, cause in case.known.items():
+            assert topic in builtins.TOPICS, (case.label, topic)
+            assert SOURCE_LINE.match(cause), (case.label, cause)
+
+
+def test_findings_name_existing_cases_and_reproducers():
+    labels = {c.label for c in CASES}
+    for f in builtins.FINDINGS:
+        assert set(f.labels) <= labels, f.key
+        assert (REPO_ROOT / f.reproducer).is_file(), f.reproducer
+        assert f.topic in builtins.TOPICS
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.label for c in CASES])
+def test_case_loads_in_its_variant(case):
+    import mitsuba as mi   # after builtins.load's first call has pinned libLLVM (runtime)
+    bsdf = builtins.load(case)
+    assert mi.variant() == case.resolved_variant()
+    assert isinstance(bsdf, mi.BSDF)
+    delta = int(mi.BSDFFlags.Delta | mi.BSDFFlags.Null)
+    lobes = [int(bsdf.flags(i)) for i in range(bsdf.component_count())]
+    assert case.delta == all(f & delta for f in lobes), case.label
+
+
+def _row(topic, status, name="cell"):
+    return Row(topic, name, 1.5, 1.0, 0.1, 0.3, status, "why" if status != "pass" else "", {})
+
+
+def test_markdown_renders_a_given_json():
+    label = "roughplastic/beckmann-a0.25"
+    case = next(c for c in CASES if c.label == label)
+    rows = [_row("finite", "pass"), _row("chi2", "KNOWN", "45 deg"), _row("energy", "fail"),
+            _row("gradient", "skipped")]
+    report = Report({"case": label, "variant": "llvm_ad_rgb", "note": case.note,
+                     "spec": {"type": "roughplastic", "alpha": 0.25}, "known": case.known},
+                    rows).to_dict()
+    data = {"meta": {"options": {"quick": True, "seed": 3}, "seconds": 12.5},
+            "reports": [report]}
+    md = builtins.render_markdown(data)
+    table_row = next(line for line in md.splitlines() if line.startswith(f"| `{label}`"))
+    cells = [c.strip() for c in table_row.strip("|").split("|")][2:]
+    assert dict(zip(builtins.TOPICS, cells)) == {
+        "finite": "pass", "eval_pdf": "", "weight": "", "pdf": "", "chi2": "KNOWN",
+        "energy": "**fail**", "reciprocity": "", "component": "", "gradient": "skipped",
+        "cost": ""}
+    assert "1 pass, 1 fail, 1 KNOWN, 1 skipped rows, 12.5 s" in md
+    assert "src/bsdfs/roughplastic.cpp#L422" in md
+    assert "tests/repro/roughplastic_pdf_below_horizon.py" in md
+    assert "**Unexplained fail** (energy)" in md
+    for name in builtins.LEFT_OUT:
+        assert f"* `{name}`:" in md
+
+
+def test_cell_status_order():
+    rows = [{"status": s} for s in ("pass", "skipped", "KNOWN")]
+    assert builtins.cell_status(rows) == "KNOWN"
+    assert builtins.cell_status(rows + [{"status": "fail"}]) == "fail"
+    assert builtins.cell_status([]) == ""
+
+
+def test_script_renders_from_json(tmp_path):
+    import json
+    import subprocess
+    import sys
+    data = {"meta": {"options": {"quick": True, "seed": 0}}, "reports": []}
+    src = tmp_path / "c.json"
+    src.write_text(json.dumps(data))
+    out = tmp_path / "c.md"
+    subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "conformance.py"),
+                    "--from-json", str(src), "--markdown", str(out)], check=True,
+                   capture_output=True)
+    assert out.read_text().startswith("# Conformance of Mitsuba 3.9.1")
+    assert Path(out).stat().st_size > 0
+
+
+def test_validator_issues_name_existing_cases():
+    labels = {c.label for c in CASES}
+    for v in builtins.VALIDATOR_ISSUES:
+        assert set(v.labels) <= labels, v.key
+        assert v.topic in builtins.TOPICS
+
+
+def test_without_plot_data_keeps_the_numbers():
+    data = {"meta": {}, "reports": [{"meta": {"case": "x"}, "results": [
+        {"topic": "energy", "details": {"albedo": [0.5], "lobes": {"theta": [1, 2]}}},
+        {"topic": "chi2", "details": {"cells": [
+            {"p_value": 0.3, "status": "pass", "messages": "Accepted", "histogram": [[1, 2]]},
+            {"p_value": 0.0, "status": "fail", "messages": "Rejected", "pdf": [[1.0, 2.0]]}]}}]}]}
+    out = builtins.without_plot_data(data)
+    energy, chi2 = out["reports"][0]["results"]
+    assert energy["details"] == {"albedo": [0.5]}
+    assert chi2["details"] == {"cells": [{"p_value": 0.3, "status": "pass"},
+                                         {"p_value": 0.0, "status": "fail",
+                                          "messages": "Rejected"}]}
+    assert "lobes" in data["reports"][0]["results"][0]["details"]    # the input is untouched
+
+
+def test_validator_section_only_for_failing_rows():
+    issue = builtins.VALIDATOR_ISSUES[0]
+    label = issue.labels[0]
+
+    def data(status):
+        report = Report({"case": label, "variant": "llvm_ad_rgb"},
+                        [_row(issue.topic, status)]).to_dict()
+        return {"meta": {"options": {}}, "reports": [report]}
+    assert f"### {issue.key}" in builtins.render_markdown(data("fail"))
+    assert "because of the validator" not in builtins.render_markdown(data("pass"))
+    skipped = next(v for v in builtins.VALIDATOR_ISSUES if "skipped" in v.statuses)
+    report = Report({"case": skipped.labels[0], "variant": "llvm_ad_rgb"},
+                    [_row(skipped.topic, "skipped")]).to_dict()
+    md = builtins.render_markdown({"meta": {"options": {}}, "reports": [report]})
+    assert f"### {skipped.key}" in md
+
+
+REPRODUCERS = sorted({f.reproducer for f in builtins.FINDINGS})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", REPRODUCERS)
+def test_reproducer_shows_its_finding_in_mitsuba_3_9_1(script):
+    """Each tests/repro script exits 1 while the behaviour it documents is present (3.9.1)."""
+    import subprocess
+    import sys
+
+    from phonglab import runtime
+    runtime.configure()      # pins libLLVM before Mitsuba (and Dr.Jit) load
+    import mitsuba as mi
+    if mi.__version__ != builtins.MITSUBA_VERSION:
+        pytest.skip(f"the findings are pinned to Mitsuba {builtins.MITSUBA_VERSION}")
+    done = subprocess.run([sys.executable, str(REPO_ROOT / script)], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 1, done.stdout + done.stderr
