@@ -189,6 +189,8 @@ def interaction(wi, n: int | None = None, wavelengths=None) -> mi.SurfaceInterac
     """A ``mi.SurfaceInteraction3f`` of n lanes on a surface whose local frame is the world's.
 
     ``n = (0, 0, 1)``, ``sh_frame = Frame3f(n)`` (tangents +x, +y), ``uv = (0.5, 0.5)``,
+    ``dp_du = (1, 0, 0)`` and ``dp_dv = (0, 1, 0)`` (a unit square's parametrization, which
+    ``bumpmap`` needs to build its perturbed frame),
     ``wi`` from (3,) (broadcast) or (N, 3); n defaults to the rows of wi.  In spectral
     variants ``wavelengths`` (nm, (C,) or (N, C)) defaults to :func:`default_wavelengths`;
     other variants ignore it.  Scalar variants build one lane only (n = 1).
@@ -205,6 +207,8 @@ def interaction(wi, n: int | None = None, wavelengths=None) -> mi.SurfaceInterac
     si.n = mi.Normal3f(0.0, 0.0, 1.0)
     si.sh_frame = mi.Frame3f(si.n)
     si.uv = mi.Point2f(0.5, 0.5)
+    si.dp_du = mi.Vector3f(1.0, 0.0, 0.0)
+    si.dp_dv = mi.Vector3f(0.0, 1.0, 0.0)
     si.wi = _dr(mi.Vector3f, rows[0] if jit else rows[0][0])
     if mi.is_spectral:
         si.wavelengths = _dr(mi.UnpolarizedSpectrum, rows[1] if jit else rows[1][0])
