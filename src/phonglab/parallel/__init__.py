@@ -29,14 +29,17 @@ raised here.  A scheduler that cannot be reached within :data:`CONNECT_TIMEOUT` 
 
 from __future__ import annotations
 
+import logging
 import os
 import re
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Hashable, Iterator, Sequence
 
 from tqdm import tqdm
 
 from ..errors import PhonglabError
+from ..registration import register
 
 #: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
 CONNECT_TIMEOUT = 5.0
@@ -75,11 +78,7 @@ def call_job(fn: Callable[..., Any], args: tuple, variant: str) -> tuple[Any, fl
     a job may have switched it (the bench's variant comparison), and in a fresh process
     without the worker plugin it is not set yet.
     """
-    import time
-
-    from ..registration import register
-
-    import mitsuba as mi  # lazy: the serial path of a command that never renders skips it
+    import mitsuba as mi  # lazy: `phonglab --help` imports this module (for its options)
 
     if mi.variant() != variant:
         register(variant)
@@ -171,8 +170,6 @@ class Runner:
 
     def _stream(self, jobs: list[Job]) -> Iterator[tuple[int, tuple[Any, float, float]]]:
         """(index, (result, seconds in the job, seconds end to end)) in finishing order."""
-        import time
-
         if self._client is None:
             if not self.serial:
                 raise RuntimeError("Runner.run outside its `with` block")
@@ -195,11 +192,9 @@ class Runner:
 
 def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, Any]:
     """(Client, LocalCluster or None), every worker prepared by the phonglab worker plugin."""
-    import logging
-
     from distributed import Client, LocalCluster  # lazy: Dask costs ~1 s to import
 
-    from .worker import PhonglabWorker
+    from .worker import PhonglabWorker  # imports distributed
 
     cluster = None
     if scheduler is None:
