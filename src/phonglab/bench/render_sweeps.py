@@ -13,10 +13,17 @@ r"""Sweeps of full renders: error against time per BSDF, variants, and render-ti
 
 Every render goes through :func:`phonglab.render.render_scene` (one pass; its
 ``pass_seconds[0]`` is the timed wall time, image evaluated and copied).
+
+Each sweep is a list of jobs run by :func:`phonglab.bench.jobs.run_jobs`, serially or on a
+Dask cluster: one per (set-up, spp) cell of the renders (after the set-up's load and warm-up,
+done once per worker process: :func:`_setup`), one per (variant, BSDF) of the variant
+comparison, one per comparison of the ratios (its A/B pairs stay together, in one process).
+References are rendered first, their passes spread over the same runner.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -25,11 +32,13 @@ import numpy as np
 
 from .. import registration
 from ..metrics import errors
+from ..parallel import Job, Runner
 from ..references import Reference
 from ..render import render_scene
 from .config import RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, Config
 from .cornell import CornellSpec, ratio_spec, render_jit, render_setups, timed_render
-from .csvlog import open_log, progress_bar
+from .csvlog import open_log
+from .jobs import Rows, run_jobs
 
 
 def measure_render(scene, spp: int, repeats: int, ref: Reference) -> dict:
@@ -45,38 +54,81 @@ def measure_render(scene, spp: int, repeats: int, ref: Reference) -> dict:
                 var_n="", nan_count=sum(e["nan_count"] for e in errs))
 
 
-def sweep_renders(out: Path, cfg: Config, cache: Path | None = None, progress: bool = True) -> None:
+@functools.lru_cache(maxsize=8)
+def _setup(spec: CornellSpec, repeats: int) -> tuple:
+    """Once per process and set-up: (scene, first-call s, compile ms, kernels, cache hits, steady s)."""
+    scene = spec.load(VARIANT)
+    first, ms, kernels, hits = render_jit(scene, 1, seed=7)
+    steady = float(np.median([timed_render(scene, 1, seed=8 + r) for r in range(repeats)]))
+    return scene, first, ms, kernels, hits, steady
+
+
+def render_jit_job(scene_name: str, method: str, spec: CornellSpec, repeats: int) -> Rows:
+    """Job: the jit.csv row of a render set-up."""
+    _, first, ms, kernels, hits, steady = _setup(spec, repeats)
+    return [("jit", dict(group="render", method=method, scene=scene_name, variant=VARIANT,
+                         first_call_s=first, steady_s=steady, compile_ms=ms, kernels=kernels,
+                         cache_hits=hits))]
+
+
+def render_job(scene_name: str, method: str, spec: CornellSpec, spp: int, repeats: int,
+               ref: Reference, ref_label: str) -> Rows:
+    """Job: the results.csv row of a render set-up at ``spp`` against ``ref``."""
+    scene, first, *_ = _setup(spec, repeats)
+    return [("results", dict(group="render", method=method, scene=scene_name, variant=VARIANT,
+                             first_call_s=first, reference=ref_label,
+                             **measure_render(scene, spp, repeats, ref)))]
+
+
+def sweep_renders(out: Path, cfg: Config, runner: Runner, cache: Path | None = None) -> None:
     """RMSE against the reference and steady time against spp, per BSDF, on the Cornell box."""
-    registration.register(VARIANT)
     log, jit = open_log(out, "results"), open_log(out, "jit")
-    setups = render_setups()
-    total = sum(len(v) for v in setups.values()) * len(cfg.render_spps)
-    bar = progress_bar(total, "renders", progress)
-    for scene_name, methods in setups.items():
+    jobs, order = [], {"results": [], "jit": []}
+    for scene_name, methods in render_setups().items():
         for method, (spec, ref_spec) in methods.items():
-            ref = ref_spec.reference(cfg.reference_spp, VARIANT, cache)
-            scene = spec.load(VARIANT)
-            first, ms, kernels, hits = render_jit(scene, 1, seed=7)
-            steady = float(np.median([timed_render(scene, 1, seed=8 + r) for r in range(cfg.repeats)]))
-            if not jit.has(group="render", method=method, scene=scene_name, variant=VARIANT):
-                jit.add(dict(group="render", method=method, scene=scene_name, variant=VARIANT,
-                             first_call_s=first, steady_s=steady, compile_ms=ms, kernels=kernels,
-                             cache_hits=hits))
-            for spp in cfg.render_spps:
-                bar.update()
-                if log.has(group="render", method=method, scene=scene_name, variant=VARIANT,
-                           samples=spp):
-                    continue
-                log.add(dict(group="render", method=method, scene=scene_name, variant=VARIANT,
-                             first_call_s=first, reference=f"{ref_spec.boxes} {cfg.reference_spp} spp",
-                             **measure_render(scene, spp, cfg.repeats, ref)))
-    bar.close()
+            key = dict(group="render", method=method, scene=scene_name, variant=VARIANT)
+            order["jit"].append(key)
+            order["results"] += [dict(key, samples=spp) for spp in cfg.render_spps]
+            todo = [spp for spp in cfg.render_spps if not log.has(**key, samples=spp)]
+            if not jit.has(**key):
+                jobs.append(Job(render_jit_job, (scene_name, method, spec, cfg.repeats),
+                                key=("jit", scene_name, method)))
+            if todo:
+                ref = ref_spec.reference(cfg.reference_spp, VARIANT, cache, runner)
+                label = f"{ref_spec.boxes} {cfg.reference_spp} spp"
+                jobs += [Job(render_job, (scene_name, method, spec, spp, cfg.repeats, ref, label),
+                             key=(scene_name, method, spp)) for spp in todo]
+    run_jobs(runner, out, jobs, order, "renders")
 
 
-def sweep_variants(out: Path, cfg: Config, cache: Path | None = None, progress: bool = True) -> list[str]:
+def variant_job(variant: str, method: str, spps: tuple[int, ...], need_jit: bool, repeats: int,
+                ref: Reference, ref_label: str) -> Rows:
+    """Job: the 16 px box of ``method`` in ``variant``: its jit.csv row (when ``need_jit``) and
+    its results.csv rows at ``spps``."""
+    scene_name = f"cornell-{VARIANT_RES}px"
+    rows: Rows = []
+    try:
+        registration.register(variant)
+        scene = CornellSpec(walls=method, boxes=method, res=VARIANT_RES).load(variant)
+        first = timed_render(scene, 1, seed=7)
+        steady = float(np.median([timed_render(scene, 1, seed=8 + r) for r in range(repeats)]))
+        if need_jit:
+            rows.append(("jit", dict(group="variant", method=method, scene=scene_name,
+                                     variant=variant, first_call_s=first, steady_s=steady)))
+        for spp in spps:
+            rows.append(("results", dict(group="variant", method=method, scene=scene_name,
+                                         variant=variant, first_call_s=first, reference=ref_label,
+                                         **measure_render(scene, spp, repeats, ref))))
+    finally:
+        registration.register(VARIANT)
+    return rows
+
+
+def sweep_variants(out: Path, cfg: Config, runner: Runner, cache: Path | None = None) -> list[str]:
     """llvm_ad_rgb against scalar_rgb (and cuda_ad_rgb with a GPU) on a 16 px Cornell box.
 
-    Returns notes (e.g. why cuda_ad_rgb was skipped).
+    Returns notes (e.g. why cuda_ad_rgb was skipped).  Whether CUDA is there is asked here,
+    where the command runs; a cluster's workers are assumed to be alike.
     """
     notes = []
     variants = [VARIANT, "scalar_rgb"]
@@ -86,50 +138,47 @@ def sweep_variants(out: Path, cfg: Config, cache: Path | None = None, progress: 
         notes.append("cuda_ad_rgb skipped: Dr.Jit found no CUDA device on this machine.")
     log, jit = open_log(out, "results"), open_log(out, "jit")
     scene_name = f"cornell-{VARIANT_RES}px"
-    ref = CornellSpec(walls="diffuse", boxes="diffuse", res=VARIANT_RES).reference(
-        cfg.reference_spp, VARIANT, cache)
-    bar = progress_bar(len(variants) * 2 * len(cfg.variant_spps), "variants", progress)
-    try:
-        for variant in variants:
-            registration.register(variant)
-            for method in ("lambert", "diffuse"):
-                scene = CornellSpec(walls=method, boxes=method, res=VARIANT_RES).load(variant)
-                first = timed_render(scene, 1, seed=7)
-                steady = float(np.median([timed_render(scene, 1, seed=8 + r) for r in range(cfg.repeats)]))
-                if not jit.has(group="variant", method=method, scene=scene_name, variant=variant):
-                    jit.add(dict(group="variant", method=method, scene=scene_name, variant=variant,
-                                 first_call_s=first, steady_s=steady))
-                for spp in cfg.variant_spps:
-                    bar.update()
-                    if log.has(group="variant", method=method, scene=scene_name, variant=variant,
-                               samples=spp):
-                        continue
-                    log.add(dict(group="variant", method=method, scene=scene_name, variant=variant,
-                                 first_call_s=first,
-                                 reference=f"diffuse {cfg.reference_spp} spp {VARIANT}",
-                                 **measure_render(scene, spp, cfg.repeats, ref)))
-    finally:
-        registration.register(VARIANT)
-        bar.close()
+    ref = None
+    label = f"diffuse {cfg.reference_spp} spp {VARIANT}"
+    jobs, order = [], {"results": [], "jit": []}
+    for variant in variants:
+        for method in ("lambert", "diffuse"):
+            key = dict(group="variant", method=method, scene=scene_name, variant=variant)
+            order["jit"].append(key)
+            order["results"] += [dict(key, samples=spp) for spp in cfg.variant_spps]
+            todo = tuple(spp for spp in cfg.variant_spps if not log.has(**key, samples=spp))
+            need_jit = not jit.has(**key)
+            if todo or need_jit:
+                ref = ref or CornellSpec(walls="diffuse", boxes="diffuse", res=VARIANT_RES).reference(
+                    cfg.reference_spp, VARIANT, cache, runner)
+                jobs.append(Job(variant_job, (variant, method, todo, need_jit, cfg.repeats, ref, label),
+                                key=(variant, method)))
+    run_jobs(runner, out, jobs, order, "variants")
     return notes
 
 
-def sweep_ratios(out: Path, cfg: Config, progress: bool = True) -> None:
+def ratio_job(name: str, a: str, b: str, which: str, pairs: tuple[int, ...], spp: int) -> Rows:
+    """Job: the A/B pairs ``pairs`` of one render-time comparison, in one process (ABBA order)."""
+    scenes = {m: ratio_spec(m, which).load(VARIANT) for m in (a, b)}
+    for m in (a, b):                  # warm-up (JIT) excluded from the pairs
+        timed_render(scenes[m], spp, seed=1)
+    rows: Rows = []
+    for pair in pairs:
+        order = (a, b) if pair % 2 == 0 else (b, a)
+        t = {m: timed_render(scenes[m], spp, seed=1000 + pair) for m in order}
+        rows.append(("ratios", dict(comparison=name, a=a, b=b, pair=pair,
+                                    scene=f"cornell {RATIO_RES}px {which}", variant=VARIANT,
+                                    spp=spp, t_a=t[a], t_b=t[b], ratio=t[a] / t[b])))
+    return rows
+
+
+def sweep_ratios(out: Path, cfg: Config, runner: Runner) -> None:
     """Alternating A/B render timings (ABBA order) for the render-time targets."""
-    registration.register(VARIANT)
     log = open_log(out, "ratios")
-    spp = cfg.ratio_spp
-    bar = progress_bar(len(RATIO_COMPARISONS) * cfg.ratio_pairs, "ratios", progress)
+    jobs, order = [], {"ratios": []}
     for name, a, b, which in RATIO_COMPARISONS:
-        scenes = {m: ratio_spec(m, which).load(VARIANT) for m in (a, b)}
-        for m in (a, b):                  # warm-up (JIT) excluded from the pairs
-            timed_render(scenes[m], spp, seed=1)
-        for pair in range(cfg.ratio_pairs):
-            bar.update()
-            if log.has(comparison=name, pair=pair):
-                continue
-            order = (a, b) if pair % 2 == 0 else (b, a)
-            t = {m: timed_render(scenes[m], spp, seed=1000 + pair) for m in order}
-            log.add(dict(comparison=name, a=a, b=b, pair=pair, scene=f"cornell {RATIO_RES}px {which}",
-                         variant=VARIANT, spp=spp, t_a=t[a], t_b=t[b], ratio=t[a] / t[b]))
-    bar.close()
+        order["ratios"] += [dict(comparison=name, pair=p) for p in range(cfg.ratio_pairs)]
+        todo = tuple(p for p in range(cfg.ratio_pairs) if not log.has(comparison=name, pair=p))
+        if todo:
+            jobs.append(Job(ratio_job, (name, a, b, which, todo, cfg.ratio_spp), key=("ratios", name)))
+    run_jobs(runner, out, jobs, order, "ratios")
