@@ -30,7 +30,7 @@ from phonglab.bench.config import LOGS, STABILITY_CELLS
 from phonglab.bench.jobs import put_in_order
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
-from phonglab.parallel import Job, Runner, check_address
+from phonglab.parallel import Runner, check_address
 
 #: Columns that are measured times or compile statistics (machine state, not results).
 TIMING = {"wall_time_s", "first_call_s", "seconds", "t_a", "t_b", "ratio", "steady_s",
