@@ -30,6 +30,7 @@ from phonglab.bench.config import LOGS, STABILITY_CELLS
 from phonglab.bench.jobs import put_in_order
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
+from phonglab import parallel
 from phonglab.parallel import Runner, check_address
 
 #: Columns that are measured times or compile statistics (machine state, not results).
@@ -150,7 +151,8 @@ def test_cluster_survives_a_killed_worker(cluster, serial_stability, tmp_path):
     assert results(out) == serial_stability
 
 
-def test_unreachable_scheduler_is_one_sentence(tmp_path, capsys):
+def test_unreachable_scheduler_is_one_sentence(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1.0)
     out = tmp_path / "b"
     out.mkdir()
     (out / "stability.csv").write_text("kept\n")
@@ -163,6 +165,19 @@ def test_unreachable_scheduler_is_one_sentence(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "Traceback" not in err
     assert time.monotonic() - t0 < 30
     assert (out / "stability.csv").read_text() == "kept\n"     # --fresh deleted nothing
+
+
+def test_scheduler_without_workers_is_one_sentence(tmp_path, capsys, monkeypatch):
+    from distributed import LocalCluster
+
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1.0)
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                      dashboard_address=":0") as empty:
+        code = main(["bench", "--quick", "--out", str(tmp_path / "b"),
+                     "--scheduler", empty.scheduler_address])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "has no workers after 1 s; start one on each machine with `dask worker" in err
 
 
 @pytest.mark.parametrize("bad", ["127.0.0.1:8786", "tcp://", "http://host:1 2", ""])

@@ -47,6 +47,7 @@ CONNECT_TIMEOUT = 5.0
 RETRIES = 2
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
+_resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://[^\s/:]+(:\d+)?$")
 
 
@@ -80,8 +81,9 @@ def call_job(fn: Callable[..., Any], args: tuple, variant: str) -> tuple[Any, fl
     """
     import mitsuba as mi  # lazy: `phonglab --help` imports this module (for its options)
 
-    if mi.variant() != variant:
-        register(variant)
+    if mi.variant() != _resolved.get(variant, variant):
+        # register() returns the variant it could set (a fallback, with its warning, once).
+        _resolved[variant] = register(variant)
     t0 = time.perf_counter()
     result = fn(*args)
     return result, time.perf_counter() - t0
@@ -212,6 +214,8 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
                                 f"`dask scheduler` (docs/cluster.md) or drop --scheduler to run "
                                 f"here") from None
     try:
+        if scheduler is not None:
+            _wait_for_a_worker(client, scheduler)
         client.register_plugin(PhonglabWorker(variant, threads=threads))
     except BaseException:
         client.close()
@@ -219,6 +223,16 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
             cluster.close()
         raise
     return client, cluster
+
+
+def _wait_for_a_worker(client, scheduler: str) -> None:
+    """Jobs sent to a scheduler without workers would wait forever: one sentence instead."""
+    try:
+        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+    except TimeoutError:
+        raise PhonglabError(f"the Dask scheduler at {scheduler} has no workers after "
+                            f"{CONNECT_TIMEOUT:g} s; start one on each machine with `dask worker "
+                            f"{scheduler} --nthreads 1` (docs/cluster.md)") from None
 
 
 def add_arguments(parser) -> None:
