@@ -1,0 +1,20 @@
+"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its :class:`Report`.
+
+Topics (one home each): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
+(:mod:`.identities`), ``chi2`` (:mod:`.sampling`), ``energy`` (:mod:`.energy`),
+``reciprocity`` (:mod:`.reciprocity`), ``gradient`` (:mod:`.gradient`), ``cost``
+(:mod:`.cost`).  Sizes and tolerances: :mod:`.config`; rows and reports: :mod:`.report`.
+
+Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` does.
+"""
+
+from .report import STATUSES, TOPICS, Report, Row, table
+
+__all__ = ["Report", "Row", "STATUSES", "TOPICS", "table", "validate_bsdf"]
+
+
+def validate_bsdf(spec, **options) -> Report:
+    """Validate a BSDF on every topic; see :func:`phonglab.validate.core.validate_bsdf`."""
+    from .core import validate_bsdf as run   # lazy: imports Mitsuba (seconds) only when called
+
+    return run(spec, **options)

@@ -1,0 +1,66 @@
+"""Many BSDFs as independent jobs: :func:`run_case` (picklable, one case -> one report dict).
+
+``phonglab validate --all-builtins`` maps :func:`run_case` over the cases of
+:func:`phonglab.validate.builtins.cases`.  Each job sets its own variant, loads its own BSDF and
+returns plain JSON-able data, so an execution layer (a process pool, ``dask.distributed``'s
+``client.map(run_case, labels, options=...)``) can run them anywhere; Mitsuba/Dr.Jit state is
+per process, so jobs parallelize over processes, not threads.  A case that cannot be loaded
+becomes a report with one failing ``finite`` row naming the error, not an exception: one bad
+case never loses the others' results.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+
+from . import builtins
+from .core import validate_bsdf
+from .report import Report, Row
+
+
+def find_case(case):
+    """A :class:`~phonglab.validate.builtins.Case` from itself or its label."""
+    if not isinstance(case, str):
+        return case
+    for c in builtins.cases():
+        if c.label == case:
+            return c
+    raise KeyError(f"no built-in case labelled {case!r}")
+
+
+def run_case(case, options: dict | None = None) -> dict:
+    """Validate one case (a Case or its label); ``options``: seed, quick, topics.
+
+    Returns ``Report.to_dict()`` with ``meta["case"]`` set to the label.
+    """
+    options = dict(options or {})
+    case = find_case(case)
+    t0 = time.perf_counter()
+    try:
+        report = validate_bsdf(case.spec, variant=case.resolved_variant(), known=case.known,
+                               seed=options.get("seed", 0), quick=options.get("quick", False),
+                               topics=options.get("topics"))
+    except Exception as exc:      # one broken case is a result, not the end of the batch
+        report = Report({"bsdf": case.plugin, "variant": case.variant, "error": repr(exc)},
+                        [Row("finite", "the case loads and runs", None, None, None, None, "fail",
+                             f"{type(exc).__name__}: {str(exc).splitlines()[0][:300] if str(exc) else ''}",
+                             {"traceback": traceback.format_exc()[-2000:]})])
+    d = report.to_dict()
+    d["meta"].update(case=case.label, note=case.note, delta=case.delta,
+                     wall_seconds=round(time.perf_counter() - t0, 3))
+    return d
+
+
+def run_all(cases=None, options: dict | None = None, progress=None) -> dict:
+    """Every case in order: ``{"meta": {...}, "reports": [run_case(...), ...]}``."""
+    cases = builtins.cases() if cases is None else cases
+    reports = []
+    for case in cases:
+        reports.append(run_case(case, options))
+        if progress:
+            progress(reports[-1])
+    failed = [r["meta"]["case"] for r in reports
+              if any(x["status"] == "fail" for x in r["results"])]
+    return {"meta": {"cases": len(reports), "failed": failed, "options": dict(options or {})},
+            "reports": reports}

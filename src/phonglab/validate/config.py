@@ -1,0 +1,140 @@
+r"""The validator's sizes, grids and round-off tolerances (one place, quick and default).
+
+Incidence grid.  Cells are (θ_i, φ_i) with cos θ_i in :attr:`Options.cos_grid` -- normal
+incidence, the interior, grazing cos θ_i = 1e-4 and exactly 0 -- at the azimuths
+:attr:`Options.phi_grid` (an anisotropic BSDF differs between them).  Every topic's lanes for
+all cells go to Mitsuba in ONE call (``wi`` is an (N, 3) array, i.e. an opaque kernel input),
+so a kernel is compiled once per query, not once per angle.
+
+Round-off tolerance of the identities (``eval_pdf``, ``weight``, ``pdf``, ``reciprocity``,
+``component``).  Mitsuba computes in float32 (unit round-off u = 2⁻²⁴ ≈ 6e-8).  The two sides
+of an identity are the same mathematical value computed by different code paths (a microfacet
+weight F·G/G₁ against eval/pdf = F·D·G/(4 cos θ_i) / (G₁ D/(4 cos θ_i)), a lobe sum in another
+order, ...).  Each path is a chain of at most a few hundred float32 operations, including
+a few subtractions (1 − cos, Fresnel) that can lose up to ~10 bits to cancellation near grazing;
+:data:`REL_TOL` = 2¹⁴ u = 2⁻¹⁰ ≈ 9.8e-4 bounds the relative difference
+|a − b| / max(|a|, |b|), with :data:`ABS_FLOOR` for values that are both ≈ 0.  A planted
+defect that is off by a factor (×1.1, ×2u₁, ...) is off by ≥ 1e-2 on most lanes.
+
+Conditioning.  Where one side is evaluated at a direction another computation produced
+(``weight`` and ``pdf`` at the sampled wo, ``reciprocity`` with the roles swapped), the float32
+rounding of that direction (≤ u/2 per component) is amplified by the function's condition
+number, which is large at grazing configurations (a half vector ω_i + ω_o that cancels, a
+lobe's steep tail).  :func:`sensitivity` measures it per lane: the relative change of the
+compared value when both directions move by :data:`PERTURB` = 8u per component (absolute,
+about 16× the rounding of a computed unit vector), the largest over :data:`DRAWS` random sign patterns (one pattern can miss the
+ill-conditioned combination), and the lane's tolerance is REL_TOL + that sensitivity.  The row reports
+max_lanes rel_diff / (REL_TOL + sensitivity), which must be ≤ 1.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: float32 unit round-off 2⁻²⁴.
+EPS32 = 2.0 ** -24
+#: Relative tolerance of a float32 identity: 2¹⁴ unit round-offs (see the module docstring).
+REL_TOL = 2.0 ** 14 * EPS32
+#: Absolute floor below which two values count as equal (both ≈ 0 in float32 terms).
+ABS_FLOOR = 1e-6
+
+
+@dataclass
+class Options:
+    """Sizes of one validation run; :func:`options` builds the default or quick ones."""
+
+    quick: bool = False
+    seed: int = 0
+    cos_grid: tuple = (1.0, 0.9, 0.7, 0.5, 0.3, 0.1, 0.02, 1e-4, 0.0)
+    phi_grid: tuple = (0.0, 2.1)
+    n_identity: int = 4096            #: sample() lanes per cell for weight/pdf/component
+    n_finite: int = 2048              #: random wo per cell for finite/eval_pdf/reciprocity
+    #: χ² incidences avoid the pole: mi.chi2's SphericalDomain bins (φ, cos θ), so a narrow lobe
+    #: at θ ≈ 0 (or 180°) falls within one row of bins and its pdf integral per bin is poor.
+    chi2_cos: tuple = (0.95, 0.8, 0.7071, 0.5, 0.2)
+    chi2_phi: tuple = (0.0, 1.0)
+    chi2_samples: int = 1_000_000
+    chi2_res: int = 101
+    chi2_ires: int = 16               #: pdf integration points per bin and axis (narrow lobes)
+    energy_cos: tuple = (1.0, 0.95, 0.85, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 1e-4, 0.0)
+    energy_nodes: int = 16            #: Gauss-Legendre nodes per panel (error from n vs n/2)
+    energy_samples: int = 100_000     #: samples per cell for the delta lobes' albedo
+    gradient_lanes: int = 4096
+    cost_lanes: int = 1 << 18
+    cost_repeats: int = 5
+    topics: tuple = field(default_factory=tuple)
+
+    def cells(self, cos=None, phi=None) -> np.ndarray:
+        """(M, 2) array of (θ_i, φ_i) cells; normal incidence once (its azimuth is moot)."""
+        cos = self.cos_grid if cos is None else cos
+        phi = self.phi_grid if phi is None else phi
+        out = []
+        for c in cos:
+            theta = math.acos(min(1.0, max(0.0, c)))
+            for p in (phi[:1] if c >= 1.0 else phi):
+                out.append((theta, p))
+        return np.array(out)
+
+
+def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
+    """The default sizes (≤ 60 s per BSDF on 2 cores) or the quick ones (≤ 10 s)."""
+    if not quick:
+        return Options(seed=seed, topics=tuple(topics))
+    return Options(quick=True, seed=seed, topics=tuple(topics),
+                   cos_grid=(1.0, 0.6, 0.2, 1e-4, 0.0), phi_grid=(0.0, 2.1),
+                   n_identity=1024, n_finite=512,
+                   chi2_cos=(0.8, 0.5, 0.2), chi2_phi=(0.0,), chi2_samples=200_000,
+                   chi2_res=61, chi2_ires=12,
+                   energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
+                   energy_samples=20_000, gradient_lanes=1024, cost_lanes=1 << 16,
+                   cost_repeats=3)
+
+
+#: Relative perturbation of each direction component for :func:`sensitivity`: 8 unit round-offs.
+PERTURB = 8 * EPS32
+
+
+def perturb(v: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unit directions v moved by ±PERTURB per component (random signs), renormalized.
+
+    Absolute, not relative, per component: a direction computed in float32 (reflect(wi, m),
+    a warp) carries an absolute error of a few u in every component, also in a small one
+    (cos θ = 0.004 at grazing), where a relative model would understate it.
+    """
+    v = np.asarray(v, np.float64) + PERTURB * rng.choice([-1.0, 1.0], size=np.shape(v))
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+#: Random sign patterns of the perturbation per lane.
+DRAWS = 4
+
+
+def sensitivity(fn, wi: np.ndarray, wo: np.ndarray, rng: np.random.Generator,
+                value=None) -> np.ndarray:
+    """Per lane: max over DRAWS perturbations of the relative change of fn(wi, wo) (all channels).
+
+    ``fn`` maps (wi (N, 3), wo (N, 3)) to (N,) or (N, C); ``value`` is fn(wi, wo) if known.
+    One call of fn for all draws (the lanes are stacked).
+    """
+    n = len(wi)
+    value = fn(wi, wo) if value is None else value
+    moved = fn(perturb(np.tile(wi, (DRAWS, 1)), rng), perturb(np.tile(wo, (DRAWS, 1)), rng))
+    d = np.nan_to_num(rel_diff(np.tile(value, (DRAWS,) + (1,) * (np.ndim(value) - 1)), moved),
+                      nan=0.0)
+    d = d.max(axis=1) if d.ndim > 1 else d
+    return d.reshape(DRAWS, n).max(axis=0)
+
+
+def excess(rel: np.ndarray, sens: np.ndarray) -> np.ndarray:
+    """rel_diff measured against the lane's tolerance REL_TOL + sensitivity (≤ 1 passes)."""
+    return rel / (REL_TOL + sens)
+
+
+def rel_diff(a, b) -> np.ndarray:
+    """|a − b| / max(|a|, |b|, ABS_FLOOR), elementwise; NaN where either side is not finite."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    d = np.abs(a - b) / np.maximum(np.maximum(np.abs(a), np.abs(b)), ABS_FLOOR)
+    return np.where(np.isfinite(a) & np.isfinite(b), d, np.nan)

@@ -1,0 +1,129 @@
+"""``--report PATH.html``: one self-contained HTML file of a validation report.
+
+Contents: the table of rows (status coloured), the directional albedo against θ_i with its
+band (from the ``energy`` row's details), lobe slices (eval and pdf in the plane of incidence),
+and for each failing χ² cell the histogram beside the integrated pdf.  Figures are matplotlib
+PNGs embedded as base64 ``data:`` URIs; the file references nothing outside itself.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .report import Report, format_number  # noqa: E402
+
+COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}
+STYLE = ("body{font-family:sans-serif;margin:1.5em;max-width:1100px}"
+         "table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #bbb;"
+         "padding:3px 6px;vertical-align:top}td.reason{font-size:11px;color:#333}"
+         "img{max-width:100%}")
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _img(uri: str, alt: str) -> str:
+    return f'<p><img alt="{html.escape(alt)}" src="{uri}"></p>'
+
+
+def _table(report: Report) -> str:
+    head = ("status", "topic", "name", "measured", "expected", "tolerance", "reason")
+    rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"]
+    for r in report.rows:
+        cells = (r.status, r.topic, r.name, format_number(r.measured), format_number(r.expected),
+                 format_number(r.tolerance))
+        rows.append(f'<tr style="background:{COLOURS.get(r.status, "#fff")}">'
+                    + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells)
+                    + f'<td class="reason">{html.escape(r.reason)}</td></tr>')
+    return "<table>" + "".join(rows) + "</table>"
+
+
+def _albedo(d: dict) -> str:
+    th, a, band = (np.array(d[k], dtype=float) for k in ("theta_deg", "albedo", "band"))
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.fill_between(th, a - band, a + band, alpha=0.3, label="band (z·stderr + quadrature)")
+    ax.plot(th, a, "o-", label="directional albedo")
+    ax.axhline(1.0, color="k", lw=0.8, ls="--", label="1 (energy conservation)")
+    ax.set_xlabel("θ_i (degrees)")
+    ax.set_ylabel("albedo")
+    ax.legend(fontsize=8)
+    return _img(_png(fig), "albedo against incidence")
+
+
+def _lobes(d: dict) -> str:
+    t = np.array(d["theta_o_deg"])
+    slices = d["slices"]
+    fig, axes = plt.subplots(1, len(slices), figsize=(3.2 * len(slices), 3), squeeze=False)
+    for ax, s in zip(axes[0], slices):
+        ev, pd = np.array(s["eval"]), np.array(s["pdf"])
+        ax.plot(t, ev, label="eval (f cos θ_o)")
+        ax.plot(t, pd, ls="--", label="pdf")
+        ax.axvline(-s["theta_i_deg"], color="grey", lw=0.5)
+        ax.set_title(f"θ_i = {s['theta_i_deg']:g}°", fontsize=9)
+        ax.set_xlabel("θ_o in the plane of incidence (°)", fontsize=8)
+    axes[0][0].legend(fontsize=7)
+    return _img(_png(fig), "lobe slices: eval and pdf")
+
+
+def _chi2_cells(d: dict) -> str:
+    out = []
+    for cell in d.get("cells", []):
+        if cell.get("status") != "fail" or "histogram" not in cell:
+            continue
+        hist, exp = np.array(cell["histogram"]), np.array(cell["expected"])
+        fig, axes = plt.subplots(1, 2, figsize=(9, 3))
+        vmax = max(hist.max(), exp.max(), 1e-12)
+        for ax, img, title in ((axes[0], hist, "histogram of samples"),
+                               (axes[1], exp, "expected (integrated pdf)")):
+            im = ax.imshow(img, aspect="auto", origin="lower", vmin=0, vmax=vmax,
+                           extent=(-180, 180, -1, 1))
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("φ_o (°)")
+            ax.set_ylabel("cos θ_o")
+        fig.colorbar(im, ax=axes.ravel().tolist())
+        fig.suptitle(f"χ² cell θ_i = {cell.get('theta_deg', 0):.1f}°, φ_i = "
+                     f"{cell.get('phi', 0):.2f}: p = {cell.get('p_value', 0):.3g}", fontsize=10)
+        out.append(_img(_png(fig), "chi2 histogram and expected"))
+    return "".join(out)
+
+
+def render(report: Report) -> str:
+    """The HTML text of ``report``."""
+    m = report.meta
+    title = f"phonglab validate: {m.get('bsdf', '?')} ({m.get('variant', '?')})"
+    verdict = "PASSED" if report.passed else f"FAILED ({len(report.failing)} rows)"
+    parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+             f"</title><style>{STYLE}</style></head><body>",
+             f"<h1>{html.escape(title)}</h1><p><b>{verdict}</b>; seed {m.get('seed')}, "
+             f"{'quick' if m.get('quick') else 'default'} sizes, {m.get('seconds')} s</p>",
+             _table(report)]
+    for r in report.rows:
+        if r.topic == "energy" and "albedo" in r.details:
+            parts += ["<h2>Directional albedo</h2>", _albedo(r.details)]
+            if "lobes" in r.details:
+                parts += ["<h2>Lobe slices</h2>", _lobes(r.details["lobes"])]
+        if r.topic == "chi2" and r.status in ("fail", "KNOWN"):
+            cells = _chi2_cells(r.details)
+            if cells:
+                parts += ["<h2>Failing χ² cells</h2>", cells]
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def write(report: Report, path) -> Path:
+    path = Path(path)
+    path.write_text(render(report), encoding="utf-8")
+    return path

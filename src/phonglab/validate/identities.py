@@ -1,0 +1,215 @@
+r"""The deterministic topics: ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``.
+
+Each is an identity that a correct BSDF satisfies lane by lane, so the tolerance is float32
+round-off (:data:`phonglab.validate.config.REL_TOL`), not statistics:
+
+* ``finite``: eval, pdf, eval_pdf and sample (weight, pdf, wo) are finite and ≥ 0 (wo a unit
+  vector where the weight is non-zero) for random directions on the whole sphere, the mirror
+  and straight-through directions, grazing ones (cos θ_o = ±1e-4, 0), below-horizon ones, at
+  every incidence cell (cos θ_i down to 1e-4 and 0), and the sample values 0 and 1 − ε.
+* ``eval_pdf``: ``eval_pdf(wi, wo)`` equals ``(eval(wi, wo), pdf(wi, wo))``.
+* ``weight``: every non-delta sample's weight equals eval/pdf at its wo (per sample: a weight
+  right only on average biases any render whose light is not uniform) [mitsuba3#134, #1011].
+* ``pdf``: ``bs.pdf`` equals ``pdf(wi, bs.wo)`` for non-delta samples.
+* ``component``: ``sampled_component`` indexes a component whose flags contain
+  ``sampled_type``; a context restricted to component k samples only k and evaluates only k;
+  Σ_k eval_k = eval [PR#1951].
+
+Non-finite values are the ``finite`` topic's alone: the other topics drop those lanes (and
+count them in ``details``), so that one defect fails one topic.
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+import numpy as np
+
+from .. import probe
+from . import lanes
+from .config import DRAWS, REL_TOL, excess, perturb, rel_diff, sensitivity
+from .report import Row
+
+ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
+CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "
+               "8-ulp move of their input directions), must be ≤ 1 (config.sensitivity)")
+
+
+SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
+               "finite pdf ≥ 0 and a unit wo, a rejected one (weight 0, which integrators "
+               "drop) may not: {} rejected samples carry NaN")
+
+
+def _row(topic, name, measured, tol, reason, details, expected=0.0) -> Row:
+    ok = measured is not None and np.isfinite(measured) and measured <= tol
+    return Row(topic, name, float(measured), expected, None, tol, "pass" if ok else "fail",
+               reason, details)
+
+
+def _worst(rel: np.ndarray, wi: np.ndarray, wo: np.ndarray, extra: dict | None = None) -> dict:
+    """details: lanes compared, non-finite lanes dropped, and the worst lane's directions."""
+    finite = np.isfinite(rel)
+    d = {"lanes": int(rel.size), "nonfinite_dropped": int((~finite).sum())}
+    if finite.any():
+        k = int(np.nanargmax(np.where(finite, rel, -1.0)))
+        d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
+        d.update({name: float(v[k]) for name, v in (extra or {}).items()})
+    return d
+
+
+def _max(rel: np.ndarray) -> float:
+    finite = rel[np.isfinite(rel)]
+    return float(finite.max()) if finite.size else 0.0
+
+
+def finite(bsdf, opts) -> list[Row]:
+    r = lanes.rng(opts.seed, "finite")
+    wi, _ = lanes.incident(opts.cells(), opts.n_finite)
+    wo = np.concatenate([lanes.sphere(r, len(wi)), *lanes.special_wo(wi)])
+    wi_all = np.concatenate([wi] * (len(wo) // len(wi)))
+    ev = probe.eval(bsdf, wi_all, wo)
+    pd = probe.pdf(bsdf, wi_all, wo)
+    ev2, pd2 = probe.eval_pdf(bsdf, wi_all, wo)
+    u1, u2 = lanes.sample_values(r, len(wi))
+    s = probe.sample(bsdf, wi, u1, u2)
+    norm = np.linalg.norm(s.wo, axis=1)
+    live = np.any(s.weight != 0, axis=1)
+    checks = {
+        "eval": (~np.isfinite(ev) | (ev < 0)).any(axis=1),
+        "pdf": ~np.isfinite(pd) | (pd < 0),
+        "eval_pdf": (~np.isfinite(ev2) | (ev2 < 0)).any(axis=1) | ~np.isfinite(pd2) | (pd2 < 0),
+        "sample": ((~np.isfinite(s.weight) | (s.weight < 0)).any(axis=1)
+                   | (live & (~np.isfinite(s.pdf) | (s.pdf < 0) | ~np.isfinite(s.wo).all(axis=1)
+                              | (np.abs(norm - 1.0) > 1e-3)))),
+    }
+    # A rejected sample (weight 0) is not used by an integrator: NaN in its wo/pdf is noted only.
+    rejected_nan = int(np.sum(~live & (~np.isfinite(s.pdf) | ~np.isfinite(s.wo).all(axis=1))))
+    rows = []
+    for name, bad in checks.items():
+        w_in, w_out = (wi, s.wo) if name == "sample" else (wi_all, wo)
+        details = {"lanes": int(bad.size), "bad": int(bad.sum())}
+        if name == "sample":
+            details["rejected_samples_with_nan"] = rejected_nan
+        if bad.any():
+            k = np.flatnonzero(bad)[:5]
+            details["examples"] = [{"wi": w_in[i].tolist(), "wo": w_out[i].tolist()} for i in k]
+            details["cos_theta_i"] = sorted({round(float(w_in[i, 2]), 6) for i in k})
+        rows.append(_row("finite", f"{name}: NaN/Inf/negative values", float(bad.sum()), 0.0,
+                         f"count of lanes with a NaN, Inf or negative {name} result over "
+                         f"random, mirror, grazing and below-horizon directions"
+                         + (SAMPLE_NOTE.format(rejected_nan) if name == "sample" else ""),
+                         details))
+    return rows
+
+
+def eval_pdf(bsdf, opts) -> list[Row]:
+    r = lanes.rng(opts.seed, "eval_pdf")
+    wi, _ = lanes.incident(opts.cells(), opts.n_finite)
+    wo = lanes.sphere(r, len(wi))
+    ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
+    ev2, pd2 = probe.eval_pdf(bsdf, wi, wo)
+    rel_e = np.max(rel_diff(ev2, ev), axis=1)
+    rel_p = rel_diff(pd2, pd)
+    return [
+        _row("eval_pdf", "eval_pdf value = eval", _max(rel_e), REL_TOL,
+             f"max relative |eval_pdf[0] − eval| over random wo; {ROUND_OFF}",
+             _worst(rel_e, wi, wo, {"eval": ev[:, 0], "eval_pdf": ev2[:, 0]})),
+        _row("eval_pdf", "eval_pdf pdf = pdf", _max(rel_p), REL_TOL,
+             f"max relative |eval_pdf[1] − pdf| over random wo; {ROUND_OFF}",
+             _worst(rel_p, wi, wo, {"pdf": pd, "eval_pdf": pd2})),
+    ]
+
+
+def _samples(bsdf, opts):
+    """Random samples at every incidence cell (shared by ``weight`` and ``pdf``), and the
+    sampler's own sensitivity: the same sample values at wi moved by 8 ulps (config.perturb)."""
+    wi, _ = lanes.incident(opts.cells(), opts.n_identity)
+    r = lanes.rng(opts.seed, "weight")
+    u1, u2 = r.random(len(wi)), r.random((len(wi), 2))
+    s = probe.sample(bsdf, wi, u1, u2)
+    draws = [probe.sample(bsdf, perturb(wi, r), u1, u2) for _ in range(DRAWS)]
+    sens_w = np.max([np.nan_to_num(np.max(rel_diff(s.weight, d.weight), axis=1), nan=0.0)
+                     for d in draws], axis=0)
+    sens_p = np.max([np.nan_to_num(rel_diff(s.pdf, d.pdf), nan=0.0) for d in draws], axis=0)
+    return wi, s, sens_w, sens_p
+
+
+def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
+    wi, s, sens_w, sens_p = _samples(bsdf, opts)
+    live = np.any(s.weight != 0, axis=1) & (s.pdf > 0) & ~lanes.delta_mask(s.sampled_type)
+    n_delta = int(np.sum(lanes.delta_mask(s.sampled_type) & np.any(s.weight != 0, axis=1)))
+    rows = []
+    if not live.any():
+        why = (f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
+               f"nothing to compare for a purely delta BSDF")
+        return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta})
+                for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))
+                if t in topics]
+    wi, wo, w, bpdf = wi[live], s.wo[live], s.weight[live], s.pdf[live]
+    sens_w, sens_p = sens_w[live], sens_p[live]
+    ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
+    r = lanes.rng(opts.seed, "weight")
+    note = f"{int(live.sum())} non-delta samples (delta ones excluded: {n_delta})"
+
+    def ratio_of(a, b):
+        e, p = probe.eval(bsdf, a, b), probe.pdf(bsdf, a, b)
+        return np.where(p[:, None] > 0, e / np.where(p > 0, p, 1.0)[:, None], 0.0)
+
+    if "weight" in topics:
+        ratio = np.where(pd[:, None] > 0, ev / np.where(pd > 0, pd, 1.0)[:, None], 0.0)
+        rel = np.max(rel_diff(w, ratio), axis=1)
+        ex = excess(rel, sensitivity(ratio_of, wi, wo, r, ratio) + sens_w)
+        rows.append(_row("weight", "weight = eval/pdf per sample", _max(ex), 1.0,
+                         f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {CONDITIONED}",
+                         _worst(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
+                                             "rel_diff": rel})))
+    if "pdf" in topics:
+        rel = rel_diff(bpdf, pd)
+        ex = excess(rel, sensitivity(lambda a, b: probe.pdf(bsdf, a, b), wi, wo, r, pd) + sens_p)
+        rows.append(_row("pdf", "bs.pdf = pdf(bs.wo)", _max(ex), 1.0,
+                         f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {CONDITIONED}",
+                         _worst(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel})))
+    return rows
+
+
+def component(bsdf, opts) -> list[Row]:
+    wi, _ = lanes.incident(opts.cells(), opts.n_identity // 2)
+    k_count = bsdf.component_count()
+    flags = [int(bsdf.flags(k)) for k in range(k_count)]
+    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["component"])
+    live = np.any(s.weight != 0, axis=1)
+    comp, stype = s.sampled_component[live], s.sampled_type[live]
+    in_range = (comp >= 0) & (comp < k_count)
+    comp_flags = np.array(flags + [0])[np.where(in_range, comp, k_count)]
+    lobe_bits = int(mi.BSDFFlags.All)
+    bad = ~in_range | ((stype & lobe_bits) == 0) | ((stype & lobe_bits & ~comp_flags) != 0)
+    rows = [_row("component", "sampled_component/sampled_type agree with the flags",
+                 float(bad.sum()), 0.0,
+                 f"count of samples whose sampled_type lobe bits are not within "
+                 f"flags(sampled_component) over {int(live.sum())} samples; "
+                 f"components: {k_count}",
+                 {"flags": flags, "bad": int(bad.sum()),
+                  "examples": [{"component": int(c), "type": int(t)}
+                               for c, t in zip(comp[bad][:5], stype[bad][:5])]})]
+    if k_count < 2:
+        return rows
+    r = lanes.rng(opts.seed, "component")
+    wo = lanes.sphere(r, len(wi))
+    full = probe.eval(bsdf, wi, wo)
+    total = np.zeros_like(full)
+    wrong = 0
+    for k in range(k_count):
+        ctx = probe.context(component=k)
+        total += probe.eval(bsdf, wi, wo, ctx)
+        sk = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 7 * k + 1, ctx=ctx)
+        lk = np.any(sk.weight != 0, axis=1)
+        wrong += int(np.sum(lk & (sk.sampled_component != k)))
+    rows.append(_row("component", "restricted context samples only its component",
+                     float(wrong), 0.0,
+                     f"count of samples from a context restricted to component k that "
+                     f"report another component, over k = 0..{k_count - 1}", {"bad": wrong}))
+    rel = np.max(rel_diff(total, full), axis=1)
+    rows.append(_row("component", "Σ_k eval(component k) = eval", _max(rel), REL_TOL,
+                     f"max relative |Σ_k eval_k − eval| over random wo; {ROUND_OFF}",
+                     _worst(rel, wi, wo)))
+    return rows
+

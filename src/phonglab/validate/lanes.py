@@ -1,0 +1,90 @@
+"""The lanes every topic probes: incidence cells, random directions and sample values.
+
+One numpy array per quantity, all cells stacked (cell-major), so that a topic makes one
+:mod:`phonglab.probe` call -- one kernel -- for the whole grid.  Random numbers come from
+``np.random.default_rng`` seeded with the run's seed and a fixed per-topic offset, so every
+topic is reproducible on its own and independent of which other topics run.
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+import numpy as np
+
+from .. import probe
+
+#: 1 − ε for a float32 sample value: the largest float32 below 1.
+ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
+
+#: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
+SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
+                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19}
+
+
+def rng(seed: int, topic: str) -> np.random.Generator:
+    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
+
+
+def exact(v: np.ndarray) -> np.ndarray:
+    """Directions with |z| < 1e-12 snapped to z = 0 exactly (cos(π/2) is 6e-17 in floating point,
+    which float32 keeps: the grazing cell must be cos θ = 0 itself)."""
+    v = np.array(v, dtype=np.float64)
+    flat = np.abs(v[..., 2]) < 1e-12
+    v[..., 2] = np.where(flat, 0.0, v[..., 2])
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def incident(cells: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(wi (M·n, 3), cell index (M·n,)) for n lanes per (θ, φ) cell."""
+    wi = exact(probe.direction(cells[:, 0], cells[:, 1]))
+    return np.repeat(wi, n, axis=0), np.repeat(np.arange(len(cells)), n)
+
+
+def sphere(r: np.random.Generator, n: int) -> np.ndarray:
+    """n uniform directions on the whole sphere (both hemispheres)."""
+    z = 2.0 * r.random(n) - 1.0
+    phi = 2.0 * np.pi * r.random(n)
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+
+
+def special_wo(wi: np.ndarray) -> np.ndarray:
+    """Directions every BSDF must survive, per wi row: mirror, straight through, grazing, normal.
+
+    Returns (k, N, 3) for wi (N, 3).
+    """
+    mirror = wi * np.array([-1.0, -1.0, 1.0])
+    through = -wi
+    graze = exact(probe.direction(np.arccos(np.array([1e-4, 0.0, -1e-4])), 0.7))
+    out = [mirror, through, np.broadcast_to([0.0, 0.0, 1.0], wi.shape),
+           np.broadcast_to([0.0, 0.0, -1.0], wi.shape)]
+    out += [np.broadcast_to(g, wi.shape) for g in graze]
+    return np.stack(out)
+
+
+def sample_values(r: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(u1 (n,), u2 (n, 2)): uniform, with the edge values 0 and 1 − ε in the first lanes."""
+    u1, u2 = r.random(n), r.random((n, 2))
+    edges = np.array([[0.0, 0.0, 0.0], [ONE_MINUS] * 3, [0.0, ONE_MINUS, 0.0],
+                      [ONE_MINUS, 0.0, ONE_MINUS], [0.5, 0.0, 0.5], [0.5, ONE_MINUS, ONE_MINUS]])
+    k = min(n, len(edges))
+    u1[:k], u2[:k] = edges[:k, 0], edges[:k, 1:]
+    return u1, u2
+
+
+def delta_mask(sampled_type: np.ndarray) -> np.ndarray:
+    """True where a sample's lobe is a delta (Dirac in 2D or 1D)."""
+    bits = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
+    return (sampled_type & bits) != 0
+
+
+def bsdf_has(bsdf, flags) -> bool:
+    """True when any component of ``bsdf`` has one of ``flags``."""
+    return (int(bsdf.flags()) & int(flags)) != 0
+
+
+def delta_only(bsdf) -> bool:
+    """True when every component is a delta lobe (nothing to histogram or integrate)."""
+    delta = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
+    n = bsdf.component_count()
+    return n > 0 and all(int(bsdf.flags(k)) & delta for k in range(n))

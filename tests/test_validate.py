@@ -1,0 +1,179 @@
+"""phonglab validate: the API, the report (JSON schema, table, HTML), --set parsing, the CLI's
+exit codes and checks of bad input, the pytest helper, and the batch job for --all-builtins."""
+
+from __future__ import annotations
+
+import json
+import pickle
+import re
+from pathlib import Path
+
+import pytest
+
+from phonglab.cli import main
+from phonglab.testing import assert_bsdf_valid
+from phonglab.validate import STATUSES, TOPICS, Report, Row, validate_bsdf
+from phonglab.validate.inputs import ParameterError, ValidateError, parse_sets
+
+DEFECTS = Path(__file__).parent / "defects"
+ROW_FIELDS = {"topic", "name", "measured", "expected", "stderr", "tolerance", "status", "reason",
+              "details"}
+
+
+def _check_schema(d: dict) -> None:
+    assert set(d) == {"meta", "results"}
+    assert d["results"]
+    for r in d["results"]:
+        assert set(r) == ROW_FIELDS
+        assert r["topic"] in TOPICS and r["status"] in STATUSES
+        assert isinstance(r["details"], dict) and isinstance(r["reason"], str)
+    json.dumps(d, allow_nan=False)            # strictly valid JSON (no NaN/Inf)
+
+
+# ----------------------------------------------------------------------------- inputs
+def test_parse_sets():
+    assert parse_sets(["alpha=0.25", "distribution=ggx", "sample_visible=false", "n=3",
+                       "reflectance=0.2,0.3,0.4", "nested.type=diffuse",
+                       "nested.reflectance=0.7"]) == {
+        "alpha": 0.25, "distribution": "ggx", "sample_visible": False, "n": 3,
+        "reflectance": {"type": "rgb", "value": [0.2, 0.3, 0.4]},
+        "nested": {"type": "diffuse", "reflectance": 0.7}}
+
+
+@pytest.mark.parametrize("bad", ["alpha", "=1", "alpha=", "a..b=1", "x=nan", "c=1,inf,2"])
+def test_parse_sets_refuses(bad):
+    with pytest.raises(ParameterError):
+        parse_sets([bad])
+
+
+def test_parse_sets_refuses_value_and_nested():
+    with pytest.raises(ParameterError):
+        parse_sets(["nested=1", "nested.type=diffuse"])
+
+
+def test_row_refuses_unknown_topic_and_status():
+    with pytest.raises(ValueError):
+        Row("speed", "x", 1.0, 1.0, None, 0.0, "pass", "")
+    with pytest.raises(ValueError):
+        Row("cost", "x", 1.0, 1.0, None, 0.0, "ok", "")
+
+
+# ----------------------------------------------------------------------------- API
+def test_report_round_trip_and_table(variant_llvm_rgb):
+    report = validate_bsdf("lambert", quick=True, topics=["finite", "energy", "gradient"])
+    assert report.passed and not report.failing
+    assert {r.topic for r in report.rows} == {"finite", "energy", "gradient"}
+    d = json.loads(report.to_json())
+    _check_schema(d)
+    again = Report.from_dict(d)
+    assert [r.name for r in again.rows] == [r.name for r in report.rows]
+    text = report.table()
+    assert "energy" in text and "directional albedo" in text
+    energy = next(r for r in report.rows if r.topic == "energy")
+    assert energy.measured == pytest.approx(0.5, abs=1e-4)          # lambert ρ = 0.5
+    assert {"theta_deg", "albedo", "band", "lobes"} <= set(energy.details)
+
+
+def test_spec_forms_dict_xml_and_loaded(variant_llvm_rgb, tmp_path):
+    import mitsuba as mi
+    xml = tmp_path / "b.xml"
+    xml.write_text('<bsdf version="3.0.0" type="diffuse"><rgb name="reflectance" '
+                   'value="0.2, 0.4, 0.6"/></bsdf>')
+    for spec in ({"type": "diffuse", "reflectance": 0.3}, str(xml),
+                 mi.load_dict({"type": "diffuse"})):
+        report = validate_bsdf(spec, quick=True, topics=["energy"])
+        assert report.passed, report.table()
+    params = validate_bsdf("diffuse", params={"reflectance": 0.25}, quick=True, topics=["energy"])
+    assert params.rows[0].measured == pytest.approx(0.25, abs=1e-4)
+
+
+def test_bad_input_is_one_sentence(variant_llvm_rgb, tmp_path):
+    with pytest.raises(ValidateError, match="cannot load BSDF 'nosuch'"):
+        validate_bsdf("nosuch", quick=True)
+    with pytest.raises(ValidateError, match="unknown topic"):
+        validate_bsdf("diffuse", topics=["speed"])
+    with pytest.raises(ValidateError, match="does not exist"):
+        validate_bsdf("diffuse", plugins=[tmp_path / "none.py"])
+    broken = tmp_path / "broken.py"
+    broken.write_text("raise RuntimeError('oops')\n")
+    with pytest.raises(ValidateError, match="failed: RuntimeError: oops"):
+        validate_bsdf("diffuse", plugins=[broken])
+
+
+def test_known_turns_a_fail_into_known_with_the_same_tolerance(variant_llvm_rgb):
+    plugin = [DEFECTS / "energy_gain.py"]
+    plain = validate_bsdf("defect_energy_gain", plugins=plugin, quick=True, topics=["energy"])
+    known = validate_bsdf("defect_energy_gain", plugins=plugin, quick=True, topics=["energy"],
+                          known={"energy": "documented: eval.cpp:12 omits 1/pi"})
+    assert not plain.passed and known.passed
+    (a,), (b,) = plain.rows, known.rows
+    assert (a.status, b.status) == ("fail", "KNOWN")
+    assert b.tolerance == a.tolerance and b.reason.startswith("documented: eval.cpp:12")
+
+
+def test_assert_bsdf_valid(variant_llvm_rgb):
+    assert assert_bsdf_valid("lambert", quick=True, topics=["weight"]).passed
+    with pytest.raises(AssertionError) as info:
+        assert_bsdf_valid("defect_weight_noise", plugins=[DEFECTS / "weight_noise.py"],
+                          quick=True, topics=["weight", "energy"])
+    msg = str(info.value)
+    assert "weight = eval/pdf per sample" in msg and "fail" in msg
+    assert "directional albedo" not in msg                   # only the failing rows
+
+
+# ----------------------------------------------------------------------------- CLI
+def test_cli_pass_json_and_html(variant_llvm_rgb, tmp_path, capsys):
+    out_json, out_html = tmp_path / "r.json", tmp_path / "sub" / "r.html"
+    rc = main(["validate", "lambert", "--quick", "--json", str(out_json),
+               "--report", str(out_html)])
+    text = capsys.readouterr().out
+    assert rc == 0 and "lambert: PASSED" in text and "status" in text
+    _check_schema(json.loads(out_json.read_text()))
+    page = out_html.read_text()
+    assert page.startswith("<!DOCTYPE html>") and "data:image/png;base64," in page
+    # self-contained: no external resource of any kind
+    assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:)", page)
+    assert "http://" not in page and "https://" not in page
+
+
+def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys):
+    out_html = tmp_path / "r.html"
+    rc = main(["validate", "defect_pdf_mismatch", "--plugin", str(DEFECTS / "pdf_mismatch.py"),
+               "--quick", "--only", "chi2", "--only", "energy", "--report", str(out_html)])
+    assert rc == 1 and "FAILED" in capsys.readouterr().out
+    assert "Failing χ² cells" in out_html.read_text()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["validate", "nosuch"], "cannot load BSDF 'nosuch'"),
+    (["validate", "diffuse", "--set", "reflectance"], "is not NAME=VALUE"),
+    (["validate", "diffuse", "--only", "speed"], "unknown topic 'speed'"),
+    (["validate", "x", "--plugin", "no/such/file.py"], "does not exist"),
+    (["validate", "missing.xml"], "does not exist"),
+    (["validate"], "name the BSDF"),
+    (["validate", "diffuse", "--report", "out.txt"], "must end in .html"),
+    (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no BSDF"),
+])
+def test_cli_bad_input_exit_2(variant_llvm_rgb, capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_all_builtins_with_a_small_catalogue(variant_llvm_rgb, tmp_path, capsys, monkeypatch):
+    from phonglab.validate import batch, builtins
+    small = [builtins.Case("diffuse/test", {"type": "diffuse"}),
+             builtins.Case("conductor/test", {"type": "conductor"}, delta=True)]
+    monkeypatch.setattr(builtins, "cases", lambda: small)
+    out = tmp_path / "all.json"
+    rc = main(["validate", "--all-builtins", "--quick", "--only", "finite", "--only", "energy",
+               "--json", str(out)])
+    assert rc == 0, capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert [r["meta"]["case"] for r in data["reports"]] == ["diffuse/test", "conductor/test"]
+    for r in data["reports"]:
+        _check_schema(r)
+    # The job function is picklable and takes a label (for a process pool or Dask).
+    job = pickle.loads(pickle.dumps(batch.run_case))
+    d = job("conductor/test", {"quick": True, "topics": ["energy"]})
+    assert d["meta"]["case"] == "conductor/test" and d["results"][0]["status"] == "pass"

@@ -1,0 +1,64 @@
+"""The validator catches each planted defect in its own topic and in no other; correct BSDFs pass.
+
+The defects are tests/defects/*.py, BSDF plugins written as an author would (they register
+themselves with mi.register_bsdf), each with one planted mistake (see tests/defects/README.md).
+Quick mode and a fixed seed: the statistical topics (chi2, energy) are run at the family-wise
+level ALPHA = 0.01 (Šidák over the BSDF's tests), so a correct plugin fails a run with
+probability ≤ 1 %; the defects are off by far more than the tolerances (a factor of π in
+energy, 2·u per sample in weight, ...), so they fail with probability ≈ 1.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from phonglab.validate import TOPICS, validate_bsdf
+
+DEFECTS = Path(__file__).parent / "defects"
+
+#: defect file -> the one topic it must fail
+PLANTED = {
+    "energy_gain": "energy",
+    "weight_noise": "weight",
+    "pdf_mismatch": "chi2",
+    "nonreciprocal": "reciprocity",
+    "nan_grazing": "finite",
+    "stale_sample_pdf": "pdf",
+    "eval_pdf_mismatch": "eval_pdf",
+    "swapped_components": "component",
+    "wrong_gradient": "gradient",
+}
+
+
+@pytest.mark.parametrize("name", sorted(PLANTED))
+def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
+    report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True, seed=0)
+    failing = {r.topic for r in report.failing}
+    assert failing == {PLANTED[name]}, report.table(report.failing)
+
+
+@pytest.mark.parametrize("bsdf", ["diffuse", "lambert", "phong"])
+def test_correct_bsdfs_pass_quick(variant_llvm_rgb, bsdf):
+    report = validate_bsdf(bsdf, quick=True, seed=0)
+    assert report.passed, report.table(report.failing)
+    assert {r.topic for r in report.rows} == set(TOPICS)
+
+
+def test_every_topic_but_cost_has_a_planted_defect():
+    assert set(PLANTED.values()) | {"cost"} == set(TOPICS)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(PLANTED))
+def test_defect_fails_its_topic_only_default_sizes(variant_llvm_rgb, name):
+    report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], seed=0)
+    assert {r.topic for r in report.failing} == {PLANTED[name]}, report.table(report.failing)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("bsdf", ["diffuse", "lambert", "phong"])
+def test_correct_bsdfs_pass_default_sizes(variant_llvm_rgb, bsdf):
+    report = validate_bsdf(bsdf, seed=0)
+    assert report.passed, report.table(report.failing)
