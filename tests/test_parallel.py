@@ -233,3 +233,43 @@ def test_rows_are_put_in_the_serial_order(tmp_path):
     again = csvlog.open_log(tmp_path, "cost")
     assert [(r["scene"], r["method"], r["round"]) for r in again.rows] == \
         [("other", "x", "0")] + [("s", k["method"], str(k["round"])) for k in keys]
+
+
+def _without_timings(x):
+    """A validate report (JSON data) without its wall-time fields."""
+    if isinstance(x, dict):
+        return {k: _without_timings(v) for k, v in x.items()
+                if k not in ("seconds", "topic_seconds", "wall_seconds")}
+    if isinstance(x, list):
+        return [_without_timings(v) for v in x]
+    return x
+
+
+def test_cluster_validate_cases_identical_to_serial(cluster):
+    """Conformance cases as jobs on the cluster give the serial reports (timings aside)."""
+    from phonglab.validate import batch, builtins
+
+    address, _ = cluster
+    cases = builtins.cases()[:4]
+    options = {"seed": 0, "quick": True, "topics": ["finite", "eval_pdf", "weight"]}
+    serial = batch.run_all(cases, options)
+    with Runner(scheduler=address, progress=False) as runner:
+        distributed = batch.run_all(cases, options, runner=runner)
+        assert len(runner.timings) == len(cases)
+    assert [r["meta"]["case"] for r in distributed["reports"]] == [c.label for c in cases]
+    assert _without_timings(distributed) == _without_timings(serial)
+
+
+@pytest.mark.slow
+def test_cluster_validate_all_builtins_cli_identical_to_serial(cluster, tmp_path):
+    address, _ = cluster
+    base = [str(BIN / "phonglab"), "validate", "--all-builtins", "--quick", "--only", "finite",
+            "--only", "eval_pdf"]
+    runs = {}
+    for name, extra in (("serial", []), ("cluster", ["--scheduler", address])):
+        path = tmp_path / f"{name}.json"
+        proc = subprocess.run(base + ["--json", str(path)] + extra, capture_output=True,
+                              text=True, timeout=600)
+        assert proc.returncode in (0, 1), proc.stderr          # 1: a case fails a row
+        runs[name] = json.loads(path.read_text())
+    assert _without_timings(runs["cluster"]) == _without_timings(runs["serial"])

@@ -65,7 +65,8 @@ class Job:
 
 @dataclass
 class JobTiming:
-    """Wall seconds a job took inside the worker (``seconds``) and end to end (``total``)."""
+    """Seconds a job took inside its worker (``seconds``), and from the start of its batch to
+    its result arriving here (``total``)."""
 
     key: Hashable
     seconds: float
@@ -144,13 +145,6 @@ class Runner:
             client.close()
         if cluster is not None:
             cluster.close()
-
-    @property
-    def worker_count(self) -> int:
-        """Workers this runner spreads jobs over (1 when serial)."""
-        if self._client is None:
-            return 1
-        return max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
 
     def run(self, jobs: Sequence[Job], on_result: Callable[[Job, Any], None] | None = None,
             desc: str = "jobs") -> list[Any]:
