@@ -17,7 +17,7 @@ Every render goes through :func:`phonglab.render.render_scene` (one pass; its
 Each sweep is a list of jobs run by :func:`phonglab.bench.jobs.run_jobs`, serially or on a
 Dask cluster: one per (set-up, spp) cell of the renders (after the set-up's load and warm-up,
 done once per worker process: :func:`_setup`), one per (variant, BSDF) of the variant
-comparison, one per comparison of the ratios (its A/B pairs stay together, in one process).
+comparison, one per A/B pair of the ratios (both renders of a pair back to back in one process).
 References are rendered first, their passes spread over the same runner.
 """
 
@@ -157,19 +157,24 @@ def sweep_variants(out: Path, cfg: Config, runner: Runner, cache: Path | None = 
     return notes
 
 
-def ratio_job(name: str, a: str, b: str, which: str, pairs: tuple[int, ...], spp: int) -> Rows:
-    """Job: the A/B pairs ``pairs`` of one render-time comparison, in one process (ABBA order)."""
+@functools.lru_cache(maxsize=4)
+def _ratio_scenes(a: str, b: str, which: str, spp: int) -> dict:
+    """Once per process and comparison: both scenes, loaded and warmed up (JIT excluded)."""
     scenes = {m: ratio_spec(m, which).load(VARIANT) for m in (a, b)}
-    for m in (a, b):                  # warm-up (JIT) excluded from the pairs
+    for m in (a, b):
         timed_render(scenes[m], spp, seed=1)
-    rows: Rows = []
-    for pair in pairs:
-        order = (a, b) if pair % 2 == 0 else (b, a)
-        t = {m: timed_render(scenes[m], spp, seed=1000 + pair) for m in order}
-        rows.append(("ratios", dict(comparison=name, a=a, b=b, pair=pair,
-                                    scene=f"cornell {RATIO_RES}px {which}", variant=VARIANT,
-                                    spp=spp, t_a=t[a], t_b=t[b], ratio=t[a] / t[b])))
-    return rows
+    return scenes
+
+
+def ratio_job(name: str, a: str, b: str, which: str, pair: int, spp: int) -> Rows:
+    """Job: one A/B pair of a render-time comparison, both renders back to back in one
+    process (A first in even pairs, B first in odd ones: ABBA over the pairs)."""
+    scenes = _ratio_scenes(a, b, which, spp)
+    order = (a, b) if pair % 2 == 0 else (b, a)
+    t = {m: timed_render(scenes[m], spp, seed=1000 + pair) for m in order}
+    return [("ratios", dict(comparison=name, a=a, b=b, pair=pair,
+                            scene=f"cornell {RATIO_RES}px {which}", variant=VARIANT,
+                            spp=spp, t_a=t[a], t_b=t[b], ratio=t[a] / t[b]))]
 
 
 def sweep_ratios(out: Path, cfg: Config, runner: Runner) -> None:
@@ -177,8 +182,9 @@ def sweep_ratios(out: Path, cfg: Config, runner: Runner) -> None:
     log = open_log(out, "ratios")
     jobs, order = [], {"ratios": []}
     for name, a, b, which in RATIO_COMPARISONS:
-        order["ratios"] += [dict(comparison=name, pair=p) for p in range(cfg.ratio_pairs)]
-        todo = tuple(p for p in range(cfg.ratio_pairs) if not log.has(comparison=name, pair=p))
-        if todo:
-            jobs.append(Job(ratio_job, (name, a, b, which, todo, cfg.ratio_spp), key=("ratios", name)))
+        for pair in range(cfg.ratio_pairs):
+            order["ratios"].append(dict(comparison=name, pair=pair))
+            if not log.has(comparison=name, pair=pair):
+                jobs.append(Job(ratio_job, (name, a, b, which, pair, cfg.ratio_spp),
+                                key=("ratios", name, pair)))
     run_jobs(runner, out, jobs, order, "ratios")

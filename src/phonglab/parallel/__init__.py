@@ -195,7 +195,7 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
     cluster = None
     if scheduler is None:
         cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR)
+                               dashboard_address=":0", silence_logs=logging.CRITICAL)
         threads = max(1, (os.cpu_count() or 1) // int(workers))
         client = Client(cluster)
     else:
