@@ -273,3 +273,19 @@ def test_cluster_validate_all_builtins_cli_identical_to_serial(cluster, tmp_path
         assert proc.returncode in (0, 1), proc.stderr          # 1: a case fails a row
         runs[name] = json.loads(path.read_text())
     assert _without_timings(runs["cluster"]) == _without_timings(runs["serial"])
+
+
+def test_kernel_cache_slots_are_exclusive_and_cleaned(tmp_path):
+    """Each live process holds its own slot; a slot's stale Dr.Jit *.tmp files are removed."""
+    from phonglab.parallel.worker import claim_slot
+
+    stale = tmp_path / "worker-0" / ".drjit" / "0123.llvm.bin.tmp"
+    stale.parent.mkdir(parents=True)
+    stale.write_bytes(b"half a kernel")
+    kept = stale.with_name("0123.llvm.bin")
+    kept.write_bytes(b"a kernel")
+    assert claim_slot(tmp_path) == tmp_path / "worker-0"
+    assert not stale.exists() and kept.exists()
+    # A second claimant (another open file description, as another process would have) is
+    # refused the held slot and gets the next one.
+    assert claim_slot(tmp_path) == tmp_path / "worker-1"

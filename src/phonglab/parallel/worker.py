@@ -5,18 +5,27 @@ registers; its ``setup`` runs :func:`prepare_process` once in each worker proces
 every worker that joins later, or that a nanny restarts after a crash).
 
 **Kernel cache.**  Dr.Jit 1.5 keeps compiled kernels in ``$HOME/.drjit``: ``jitc_init``
-(drjit-core ``src/init.cpp``) reads ``getenv("HOME")`` once, when the first JIT backend
-starts, and there is neither an environment variable nor an API to move it later.  Several
-worker processes of one machine writing the same cache files at once is what Mitsuba's
-maintainers warn against, so :func:`prepare_process` gives each process its own folder:
-it claims the first free slot ``<root>/worker-<k>`` (an exclusive ``flock`` on
-``<slot>/.lock``, held for the life of the process, so two live processes never share a slot
-and a restarted worker reuses a warm one), points ``HOME`` there, starts Dr.Jit's LLVM
-backend (importing Mitsuba, setting the variant, evaluating one array), and puts ``HOME``
-back.  ``<root>`` is ``$PHONGLAB_WORKER_CACHE`` or ``~/.cache/phonglab/drjit-workers``.
-When Dr.Jit was already started in the process (it never is in a ``dask worker`` or a
-LocalCluster process: neither imports it) the folder cannot be changed and
-:func:`prepare_process` says so in its report instead of pretending.
+(drjit-core ``src/init.cpp``), which runs when ``drjit`` is imported, reads
+``getenv("HOME")`` once; there is neither an environment variable nor an API to move the
+folder later.  So :func:`prepare_process` gives each worker process its own folder before it
+imports Dr.Jit: it claims the first free slot ``<root>/worker-<k>`` (an exclusive ``flock``
+on ``<slot>/.lock``, held for the life of the process: two live processes never share a slot,
+and a restarted worker reuses a warm one), removes the slot's stale ``*.tmp`` files, points
+``HOME`` there, imports Dr.Jit and Mitsuba, sets the variant, and puts ``HOME`` back.
+``<root>`` is ``$PHONGLAB_WORKER_CACHE`` or ``~/.cache/phonglab/drjit-workers``.
+
+Why a slot of its own, when Dr.Jit's writes are careful (``jitc_kernel_write``, drjit-core
+``src/io.cpp``: the kernel goes to ``<hash>.tmp`` opened with ``O_CREAT | O_EXCL``, is
+``link``-ed to its final name and the ``.tmp`` unlinked, so a reader never sees half a file
+and two writers of one kernel cost one a warning): a process killed between creating the
+``.tmp`` and unlinking it (a lost worker, which the cluster is built to survive) leaves a
+``.tmp`` that makes every later write of that kernel fail, in every process sharing the
+folder, forever.  Only the owner of a folder can safely delete it, and with a slot each
+process owns one.  When Dr.Jit was imported before the plugin ran (a LocalCluster started
+from a script that imports ``drjit`` or ``mitsuba`` at module level: the ``spawn`` start
+method re-imports the main module in every worker) the folder is the shared ``~/.drjit``,
+safe by the protocol above but without the clean-up; the report's ``kernel_cache`` is then
+None.  ``phonglab``'s commands and ``dask worker`` never import Dr.Jit first.
 
 **Threads.**  A LocalCluster of N workers on C cores sets Dr.Jit's thread pool to C // N
 threads per process, so N processes do not start N·C kernel threads; on a hand-started
@@ -62,6 +71,8 @@ def claim_slot(root: Path) -> Path:
             k += 1
             continue
         _held_lock = fd
+        for stale in (slot / ".drjit").glob("*.tmp"):       # left by a killed owner
+            stale.unlink(missing_ok=True)
         return slot
 
 
@@ -92,8 +103,6 @@ def prepare_process(variant: str, threads: int | None = None,
         register(variant)
         if threads is not None:
             dr.set_thread_count(int(threads))
-        if mi.variant().startswith("llvm_"):
-            dr.eval(dr.llvm.Float(0.0) + 1.0)     # starts the LLVM backend (reads $HOME) now
     finally:
         if home is None:
             os.environ.pop("HOME", None)
