@@ -71,14 +71,16 @@ def run(args) -> int:
         if args.pilot_spp < 8:
             raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
         kwargs["pilot_spp"] = args.pilot_spp
-    # The reference's passes run on --workers/--scheduler: reached before the pilot starts.
-    runner = runner_from_args(args) if args.make_reference is not None else None
-    with runner or contextlib.nullcontext():
+    # A missing reference's passes run on --workers/--scheduler: reached before the pilot.
+    runner = runner_from_args(args)
+    rendering = (args.make_reference is not None and
+                 references.cached(path, params, min_spp=args.make_reference) is None)
+    with runner if rendering else contextlib.nullcontext():
         p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
                          max_depth=args.max_depth, spp=args.spp, params=params,
                          max_seconds=args.max_seconds, **kwargs)
         print(p.to_json() if args.json else p.summary())
-        if runner is not None:
+        if args.make_reference is not None:
             ref = references.reference(path, args.make_reference, params=params, progress=True,
                                        runner=runner)
             if not args.json:
