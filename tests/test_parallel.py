@@ -1,12 +1,13 @@
 """phonglab.parallel: serial, LocalCluster and a real Dask cluster give the same results.
 
 The cluster tests start a real ``dask scheduler`` and two ``dask worker`` processes on the
-loopback interface (random free ports, each in its own process group, torn down in a
+loopback interface (random free port, each in its own process group, torn down in a
 ``finally``), run ``phonglab bench --quick --only stability`` there and compare its CSV,
-timing columns aside, with a serial run of the same command, bit for bit; once more with one
-worker process killed (SIGKILL) while the sweep runs (slow tier: ~12 s more; the default tier
-keeps the cluster run, the LocalCluster reference and the error sentences, ~30 s together).  Timing columns (wall times, compile
-statistics) are measurements of the machine, not results, and differ run to run anyway.
+timing columns aside, with a serial run of the same command, bit for bit; the same for four
+conformance cases of ``phonglab validate``.  The slow tier adds the run with one worker
+process killed (SIGKILL) mid-sweep and the whole ``validate --all-builtins`` command.
+Timing columns (wall times, compile statistics) are measurements of the machine, not
+results, and differ from run to run anyway.
 """
 
 from __future__ import annotations
