@@ -29,6 +29,7 @@ test-all: setup
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
+	$(BIN)/python -m phonglab.fit.timing --repeats 5 --out docs/bench/fit.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 
 # docs/classic_model.md's figure: whitted graphics vs whitted radiance vs path (~10 s).
@@ -57,3 +58,8 @@ bench-planner: setup
 bench-cluster: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --workers 2 --out out/bench-quick-2w
 	$(BIN)/python scripts/parallel_overhead.py --workers 2 --bench out/bench-quick-2w --out out/parallel_overhead.json
+
+# docs/fitting.md's table: phong fitted to Beckmann/GGX roughconductor and roughplastic (~20 s).
+.PHONY: fitting-table
+fitting-table: setup
+	$(BIN)/python -m phonglab.fit.table --json docs/fitting.json --markdown docs/fitting.md

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from phonglab.errors import PhonglabError
-from phonglab.physics.estimators import (METHODS, Problem, ReflectionEstimators,
-                                         clipped_cosine_mean, exact_normal_incidence, exact_value)
+from phonglab.physics.estimators import (ALLOCATIONS, METHODS, Problem, ReflectionEstimators,
+                                         choose_allocation, clipped_cosine_mean,
+                                         exact_normal_incidence, exact_value)
 
 
 @pytest.mark.parametrize("A,B", [(0.3, 0.0), (-0.2, 0.0), (0.5, 0.2), (0.1, 0.7), (-0.3, 0.6),
@@ -98,13 +99,60 @@ def test_bad_estimator_calls_are_clear_errors(variant_llvm_rgb):
         est.run("stratified", 64)
     with pytest.raises(PhonglabError, match="n >= 2"):
         est.run("bsdf", 1)
+    with pytest.raises(PhonglabError, match="mis_optimal needs n >= 64"):
+        est.run("mis_optimal", 32)
+
+
+def _pilot_rows(rng, f_of, m=512):
+    """A synthetic pilot on [0, 1]: p_b(x) = 2x, p_l(x) = 1 (M/2 samples of each), f = f_of(x)."""
+    xb = np.sqrt(rng.random((4, m // 2)))          # inverse CDF of p_b = 2x
+    xl = rng.random((4, m // 2))
+    x = np.concatenate([xb, xl], axis=1)
+    return f_of(x), 2.0 * x, np.ones_like(x)
+
+
+def test_choose_allocation_solves_the_2x2_system_exactly_for_a_mixture_of_the_pdfs():
+    """f = 3 p_b + 0.5 p_l is its own control variate: α = (3, 0.5) and σ²(c) = 0 for every
+    mixture, while either strategy alone has σ² > 0 (f/p_b, f/p_l are not constant)."""
+    fv, pb, pl = _pilot_rows(np.random.default_rng(1), lambda x: 3.0 * 2.0 * x + 0.5)
+    c_b, a_b, a_l, s2 = choose_allocation(fv, pb, pl, allocations=(0.5,))
+    np.testing.assert_allclose(a_b, 3.0, rtol=1e-9)
+    np.testing.assert_allclose(a_l, 0.5, rtol=1e-9)
+    np.testing.assert_allclose(s2, 0.0, atol=1e-9)
+    c_b, _, _, s2 = choose_allocation(fv, pb, pl)
+    assert np.all((c_b > 0.0) & (c_b < 1.0)) and np.all(s2 == 0.0)
+    for end in (0.0, 1.0):
+        assert np.all(choose_allocation(fv, pb, pl, allocations=(end,))[3] > 0.1)
+
+
+def test_choose_allocation_matches_the_analytic_variance_of_each_pure_strategy():
+    """f(x) = x on [0, 1] (μ = 1/2): light sampling (p_l = 1) has σ² = 1/3 − 1/4 = 1/12,
+    BSDF sampling (p_b = 2x) has f/p_b = 1/2, σ² = 0: the pilot picks c_b = 1."""
+    fv, pb, pl = _pilot_rows(np.random.default_rng(2), lambda x: x, m=1 << 14)
+    _, _, _, s2_l = choose_allocation(fv, pb, pl, allocations=(0.0,))
+    # Var of the pilot estimate of E_q[x²/(p_l q)]: a loose 5 % (M = 16384, tail bounded).
+    np.testing.assert_allclose(s2_l, 1.0 / 12.0, rtol=0.05)
+    c_b, a_b, a_l, s2 = choose_allocation(fv, pb, pl)
+    assert np.all(c_b == 1.0) and np.all(a_l == 0.0)
+    np.testing.assert_allclose(s2, 0.0, atol=1e-12)
+
+
+def test_choose_allocation_refuses_a_pure_strategy_that_misses_part_of_f():
+    """f > 0 where p_b = 0: BSDF sampling alone would be biased, so σ²(c_b = 1) = ∞."""
+    fv, pb, pl = _pilot_rows(np.random.default_rng(3), lambda x: np.ones_like(x))
+    pb[:, -1] = 0.0
+    _, _, _, s2 = choose_allocation(fv, pb, pl, allocations=(1.0,))
+    assert np.all(np.isinf(s2))
+    c_b, *_ = choose_allocation(fv, pb, pl)
+    assert np.all(c_b < 1.0) and len(ALLOCATIONS) > 2
 
 
 def test_sweeping_exponent_angle_and_light_size_never_recompiles(variant_llvm_rgb):
     """Opaque parameters: a sweep launches the kernels of its first point, by hash."""
     est = ReflectionEstimators(Problem(exponent=10.0, theta_i=30.0, half_angle=3.0))
     first = {m: est.run(m, 256, seed=1).kernel_hashes for m in METHODS}
-    assert all(len(h) == 1 for h in first.values()), first
+    # One kernel per estimator; mis_optimal launches two (its pilot, then its main stage).
+    assert all(len(h) == (2 if m == "mis_optimal" else 1) for m, h in first.items()), first
     for p, theta, delta in ((1e4, 80.0, 1.0), (0.0, 0.0, 10.0), (1e5, 89.9, 0.5)):
         est.set(exponent=p, theta_i=theta, half_angle=delta, radiance=2.0)
         for m in METHODS:

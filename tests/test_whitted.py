@@ -496,3 +496,31 @@ def test_attenuation_demo_header(variant_llvm_rgb):
         # The 0.999 inset and (L·R)^20 of a far-off highlight: 0.5 % at most.
         np.testing.assert_allclose(got, want, rtol=5e-3, err_msg=str(params))
     np.testing.assert_allclose((r[-1] / r[0]) ** 2, 9.72, rtol=1e-3)
+
+
+def _jit_kernels(scene, integrator) -> list[tuple]:
+    """(hash, cache hit) of the JIT kernels one render launches."""
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()
+    render_scene(scene, 4, seed=3, integrator=integrator)
+    return [(k.get("hash"), bool(k.get("cache_hit", 0))) for k in dr.kernel_history()
+            if str(k.get("type", "")).endswith("JIT")]
+
+
+@pytest.mark.parametrize("name", ["exponent_series", "attenuation_demo"])
+def test_graphics_and_radiance_units_launch_the_same_kernels_without_recompiling(variant_llvm_rgb, name):
+    """Graphics units cost what radiance units cost in kernels: per render the same number of
+    JIT launches, and a second render (another seed) reuses every kernel of the first (the
+    per-material loop of graphics units is traced, not compiled, again).  The time ratio
+    itself is a benchmark (bench.render_sweeps.sweep_whitted_units), not a unit test."""
+    scene = load_scene(name, "llvm_ad_rgb", width=32, height=16)
+    settings = scene.integrator().parameters()
+    kernels = {}
+    for units in ("graphics", "radiance"):
+        integrator = mi.load_dict(dict(settings, units=units))
+        first = _jit_kernels(scene, integrator)
+        second = _jit_kernels(scene, integrator)
+        assert [h for h, _ in second] == [h for h, _ in first], f"{units}: recompiled"
+        assert all(hit for _, hit in second), f"{units}: {second}"
+        kernels[units] = len(first)
+    assert kernels["graphics"] == kernels["radiance"], kernels

@@ -46,9 +46,9 @@ from ..lazy import lazy_exports
 #: The public API, by the module of this package that defines it, re-exported on first use
 #: (phonglab.lazy says why).
 _EXPORTS = {
-    "analysis": ("efficiency_ratios", "loglog_slope", "mis_ratios", "pareto_front",
+    "analysis": ("efficiency_ratios", "loglog_slope", "mis_cell_table", "mis_ratios", "pareto_front",
                  "ratio_summary", "stability_verdict", "stability_z_crit"),
-    "charts": ("chart_error_time", "chart_stability"),
+    "charts": ("chart_error_time", "chart_mis", "chart_stability"),
     "config": ("BIAS_FLOOR", "BREAKDOWN_REL_RMSE", "Config", "DEFAULT_OUT", "ESTIMATOR_SCENES",
                "NEAR_ZERO_REL_SD", "PARTS", "RATIO_COMPARISONS", "STABILITY_ANGLES",
                "STABILITY_EXPONENTS", "STABILITY_LIGHTS", "STABILITY_N"),

@@ -110,9 +110,9 @@ def efficiency_ratios(rows: list[dict], cost_rows: list[dict] | None = None) -> 
     return out
 
 
-def _mis_cells(stab: list[dict]) -> tuple[list[tuple], dict[tuple[str, str], float]]:
-    """(rt, rn, cell key, near-zero, rp) for every cell where MIS and both strategies ran, and
-    the median time per estimate of each (light, method)."""
+def _mis_cells(stab: list[dict], method: str = "mis") -> tuple[list[tuple], dict[tuple[str, str], float]]:
+    """(rt, rn, cell key, near-zero, rp) for every cell where ``method`` and both strategies ran,
+    and the median time per estimate of each (light, method)."""
     cells: dict[tuple, dict[str, dict]] = {}
     for r in stab:
         cells.setdefault((r["light"], r["exponent"], r["theta_i"]), {})[r["method"]] = r
@@ -124,25 +124,25 @@ def _mis_cells(stab: list[dict]) -> tuple[list[tuple], dict[tuple[str, str], flo
     t = {k: float(np.median(v)) for k, v in cost.items()}
     found = []
     for key, m in cells.items():
-        if not all(k in m for k in ("mis", "bsdf", "light")):
+        if not all(k in m for k in (method, "bsdf", "light")):
             continue
         light = key[0]
         best = min(("bsdf", "light"), key=lambda k: number(m[k], "var_n") * t[(light, k)])
         if m[best]["verdict"] != "ok" or number(m[best], "var_n") <= 0:
             continue
-        var_mis = number(m["mis"], "var_n")
-        rt = math.sqrt(var_mis * t[(light, "mis")] / (number(m[best], "var_n") * t[(light, best)]))
+        var_mis = number(m[method], "var_n")
+        rt = math.sqrt(var_mis * t[(light, method)] / (number(m[best], "var_n") * t[(light, best)]))
         best_var = min(x for x in (number(m["bsdf"], "var_n"), number(m["light"], "var_n")) if x > 0)
         rn = math.sqrt(var_mis / best_var)
         # N pairs (2N samples) against N samples of the better strategy: var_pair = var_n / 2.
-        rp = math.sqrt(var_mis / 2.0 / best_var)
+        rp = math.sqrt(var_mis / 2.0 / best_var) if method == "mis" else rn
         near_zero = math.sqrt(number(m[best], "var_n")) / number(m[best], "exact") < NEAR_ZERO_REL_SD
         found.append((rt, rn, key, near_zero, rp))
     return found, t
 
 
-def mis_ratios(stab: list[dict]) -> dict[str, Any]:
-    """MIS error over the better of bsdf/light sampling, at equal time and at equal samples.
+def mis_ratios(stab: list[dict], method: str = "mis") -> dict[str, Any]:
+    """``method``'s error over the better of bsdf/light sampling, at equal time and at equal samples.
 
     Equal time: √(σ²_mis t_mis / min(σ²_b t_b, σ²_l t_l)); equal samples: √(σ²_mis / min(σ²_b, σ²_l)),
     σ² the per-sample-equivalent variance N·mean(stderr²).  Stability cells where the better
@@ -152,7 +152,7 @@ def mis_ratios(stab: list[dict]) -> dict[str, Any]:
     (balance/power heuristic variance ≤ best variance + (1/min nᵢ − 1/Σnᵢ) μ²) is additive in
     μ², so against an almost zero-variance strategy no fixed split can stay within a factor.
     """
-    found, t = _mis_cells(stab)
+    found, t = _mis_cells(stab, method)
 
     def worst(sel, idx):
         return max(sel, key=lambda x: x[idx]) if sel else (math.nan, math.nan, None, False, math.nan)
@@ -165,8 +165,25 @@ def mis_ratios(stab: list[dict]) -> dict[str, Any]:
             "equal_samples_max": wn[1], "equal_samples_cell": wn[2],
             "regular_time_max": wr[0], "regular_time_cell": wr[2],
             "equal_time_median": float(np.median([x[0] for x in found])) if found else float("nan"),
+            "equal_samples_median": float(np.median([x[1] for x in found])) if found else float("nan"),
             "within_1_2": sum(x[0] <= 1.2 for x in found), "cells": len(found),
+            "within_1_2_samples": sum(x[1] <= 1.2 for x in found),
             "near_zero_cells": len(found) - len(regular)}
+
+
+def mis_cell_table(stab: list[dict], method: str = "mis_optimal", baseline: str = "mis") -> list[dict]:
+    """Per stability cell: ``method`` and ``baseline`` over the better single strategy, at equal
+    time (rt) and equal samples (rn), and ``method`` over ``baseline`` at equal time."""
+    ours = {x[2]: x for x in _mis_cells(stab, method)[0]}
+    base = {x[2]: x for x in _mis_cells(stab, baseline)[0]}
+    rows = []
+    for key in sorted(ours, key=lambda k: (k[0], float(k[1]), float(k[2]))):
+        o, b = ours[key], base.get(key)
+        rows.append(dict(light=key[0], exponent=float(key[1]), theta_i=float(key[2]),
+                         near_zero=o[3], rt=o[0], rn=o[1],
+                         rt_base=b[0] if b else math.nan, rn_base=b[1] if b else math.nan,
+                         vs_base=o[0] / b[0] if b and b[0] > 0 else math.nan))
+    return rows
 
 
 def loglog_slope(rows: list[dict], group: str, scene: str, method: str, variant: str = "llvm_ad_rgb",

@@ -7,6 +7,9 @@
   reference).
 * :func:`chart_stability` — ``stability.png``: per estimator (columns) and light (rows), log10
   of the relative RMSE over exponent × θ_i, a red ✗ where the verdict is "breaks down".
+* :func:`chart_mis` — ``mis.png``: per light (rows), the error of power-heuristic ``mis`` and
+  of ``mis_optimal`` over the better single strategy at equal time, and of ``mis_optimal`` at
+  equal samples (:func:`phonglab.bench.analysis.mis_cell_table`), per exponent × θ_i.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.estimators import METHODS
-from .analysis import pareto_front
+from .analysis import mis_cell_table, pareto_front
 from .config import BREAKDOWN_REL_RMSE, STABILITY_ANGLES, STABILITY_EXPONENTS, STABILITY_LIGHTS, STABILITY_N
 from .csvlog import number, open_log
 
@@ -141,6 +144,53 @@ def chart_stability(out: Path, figdir: Path) -> Path | None:
                  f"✗ = breaks down (rel. RMSE > {BREAKDOWN_REL_RMSE:g}, NaN/Inf, or unexplained error)",
                  fontsize=9)
     path = figdir / "stability.png"
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def chart_mis(out: Path, figdir: Path) -> Path | None:
+    """Heatmaps of MIS over the better of BSDF/light sampling: log2 of the error ratio, the
+    value written in each cell, a box where the better strategy is near-zero-variance."""
+    plt = _plt()
+    table = mis_cell_table(open_log(out, "stability").rows)
+    if not table:
+        return None
+    lights = list(STABILITY_LIGHTS)
+    panels = (("rt_base", "mis (power), equal time"), ("rt", "mis_optimal, equal time"),
+              ("rn", "mis_optimal, equal samples"))
+    fig, axes = plt.subplots(len(lights), len(panels), figsize=(4.2 * len(panels), 3.2 * len(lights)),
+                             squeeze=False)
+    im = None
+    for i, light in enumerate(lights):
+        for j, (key, title) in enumerate(panels):
+            ax = axes[i][j]
+            grid = np.full((len(STABILITY_ANGLES), len(STABILITY_EXPONENTS)), np.nan)
+            for c in table:
+                if c["light"] != light:
+                    continue
+                a = STABILITY_ANGLES.index(c["theta_i"])
+                p = STABILITY_EXPONENTS.index(c["exponent"])
+                grid[a, p] = c[key]
+                ax.text(p, a, f"{c[key]:.2f}" if c[key] < 10 else f"{c[key]:.2g}", ha="center", va="center", fontsize=5.5,
+                        color="white" if abs(math.log2(max(c[key], 1e-9))) > 1.5 else "black",
+                        fontweight="bold" if c["near_zero"] else "normal")
+            im = ax.imshow(np.log2(np.clip(grid, 0.25, 4.0)), origin="lower", cmap="coolwarm",
+                           vmin=-2, vmax=2, aspect="auto")
+            ax.set_xticks(range(len(STABILITY_EXPONENTS)),
+                          [f"{p:g}" for p in STABILITY_EXPONENTS], fontsize=6, rotation=45)
+            ax.set_yticks(range(len(STABILITY_ANGLES)), [f"{t:g}" for t in STABILITY_ANGLES],
+                          fontsize=6)
+            ax.set_title(f"{title} — {light}", fontsize=8)
+            if i == len(lights) - 1:
+                ax.set_xlabel("exponent p", fontsize=7)
+            if j == 0:
+                ax.set_ylabel("θ_i [deg]", fontsize=7)
+    fig.subplots_adjust(hspace=0.45, wspace=0.3)
+    fig.colorbar(im, ax=axes, shrink=0.8, label="log2 (MIS error / better single strategy's)")
+    fig.suptitle("MIS against the better of BSDF and light sampling (target ≤ 1.2); bold: the "
+                 "better strategy is near-zero-variance; blank: it breaks down", fontsize=9)
+    path = figdir / "mis.png"
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path

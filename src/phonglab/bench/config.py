@@ -48,6 +48,10 @@ RATIO_COMPARISONS = (
 )
 #: Render-time targets: comparison → largest acceptable median ratio.
 RATIO_TARGETS = {"lambert/diffuse": 1.05, "phong/plastic": 1.25}
+#: whitted graphics/radiance units: the scene, spp and the target (largest median ratio).
+WHITTED_SCENES = ("exponent_series", "attenuation_demo")
+WHITTED_SPP = 16
+WHITTED_TARGET = 1.1
 RATIO_RES = 64
 VARIANT_RES = 16
 RENDER_RES = 32
@@ -59,6 +63,8 @@ STABILITY_FIELDS = ["light", "method", "exponent", "theta_i", "samples", "seeds"
                     "seconds", "verdict", "reason"]
 RATIO_FIELDS = ["comparison", "a", "b", "pair", "scene", "variant", "spp", "t_a", "t_b", "ratio"]
 COST_FIELDS = ["scene", "method", "round", "samples", "seconds"]
+WHITTED_FIELDS = ["scene", "pair", "spp", "t_graphics", "t_radiance", "ratio", "kernels_graphics",
+                  "kernels_radiance"]
 JIT_FIELDS = ["group", "method", "scene", "variant", "first_call_s", "steady_s", "compile_ms",
               "kernels", "cache_hits", "cold_compile_ms"]
 
@@ -69,6 +75,7 @@ LOGS = {
     "ratios": ("ratios.csv", RATIO_FIELDS, ("comparison", "pair")),
     "cost": ("cost.csv", COST_FIELDS, ("scene", "method", "round")),
     "jit": ("jit.csv", JIT_FIELDS, ("group", "method", "scene", "variant")),
+    "whitted": ("whitted.csv", WHITTED_FIELDS, ("scene", "pair")),
 }
 
 

@@ -6,16 +6,18 @@ r"""Sweeps of the reflection-equation estimators: error and time against N, and 
   steady-state wall time of one N-sample estimate (median of repeats after a warm-up call,
   whose own time and JIT statistics go to ``jit.csv``); then :func:`sweep_cost`, the cost
   per estimate at the largest N with the methods interleaved.
-* :func:`sweep_stability` — every estimator × exponent × θ_i × light of the stability grid,
+* :func:`sweep_stability` — every estimator (``mis_optimal`` included) × exponent × θ_i × light
+  of the stability grid (the estimators interleaved cell by cell),
   pure specular lobe (k_d = 0, k_s = 1), N = :data:`~phonglab.bench.config.STABILITY_N`;
   the verdict is :func:`phonglab.bench.analysis.stability_verdict`.  The bias z-score is
   mean error / (pooled standard error / √S); with a zero standard error it is 0 when the
   estimate is exact to 10⁻⁶ and ∞ otherwise (a silent failure).
 
 Each sweep is a list of jobs (:class:`phonglab.parallel.Job`: one per estimator cell, per
-cost round, per stability exponent row) run by :func:`phonglab.bench.jobs.run_jobs`, serially
-or on a Dask cluster; a job carries its seeds and measures its own times, after the
-warm-up its worker process does once (:func:`_warm_up`, :func:`_warm_stability`).
+cost round, per (light, p, θ_i) cell of the stability map) run by
+:func:`phonglab.bench.jobs.run_jobs`, serially or on a Dask cluster; a job carries its seeds
+and measures its own times, after the warm-up its worker process does once
+(:func:`_warm_up`, :func:`_warm_stability`).
 """
 
 from __future__ import annotations
@@ -185,18 +187,21 @@ def stability_job(cells: tuple[tuple[str, str, float, float, int], ...], seeds: 
 def sweep_stability(out: Path, cfg: Config, runner: Runner) -> None:
     """The stability map: each estimator × p × θ_i × light at N = :data:`STABILITY_N` samples.
 
-    One job per (light, estimator, p): its θ_i cells (each ~5 ms, so a job of one cell would
-    cost about as much in scheduling as in work; docs/cluster.md).
+    One job per (light, p, θ_i): its estimators one after the other, as the serial order has
+    them (each cell ~5 ms, so a job of one cell would cost about as much in scheduling as in
+    work; docs/cluster.md).
     """
     log = open_log(out, "stability")
     z_crit = stability_z_crit()
-    cells = [(lt, m, p, t) for lt in STABILITY_LIGHTS for m in METHODS
-             for p in STABILITY_EXPONENTS for t in STABILITY_ANGLES]
+    # Methods innermost: the per-(light, method) median time that the MIS comparison uses
+    # (analysis.mis_ratios) then sees the same load drift for every method.
+    cells = [(lt, m, p, t) for lt in STABILITY_LIGHTS for p in STABILITY_EXPONENTS
+             for t in STABILITY_ANGLES for m in METHODS]
     order = {"stability": [dict(light=lt, method=m, exponent=p, theta_i=t) for lt, m, p, t in cells]}
     rows: dict[tuple, list] = {}
     for i, (light, method, p, theta) in enumerate(cells):
         if not log.has(light=light, method=method, exponent=p, theta_i=theta):
-            rows.setdefault((light, method, p), []).append((light, method, p, theta, 20_000 + i))
+            rows.setdefault((light, p, theta), []).append((light, method, p, theta, 20_000 + i))
     jobs = [Job(stability_job, (tuple(todo), cfg.stability_seeds, z_crit), key=("stability",) + k)
             for k, todo in rows.items()]
     run_jobs(runner, out, jobs, order, "stability")

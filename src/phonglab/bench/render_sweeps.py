@@ -10,6 +10,9 @@ r"""Sweeps of full renders: error against time per BSDF, variants, and render-ti
 * :func:`sweep_ratios` — render-time ratios lambert/diffuse, phong/plastic,
   phong/roughplastic on the same scene, spp and variant: A/B pairs in alternating order
   (ABBA), the median of the per-pair ratios (:func:`phonglab.bench.analysis.ratio_summary`).
+* :func:`sweep_whitted_units` — ``whitted`` in graphics against radiance units on
+  :data:`~phonglab.bench.config.WHITTED_SCENES` (their own settings, only ``units`` swapped):
+  ABBA pairs of steady renders, and the JIT kernels each render launches.
 
 Every render goes through :func:`phonglab.render.render_scene` (one pass; its
 ``pass_seconds[0]`` is the timed wall time, image evaluated and copied).
@@ -17,7 +20,8 @@ Every render goes through :func:`phonglab.render.render_scene` (one pass; its
 Each sweep is a list of jobs run by :func:`phonglab.bench.jobs.run_jobs`, serially or on a
 Dask cluster: one per (set-up, spp) cell of the renders (after the set-up's load and warm-up,
 done once per worker process: :func:`_setup`), one per (variant, BSDF) of the variant
-comparison, one per A/B pair of the ratios (both renders of a pair back to back in one process).
+comparison, one per A/B pair of the ratios and of the whitted units (both renders of a pair
+back to back in one process).
 References are rendered first, their passes spread over the same runner.
 """
 
@@ -28,6 +32,7 @@ import math
 from pathlib import Path
 
 import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from .. import registration
@@ -35,7 +40,9 @@ from ..metrics import errors
 from ..parallel import Job, Runner
 from ..references import Reference
 from ..render import render_scene
-from .config import RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, Config
+from ..scenes import load_scene
+from .config import (RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, WHITTED_SCENES, WHITTED_SPP,
+                     Config)
 from .cornell import CornellSpec, ratio_spec, render_jit, render_setups, timed_render
 from .csvlog import open_log
 from .jobs import Rows, run_jobs
@@ -188,3 +195,50 @@ def sweep_ratios(out: Path, cfg: Config, runner: Runner) -> None:
                 jobs.append(Job(ratio_job, (name, a, b, which, pair, cfg.ratio_spp),
                                 key=("ratios", name, pair)))
     run_jobs(runner, out, jobs, order, "ratios")
+
+
+@functools.lru_cache(maxsize=2)
+def _whitted_setup(name: str) -> tuple:
+    """Once per process and scene: (scene, integrator per units, kernels per units), warmed up."""
+    scene = load_scene(name, VARIANT)
+    settings = scene.integrator().parameters()
+    units = {u: mi.load_dict(dict(settings, units=u)) for u in ("graphics", "radiance")}
+    kernels = {u: render_jit_integrator(scene, integrator)     # warm-up: tracing and JIT excluded
+               for u, integrator in units.items()}
+    return scene, units, kernels
+
+
+def whitted_job(name: str, pair: int) -> Rows:
+    """Job: one ABBA pair of ``whitted`` renders of ``name`` in graphics and radiance units,
+    back to back in one process, and the kernels each render launches."""
+    scene, units, kernels = _whitted_setup(name)
+    order = ("graphics", "radiance") if pair % 2 == 0 else ("radiance", "graphics")
+    t = {u: render_scene(scene, WHITTED_SPP, seed=1000 + pair,
+                         integrator=units[u]).pass_seconds[0] for u in order}
+    return [("whitted", dict(scene=name, pair=pair, spp=WHITTED_SPP, t_graphics=t["graphics"],
+                             t_radiance=t["radiance"], ratio=t["graphics"] / t["radiance"],
+                             kernels_graphics=kernels["graphics"],
+                             kernels_radiance=kernels["radiance"]))]
+
+
+def sweep_whitted_units(out: Path, cfg: Config, runner: Runner) -> None:
+    """ABBA pairs of ``whitted`` renders in graphics and in radiance units, same scene and spp
+    (the kernels compiled beforehand); each row also records the kernels each render launched.
+    One job per pair."""
+    log = open_log(out, "whitted")
+    jobs, order = [], {"whitted": []}
+    for name in WHITTED_SCENES:
+        for pair in range(cfg.ratio_pairs):
+            order["whitted"].append(dict(scene=name, pair=pair))
+            if not log.has(scene=name, pair=pair):
+                jobs.append(Job(whitted_job, (name, pair), key=("whitted", name, pair)))
+    run_jobs(runner, out, jobs, order, "whitted units")
+
+
+def render_jit_integrator(scene, integrator) -> int:
+    """JIT kernels launched by one render of ``scene`` with ``integrator`` (after a warm-up)."""
+    render_scene(scene, WHITTED_SPP, seed=1, integrator=integrator)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()
+    render_scene(scene, WHITTED_SPP, seed=2, integrator=integrator)
+    return sum(1 for k in dr.kernel_history() if str(k.get("type", "")).endswith("JIT"))

@@ -28,11 +28,11 @@ import mitsuba as mi
 from .. import __version__, registration
 from ..errors import PhonglabError
 from ..parallel import Runner
-from .charts import chart_error_time, chart_stability
+from .charts import chart_error_time, chart_mis, chart_stability
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
-from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants
+from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants, sweep_whitted_units
 from .report import write_markdown
 
 
@@ -81,7 +81,8 @@ def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, run
              "stability": lambda: sweep_stability(out, cfg, runner),
              "renders": lambda: sweep_renders(out, cfg, runner, cache),
              "variants": lambda: notes.extend(sweep_variants(out, cfg, runner, cache)),
-             "ratios": lambda: sweep_ratios(out, cfg, runner),
+             "ratios": lambda: (sweep_ratios(out, cfg, runner),
+                                sweep_whitted_units(out, cfg, runner)),
              "jit": lambda: sweep_cold_compile(out, runner.progress)}
     for name in PARTS:
         if name in parts:
@@ -145,6 +146,9 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
     stability_png = chart_stability(out, out)
     if stability_png:
         charts.append(str(stability_png))
+    mis_png = chart_mis(out, out)
+    if mis_png:
+        charts.append(str(mis_png))
     record = {"mode": "quick" if quick else "full", "seconds": round(time.perf_counter() - t0, 2),
               "process_seconds": process_age(), "parts": timings,
               "machine": machine_info(), "load_before": load_before,

@@ -16,7 +16,7 @@ from .. import __version__
 from ..errors import user_errors
 
 #: Modules ``phonglab.cli.<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor",
+SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor", "fit",
                "validate"]
 
 DEBUG_HELP = "show the full traceback on errors"

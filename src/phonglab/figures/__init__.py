@@ -17,6 +17,9 @@ plugins, BSDF probing in :mod:`phonglab.probe`; these modules only arrange and p
   :func:`refraction_agreement` + :func:`fig_refraction_agreement`;
 * :mod:`.speed`       notebook 04 (speed against accuracy): :func:`convergence_curves` +
   :func:`fig_convergence`, :func:`efficiency_table`, :func:`fig_plan_depths`;
+* :mod:`.fitting`     notebook 05 (fitting Phong to physics; imported as
+  ``phonglab.figures.fitting``, not re-exported: it loads :mod:`phonglab.fit` and scipy):
+  :func:`fig_lobe_cuts`, :func:`fig_fit_albedo`, :func:`fig_image_fit`, :func:`fig_image_history`;
 * :mod:`.docs`        :func:`write_doc_images`, the one figure per notebook that
   docs/notebooks.md shows (``python -m phonglab.figures DIR``).
 

@@ -23,9 +23,38 @@ standard deviation)::
               constant: ω ~ uniform sphere, p = 1/(4π)    (the constant emitter's own sampling)
     mis       N/2 pairs (one bsdf + one light sample), power heuristic β = 2 [Veach 1997, §9.2]:
               X = f_b L_b/p_b · p_b²/(p_b²+p_l(ω_b)²) + f_l L_e/p_l · p_l²/(p_l²+p_b(ω_l)²)
+    mis_optimal  pilot-chosen allocation n_b + n_l = N − M and optimal weights (below)
 
 so every estimator draws N directions in total (MIS's N/2 pairs keep equal sample
 counts; its standard error comes from the N/2 pair values).
+
+``mis_optimal``: optimal MIS weights for the two strategies t ∈ {b, l} (BSDF and light
+sampling) [Kondapaneni, Vévoda, Grittmann, Skřivan, Slusallek, Křivánek, "Optimal Multiple
+Importance Sampling", ACM TOG 38(4), SIGGRAPH 2019, §4–5] with the allocation c_t = n_t/n
+between them chosen from a pilot [Sbert, Havran, Szirmay-Kalos, "Multiple importance
+sampling revisited: breaking the bounds", EURASIP J. Adv. Signal Process. 2018].  For a fixed
+allocation the optimal weights are w_t = α_t p_t/f + (c_t p_t/Σ c p)(1 − Σ_k α_k p_k/f), and the
+estimator they give is the balance heuristic applied to f − α·p plus the control variates
+∫ p_t = 1::
+
+    F = Σ_t α_t + (1/n) Σ_t Σ_{j ≤ n_t} (f(x_tj) − α·p(x_tj)) / (c·p(x_tj)),      x_tj ~ p_t
+    A α = b,   A_tk = ∫ p_t p_k / (c·p) dx,   b_t = ∫ f p_t / (c·p) dx              (2×2)
+    n·Var F = σ²(c) = ∫ (f − α·p)² / (c·p) dx       (at the solution: ∫ (f − α·p) p_t/(c·p) = 0)
+
+F is unbiased for *any* α that does not depend on its own samples.  So the estimate spends
+a pilot of M = n·:data:`PILOT_FRACTION` samples (at most :data:`PILOT_MAX`) (M/2 per strategy, i.e. drawn from q =
+(p_b + p_l)/2) on choosing c and α, and *discards* it: for each candidate c_b in
+:data:`ALLOCATIONS` (c_l = 1 − c_b) the pilot estimates A, b and ∫ f²/(c·p) by importance
+sampling, Â = (1/M) Σ_m p pᵀ/((c·p) q) etc. (summed inside the pilot's kernel, in float64), solves the 2×2 system (a 1×1 one at c_b ∈ {0, 1},
+where the absent strategy's α is 0) and keeps the c with the smallest σ̂²(c) = ∫̂ f²/(c·p) −
+α̂·b̂ (the pure strategy when within :data:`PURE_PREFERENCE` of it: heavy tails make the
+pilot optimistic about mixtures).  The other n − M samples, drawn from fresh streams, give F
+(the kernel sums their residuals per estimate, in float64).  Its standard error is stratified: Var F = Σ_t n_t s_t²/n², s_t² the sample variance within
+strategy t.  A BSDF sample that the plugin rejects (pdf 0, a lobe direction below the
+horizon) is a point of its own with probability 1 − ∫_{H²} p_b; giving it p_b := 1, p_l = 0,
+f = 0 makes its value −α_b/c_b, which is what keeps ∫ p_b = 1 (the control variate) true,
+and the "1" cancels in every term above.  With f = α·p exactly (a pure lobe inside the
+light, a pure light under a wide lobe) σ² = 0 for every c, so no split is penalized.
 
 Exact values come from deterministic quadrature in float64 (:func:`exact_value`).
 Around the lobe axis R write ω_o = cos α R + sin α (cos φ e₁ + sin φ e₂), e₁ in the
@@ -68,7 +97,19 @@ from .. import probe, registration
 from ..errors import PhonglabError
 
 #: Estimator names, in the order charts and tables list them.
-METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis")
+METHODS: tuple[str, ...] = ("uniform", "cosine", "bsdf", "light", "mis", "mis_optimal")
+#: Estimators whose N samples are independent and identically distributed (all but the
+#: two-stage ``mis_optimal``, whose samples follow a pilot-chosen allocation).
+IID_METHODS: tuple[str, ...] = METHODS[:5]
+#: ``mis_optimal``: the pilot's share of the N samples (discarded after it chose α and c).
+PILOT_FRACTION = 1.0 / 32.0
+#: ``mis_optimal``: the largest pilot (its 2×2 solves cost host time per candidate c).
+PILOT_MAX = 2048
+#: ``mis_optimal``: the candidate BSDF shares c_b of the main samples (c_l = 1 − c_b).
+ALLOCATIONS = tuple(k / 8.0 for k in range(9))
+#: ``mis_optimal``: a pure strategy (c_b = 0 or 1) is preferred over a mixture whose pilot
+#: variance is not below (1 − this) times the pure strategy's.
+PURE_PREFERENCE = 0.1
 LIGHTS: tuple[str, ...] = ("constant", "disk")
 
 #: Gauss–Legendre quadrature: panels × nodes per panel on each 1-D integral.
@@ -390,9 +431,116 @@ def _mis(f: Integrand, u1, u2, rng):
     return value + f_l * _safe_ratio(f.light.radiance * w_l, p_l)
 
 
+def _technique(f: Integrand, is_b, u1, u2):
+    """(f, p_b, p_l) at one sample of BSDF sampling where ``is_b``, else of light sampling.
+
+    A symbolic ``if``: a lane runs only its own technique (the LLVM backend skips a branch
+    that no lane of a packet takes).  A BSDF sample the plugin rejects (pdf 0, e.g. a lobe
+    direction below the horizon) is the *null point* of that technique: f = 0, p_l = 0 and
+    p_b := 1 (any positive value; it cancels, module docstring).
+    """
+    def by_bsdf(u1, u2):
+        bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
+        valid = bs.pdf > 0
+        value = _channel_mean(weight) * bs.pdf * f.light.emitted(bs.wo)     # eval · L
+        return (dr.select(valid, value, 0.0), dr.select(valid, bs.pdf, 1.0),
+                dr.select(valid, f.light.pdf(bs.wo), 0.0))
+
+    def by_light(u1, u2):
+        wo, p_l = f.light.sample(u2)
+        value, p_b = f.bsdf.eval_pdf(f.ctx, f.si, wo)
+        return _channel_mean(value) * f.light.radiance, p_b, p_l
+
+    return dr.if_stmt((u1, u2), is_b, by_bsdf, by_light)
+
+
+def _row_sums(values: list, row, rows: int) -> np.ndarray:
+    """(rows, K) float64 sums of K Dr.Jit arrays over the lanes of each row.
+
+    A scatter-add inside the kernel (``ReduceMode.Local``: reduced within each SIMD packet
+    first) into one (rows + 1)·K buffer at the opaque index row·K + k, read back at once.  Not
+    ``dr.block_sum``, whose block size is a kernel literal (a new N would recompile), nor the
+    automatic mode, which compiles a kernel per buffer size.
+    """
+    k = len(values)
+    target = dr.zeros(mi.Float64, (rows + 1) * k)
+    base = row * dr.opaque(mi.UInt32, k)
+    for i, value in enumerate(values):
+        dr.scatter_reduce(dr.ReduceOp.Add, target, mi.Float64(value), base + i,
+                          mode=dr.ReduceMode.Local)
+    dr.eval(target)
+    return np.array(target, dtype=np.float64)[:rows * k].reshape(rows, k)
+
+
+def weighted_moments(fv, pb, pl, c_b: float, select):
+    """The six per-sample terms w·(p_b², p_b p_l, p_l², f p_b, f p_l, f²), w = 1/((c·p) q), whose
+    pilot means are A, b and ∫ f²/(c·p) at the BSDF share c_b (q = (p_b + p_l)/2, the pilot's
+    mixture).  Plain arithmetic plus ``select`` (np.where or dr.select): the one formula for
+    numpy arrays and for Dr.Jit arrays inside the pilot kernel."""
+    d = (c_b * pb + (1.0 - c_b) * pl) * (0.5 * (pb + pl))
+    w = select(d > 0, 1.0 / select(d > 0, d, 1.0), 0.0)
+    wf = w * fv
+    return [w * pb * pb, w * pb * pl, w * pl * pl, wf * pb, wf * pl, wf * fv]
+
+
+def solve_allocation(mom: np.ndarray, uncovered_b: np.ndarray, uncovered_l: np.ndarray,
+                     allocations=ALLOCATIONS) -> tuple[np.ndarray, ...]:
+    """(c_b, α_b, α_l, σ²(c_b)) per row from the pilot's moments.
+
+    Args:
+        mom: (B, G, 6) pilot means of :func:`weighted_moments` for each candidate c_b.
+        uncovered_b / uncovered_l: (B,) whether a pilot sample had f ≠ 0 where p_b (p_l) = 0.
+        allocations: the G candidate BSDF shares c_b (c_l = 1 − c_b).
+
+    For each c the 2×2 system A α = b (A = mean w p pᵀ, b = mean w f p) is the pilot's estimate
+    of Kondapaneni et al.'s moment matrix and vector, and σ²(c) = mean w f² − αᵀ b the
+    per-sample variance of the optimally weighted estimator (module docstring).  At c_b = 0
+    or 1 only the present technique's α is fitted (the other is 0), and σ² is infinite when
+    that technique alone misses part of f (``uncovered``).  The smallest σ² wins, a pure
+    strategy (c_b ∈ {0, 1}) when it is within :data:`PURE_PREFERENCE` of the best.
+    """
+    abb, abl, all_, bb, bl, sff = np.moveaxis(np.asarray(mom, np.float64), -1, 0)
+    det = abb * all_ - abl * abl
+    good = det > 1e-9 * abb * all_
+    safe = np.where(good, det, 1.0)
+    fit_b = bb / np.where(abb > 0, abb, 1.0)
+    alpha_b = np.where(good, (bb * all_ - bl * abl) / safe, fit_b)
+    alpha_l = np.where(good, (bl * abb - bb * abl) / safe, 0.0)
+    ends = np.asarray(allocations, np.float64)
+    pure_b, pure_l = ends == 1.0, ends == 0.0
+    alpha_b = np.where(pure_b, fit_b, np.where(pure_l, 0.0, alpha_b))
+    alpha_l = np.where(pure_l, bl / np.where(all_ > 0, all_, 1.0), np.where(pure_b, 0.0, alpha_l))
+    sigma2 = sff - alpha_b * bb - alpha_l * bl
+    # Below 10⁻¹² of the second moment it is float64 rounding of an exact fit (σ² = 0).
+    sigma2 = np.where(sigma2 <= 1e-12 * sff, 0.0, sigma2)
+    # Inside (0, 1) c·p > 0 at every sample (each has p_b > 0 or p_l > 0).
+    sigma2 = np.where(pure_b & np.asarray(uncovered_b, bool)[:, None], np.inf, sigma2)
+    sigma2 = np.where(pure_l & np.asarray(uncovered_l, bool)[:, None], np.inf, sigma2)
+    best = np.argmin(sigma2, axis=1)
+    rows = np.arange(len(best))
+    for end in (np.flatnonzero(pure_b), np.flatnonzero(pure_l)):
+        if end.size:
+            e = int(end[0])
+            best = np.where(sigma2[:, e] * (1.0 - PURE_PREFERENCE) <= sigma2[rows, best], e, best)
+    return ends[best], alpha_b[rows, best], alpha_l[rows, best], sigma2[rows, best]
+
+
+def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
+                      allocations=ALLOCATIONS) -> tuple[np.ndarray, ...]:
+    """:func:`solve_allocation` from (B, M) float64 pilot samples f, p_b, p_l (numpy): the first
+    M/2 of each row drawn by BSDF sampling, the rest by light sampling (null points carry
+    p_b = 1, p_l = 0, f = 0).  The estimator computes the same moments inside its kernel."""
+    mom = np.stack([np.stack([t.mean(axis=1) for t in weighted_moments(fv, pb, pl, c, np.where)],
+                             axis=-1) for c in allocations], axis=1)
+    return solve_allocation(mom, np.any((pb == 0) & (fv != 0), axis=1),
+                            np.any((pl == 0) & (fv != 0), axis=1), allocations)
+
+
 #: The estimators by name (the order of :data:`METHODS`).
 _ESTIMATORS = {"uniform": _uniform, "cosine": _cosine, "bsdf": _bsdf, "light": _light,
                "mis": _mis}
+#: A seed offset that keeps ``mis_optimal``'s pilot streams apart from its main streams.
+_PILOT_KEY = 0x6A09E667
 
 
 def _load_bsdf(problem: Problem):
@@ -465,6 +613,16 @@ class ReflectionEstimators:
     def exact(self) -> float:
         return exact_value(self.problem)
 
+    @staticmethod
+    def _uniforms(n_total: int, seed: int):
+        """(lane index, u1, u2) of n_total lanes; lane k draws from PCG32 stream TEA(seed, k)."""
+        idx = dr.arange(mi.UInt32, n_total)
+        v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
+        rng = mi.PCG32(size=n_total)
+        rng.seed(mi.UInt64(v0), mi.UInt64(v1))
+        u1 = rng.next_float32()
+        return idx, u1, mi.Point2f(rng.next_float32(), rng.next_float32()), rng
+
     def _samples(self, method: str, n_total: int, seed: int):
         """Per-sample values X (a Dr.Jit Float of n_total entries; MIS: of pairs).
 
@@ -472,13 +630,96 @@ class ReflectionEstimators:
         """
         if method not in _ESTIMATORS:
             raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
-        idx = dr.arange(mi.UInt32, n_total)
-        v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
-        rng = mi.PCG32(size=n_total)
-        rng.seed(mi.UInt64(v0), mi.UInt64(v1))
-        u1 = rng.next_float32()
-        u2 = mi.Point2f(rng.next_float32(), rng.next_float32())
+        _, u1, u2, rng = self._uniforms(n_total, seed)
         return _channel_mean(_ESTIMATORS[method](self.integrand, u1, u2, rng))
+
+    def _pilot(self, m: int, batches: int, seed: int) -> tuple[np.ndarray, ...]:
+        """(c_b, α_b, α_l, σ²) per row from a pilot of m/2 BSDF then m/2 light samples a row.
+
+        The kernel sums :func:`weighted_moments` for every candidate c_b per row (float64), so only (batches, G, 6) means and two coverage flags per row come back;
+        :func:`solve_allocation` does the 2×2 solves on the host.
+        """
+        idx, u1, u2, _ = self._uniforms(m * batches, seed ^ _PILOT_KEY)
+        row = mi.UInt32(dr.floor((mi.Float64(idx) + 0.5) * dr.opaque(mi.Float64, 1.0 / m)))
+        j = idx - row * dr.opaque(mi.UInt32, m)
+        fv, pb, pl = (mi.Float64(x) for x in
+                      _technique(self.integrand, j < dr.opaque(mi.UInt32, m // 2), u1, u2))
+        terms = [t for c in ALLOCATIONS for t in weighted_moments(fv, pb, pl, c, dr.select)]
+        zero = mi.Float64(0.0)
+        terms += [dr.select((pb == 0) & (fv != 0), 1.0, zero),
+                  dr.select((pl == 0) & (fv != 0), 1.0, zero)]
+        out = _row_sums(terms, row, batches) / m
+        mom = out[:, :-2].reshape(batches, len(ALLOCATIONS), 6)
+        return solve_allocation(mom, out[:, -2] > 0, out[:, -1] > 0)
+
+    def _optimal_sums(self, per: int, n_b: np.ndarray, alpha_b: np.ndarray,
+                      alpha_l: np.ndarray, seed: int) -> dict[str, np.ndarray]:
+        """Per-row sums of ``mis_optimal``'s main stage: row s draws n_b[s] BSDF samples then
+        per − n_b[s] light samples, weighted with its own α (module docstring).
+
+        The kernel sums its residuals R = X − α_b − α_l per row (float64, :func:`_row_sums`), so
+        only a few numbers per row come back: Σ R and Σ R² over the BSDF samples and over all,
+        and the NaN and Inf counts.  α as the kernel holds them (float32) come back too.
+        """
+        batches = len(n_b)
+        idx, u1, u2, _ = self._uniforms(per * batches, seed)
+        # row = ⌊k / per⌋ in float64 (exact here: k < 2³², per ≤ 2²²), not a UInt32 division,
+        # which the LLVM backend scalarizes (it cost as much as the BSDF sample itself).
+        row = mi.UInt32(dr.floor((mi.Float64(idx) + 0.5) * dr.opaque(mi.Float64, 1.0 / per)))
+        width = dr.opaque(mi.UInt32, per)
+
+        def table(kind, values, dtype):
+            # Padded to >= 2 entries: a 1-entry gather source compiles a different kernel.
+            return dr.gather(kind, kind(np.append(values, values[-1:]).astype(dtype)), row)
+
+        is_b = (idx - row * width) < table(mi.UInt32, n_b, np.uint32)
+        fv, pb, pl = _technique(self.integrand, is_b, u1, u2)
+        a_b = table(mi.Float, alpha_b, np.float32)
+        a_l = table(mi.Float, alpha_l, np.float32)
+        c_b = table(mi.Float, n_b / per, np.float32)
+        r = _safe_ratio(fv - a_b * pb - a_l * pl, c_b * pb + (1.0 - c_b) * pl)
+        r64 = mi.Float64(r)
+        sq = r64 * r64
+        zero = mi.Float64(0.0)
+        names = ("sum_b", "sum", "sq_b", "sq", "nan", "inf")
+        sums = _row_sums([dr.select(is_b, r64, zero), r64, dr.select(is_b, sq, zero), sq,
+                          dr.select(dr.isnan(r), 1.0, zero), dr.select(dr.isinf(r), 1.0, zero)],
+                         row, batches)
+        out = {k: sums[:, i] for i, k in enumerate(names)}
+        out["alpha"] = (alpha_b.astype(np.float32).astype(np.float64)
+                        + alpha_l.astype(np.float32).astype(np.float64))
+        return out
+
+    @staticmethod
+    def pilot_size(n: int) -> int:
+        """Pilot samples of an n-sample ``mis_optimal`` estimate: n·PILOT_FRACTION, even, in
+        [32, PILOT_MAX]."""
+        return min(PILOT_MAX, max(32, 2 * int(round(n * PILOT_FRACTION / 2))))
+
+    def _run_optimal(self, n: int, batches: int, seed: int) -> tuple:
+        """(values, stderr, NaN count, Inf count) of ``batches`` mis_optimal estimates, in chunks
+        of <= CHUNK samples."""
+        m = self.pilot_size(n)
+        per = n - m
+        rows = max(1, self.CHUNK // n)
+        values, stderr, nan, inf = [], [], 0, 0
+        for c, b0 in enumerate(range(0, batches, rows)):
+            b = min(rows, batches - b0)
+            chunk_seed = seed if c == 0 else (seed * 0x9E3779B1 + c) & 0xFFFFFFFF
+            c_b, alpha_b, alpha_l, _ = self._pilot(m, b, chunk_seed)
+            n_b = np.rint(c_b * per).astype(np.int64)
+            t = self._optimal_sums(per, n_b, alpha_b, alpha_l, chunk_seed)
+            values.append(t["alpha"] + t["sum"] / per)
+            # Stratified: Var = Σ_t k_t s_t² / per², s_t² the variance within technique t.
+            var = np.zeros(b)
+            for k, total, squares in ((n_b, t["sum_b"], t["sq_b"]),
+                                      (per - n_b, t["sum"] - t["sum_b"], t["sq"] - t["sq_b"])):
+                ss = np.maximum(squares - total * total / np.maximum(k, 1), 0.0)
+                var += ss / np.maximum(k - 1, 1) * k
+            stderr.append(np.sqrt(var) / per)
+            nan += int(t["nan"].sum())
+            inf += int(t["inf"].sum())
+        return np.concatenate(values), np.concatenate(stderr), nan, inf
 
     def _values(self, method: str, per: int, batches: int, seed: int) -> np.ndarray:
         """(batches, per) float64 per-sample values, launched in chunks of <= CHUNK samples."""
@@ -505,28 +746,40 @@ class ReflectionEstimators:
             raise PhonglabError(f"unknown estimator {method!r}; use one of {', '.join(METHODS)}")
         if n < 2 or batches < 1:
             raise PhonglabError(f"need n >= 2 samples and batches >= 1, got n={n}, batches={batches}")
-        per = n // 2 if method == "mis" else n          # MIS: n/2 pairs of 2 samples
+        if method == "mis_optimal" and n < 2 * self.pilot_size(n):
+            raise PhonglabError(f"mis_optimal needs n >= {2 * self.pilot_size(n)} samples (a pilot of "
+                                f"{self.pilot_size(n)} and a main stage), got n={n}")
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         dr.kernel_history()                              # clear
         t0 = time.perf_counter()
-        arr = self._values(method, per, batches, seed)
+        if method == "mis_optimal":
+            values, stderr, nan_count, inf_count = self._run_optimal(n, batches, seed)
+        else:
+            per = n // 2 if method == "mis" else n      # MIS: n/2 pairs of 2 samples
+            arr = self._values(method, per, batches, seed)
+            values = arr.mean(axis=1)
+            dev = arr - values[:, None]
+            stderr = np.sqrt(np.einsum("ij,ij->i", dev, dev) / max(per - 1, 1) / per)
+            nan_count = int(np.isnan(arr).sum())
+            inf_count = int(np.isinf(arr).sum())
         seconds = time.perf_counter() - t0
         hashes: list[str] = []
         compile_ms, kernels, hits = kernel_stats(hashes)
-        nan_count = int(np.isnan(arr).sum())
-        inf_count = int(np.isinf(arr).sum())
-        values = arr.mean(axis=1)
-        dev = arr - values[:, None]
-        var_b = np.einsum("ij,ij->i", dev, dev) / max(per - 1, 1)
-        return Estimate(method, n, values, np.sqrt(var_b / per), nan_count, inf_count, seconds,
-                        compile_ms, kernels, hits, float(var_b.mean()), hashes)
+        # Per-sample variance in the units of n: an n-sample estimate has variance σ²/n.
+        per_n = n // 2 if method == "mis" else n
+        return Estimate(method, n, values, stderr, nan_count, inf_count, seconds,
+                        compile_ms, kernels, hits, float(np.mean(stderr ** 2)) * per_n, hashes)
 
     def moments(self, method: str, n: int = 1 << 22, seed: int = 0xC0FFEE) -> tuple[float, float, float]:
         """(mean, variance σ², excess kurtosis γ₂) of the per-sample value X, from n samples.
 
         For MIS, X is the value of one pair (two samples), so that an n-sample estimate
-        has variance σ²/(n/2).
+        has variance σ²/(n/2).  ``mis_optimal``'s samples are not identically distributed:
+        σ² is n times the variance of one n-sample estimate (stratified), γ₂ is NaN.
         """
+        if method == "mis_optimal":
+            e = self.run(method, n, seed=seed)
+            return e.value, e.sample_variance, float("nan")
         per = n // 2 if method == "mis" else n
         arr = self._values(method, per, 1, seed).ravel()
         mean = float(arr.mean())

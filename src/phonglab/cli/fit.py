@@ -1,0 +1,81 @@
+"""``phonglab fit``: the best modified Phong (or Lambert) for a target BSDF, by Dr.Jit AD."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from ..errors import PhonglabError
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "fit", help="fit phong (k_d, k_s, p) to a physically based BSDF with Dr.Jit AD",
+        description="Fit the modified Phong BSDF (k_d/π + k_s (p+2)/(2π) cos^p α, k_d + k_s <= 1) "
+                    "or Lambert to any registered BSDF by minimizing the relative L2 distance of "
+                    "f cos θ_i cos θ_o (luminance) over both hemispheres, with gradients from "
+                    "Dr.Jit's AD through the phong plugin and L-BFGS-B. Prints the fitted "
+                    "parameters, the residual (overall, per incidence angle, worst direction) "
+                    "and the albedo of fit and target against θ_i. See docs/fitting.md.",
+        epilog="examples:\n  phonglab fit roughconductor --set alpha=0.2\n"
+               "  phonglab fit roughplastic --set alpha=0.1 --set distribution=ggx --json out/fit.json",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("target", help="a registered BSDF plugin: roughconductor, roughplastic, "
+                                  "principled, plastic, phong, ...")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", dest="settings",
+                   help="a parameter of the target (repeatable): a number, 'r, g, b' or a string, "
+                        "e.g. --set alpha=0.2 --set distribution=ggx")
+    p.add_argument("--model", choices=["phong", "lambert"], default="phong",
+                   help="the classic model to fit (default phong)")
+    p.add_argument("--maxiter", type=int, default=200, help="L-BFGS-B iterations at most (default 200)")
+    p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
+    p.add_argument("--json", default=None, metavar="PATH", help="write the result as JSON")
+    p.add_argument("--report", default=None, metavar="PATH", help="write the printed report to a file")
+    p.set_defaults(func=run)
+
+
+def parse_settings(items: list[str]) -> dict[str, str]:
+    """NAME=VALUE strings -> {name: value text}; one sentence for a malformed item."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise PhonglabError(f"--set expects NAME=VALUE, got {item!r}; e.g. --set alpha=0.2")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def run(args) -> int:
+    settings = parse_settings(args.settings)
+    if args.maxiter < 1:
+        raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
+    # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
+    from ..outputs import check_file, check_folder
+
+    for path, what in ((args.json, "JSON file"), (args.report, "report")):
+        if path:
+            check_file(Path(path), what)
+            check_folder(Path(path), what)
+    # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
+    from .. import registration, runtime
+    from ..fit.optimize import fit, format_result, parse_value
+
+    params = {k: parse_value(v) for k, v in settings.items()}
+    variant = args.variant or runtime.default_variant()
+    runtime.check_variant(variant)
+    if not variant.endswith(("_ad_rgb", "_ad_mono")):
+        raise PhonglabError(f"fitting needs gradients and RGB or mono colour: use an *_ad_rgb or "
+                            f"*_ad_mono variant such as llvm_ad_rgb, not {variant}")
+    registration.register(variant)
+    result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
+    text = format_result(result)
+    # Files first: a closed stdout (`| head`) must not lose them.
+    if args.report:
+        Path(args.report).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.report).write_text(text + "\n")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(result.as_dict(), indent=1) + "\n")
+    print(text)
+    return 0
