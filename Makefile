@@ -53,6 +53,13 @@ notebook-figures: setup
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
 
+# The bench on a 2-process LocalCluster and phonglab.parallel's per-job overhead, with the
+# expected time on N workers from its job times (docs/cluster.md).
+.PHONY: bench-cluster
+bench-cluster: setup
+	$(BIN)/phonglab bench --quick --fresh --no-progress --workers 2 --out out/bench-quick-2w
+	$(BIN)/python scripts/parallel_overhead.py --workers 2 --bench out/bench-quick-2w --out out/parallel_overhead.json
+
 # docs/fitting.md's table: phong fitted to Beckmann/GGX roughconductor and roughplastic (~20 s).
 .PHONY: fitting-table
 fitting-table: setup

@@ -13,7 +13,19 @@ metrics subtract that noise (:func:`phonglab.metrics.errors`).  It is rendered
 
 Cache layout: ``<cache>/references/<scene stem>-<key>.exr`` and ``.stderr.exr`` beside it,
 the key hashing the scene file's bytes, the parameters, the variant, the depth choice and
-Mitsuba's version; the header records spp, passes, seed and render time.  A cached
+Mitsuba's version; the header records spp, passes, seed and render time.
+
+A missing reference renders its passes one after the other here, or, given a
+:class:`phonglab.parallel.Runner` that is not serial, as one job per pass on the cluster
+(:func:`reference_pass`: pass k of ``spp_k`` samples with Mitsuba seed
+:func:`~phonglab.render.pass_seed` (seed, k), exactly the pass the serial loop renders).  The
+passes are merged here in pass order by :class:`phonglab.render.PassMerge`, the one merge of
+:func:`~phonglab.render.render_scene`: with N = Σ spp_k and per-pixel pass means x_k,
+x̄ = Σ spp_k x_k / N and s² = (Σ spp_k x_k² / N − x̄²) · N / (N − N/P) / P (the weighted
+sample variance of the P pass means, over P), so the per-pixel variance is kept and the
+merge is bit-identical to the serial one whenever the pass images are (a box-filtered
+scene's are; a wider filter's float32 atomic splats may differ by a few ulps,
+docs/exr_and_compare.md).  A cached
 reference with at least the asked spp is reused; a missing one (a clean clone) is rendered.
 The cache lives in ``.bench_cache/`` at the repository root (git-ignored), or where
 ``PHONGLAB_CACHE`` points.
@@ -24,6 +36,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,9 +48,11 @@ import numpy as np
 from . import exr
 from .errors import PhonglabError
 from .metrics import as_hwc
-from .render import render_scene
+from .parallel import Job, Runner
+from .render import PassMerge, pass_seed, pass_spps, render_pass, render_scene
 from .runtime import available_backend, quiet_mitsuba, variant_for
-from .scenes import REPO_ROOT, file_hash, inspect_scene, load_scene, path_integrator, scene_path
+from .scenes import (REPO_ROOT, SceneInfo, file_hash, inspect_scene, load_scene, path_integrator,
+                     scene_path)
 
 #: Default cache folder (git-ignored); ``PHONGLAB_CACHE`` overrides it.
 CACHE_DIR = Path(os.environ.get("PHONGLAB_CACHE", REPO_ROOT / ".bench_cache"))
@@ -108,7 +124,7 @@ def _read(path: Path, min_spp: int) -> Reference | None:
 def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
               variant: str | None = None, max_depth: int | None = -1, passes: int = PASSES,
               seed: int = REFERENCE_SEED, cache_dir: str | Path | None = None,
-              progress: bool = False) -> Reference:
+              progress: bool = False, runner: Runner | None = None) -> Reference:
     """The reference of ``scene`` with at least ``spp`` samples: from the cache, else rendered.
 
     Args:
@@ -118,6 +134,7 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
         variant: Mitsuba variant (default: :func:`default_variant`).
         max_depth: -1 full depth, None the scene's own integrator, d a path tracer of depth d.
         passes, seed: how a missing reference is rendered (pass k uses pass_seed(seed, k)).
+        runner: where the passes of a missing reference render (default: here, one by one).
     """
     params = {k: v for k, v in (params or {}).items() if v is not None}
     # The XML is read once: for the default variant, or (on a cache miss) for the integrator.
@@ -130,9 +147,12 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
     info = info or inspect_scene(scene, **params)
     with quiet_mitsuba():
         loaded = load_scene(info.path, variant, **params)
-    integrator = None if max_depth is None else path_integrator(max_depth, info)
-    result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
-                          integrator=integrator)
+    if runner is None or runner.serial:
+        integrator = None if max_depth is None else path_integrator(max_depth, info)
+        result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
+                              integrator=integrator)
+    else:
+        result = _render_on(runner, info, loaded, spp, params, variant, max_depth, passes, seed)
     meta = {"scene": str(info.path), "scene_sha256": file_hash(info.path), "variant": variant,
             "spp": spp, "passes": passes, "seed": seed,
             "max_depth": "scene's integrator" if max_depth is None else max_depth,
@@ -141,3 +161,58 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
     exr.write(path, result.image, meta)
     exr.write(exr.stderr_path(path), result.stderr, meta)
     return Reference(result.image, result.stderr, meta, path)
+
+
+def _render_on(runner: Runner, info: SceneInfo, loaded, spp: int, params: dict[str, Any],
+               variant: str, max_depth: int | None, passes: int, seed: int):
+    """The reference render as one job per pass on ``runner``, merged here in pass order."""
+    per_pass = pass_spps(loaded, spp, passes)
+    text = info.path.read_text()
+    jobs = [Job(reference_pass, (str(info.path), text, params, variant, max_depth, w,
+                                 pass_seed(seed, k)), key=k)
+            for k, w in enumerate(per_pass)]
+    merged = PassMerge(spp, len(per_pass))
+    ready: dict[int, Any] = {}
+
+    def merge_in_order(job: Job, image) -> None:
+        # Passes come back in any order; they are added in pass order (bit-identical merge).
+        ready[job.key] = image
+        while len(merged.weights) in ready:
+            k = len(merged.weights)
+            merged.add(ready.pop(k), per_pass[k])
+
+    t0 = time.perf_counter()
+    start = len(runner.timings)
+    runner.run(jobs, merge_in_order, desc="reference passes")
+    pass_seconds = [t.seconds for t in sorted(runner.timings[start:], key=lambda t: t.key)]
+    return merged.result(time.perf_counter() - t0, pass_seconds)
+
+
+_pass_scenes: dict[tuple, tuple[Any, Any]] = {}     # per process: (scene, integrator) by key
+
+
+def reference_pass(scene_file: str, text: str, params: dict[str, Any], variant: str,
+                   max_depth: int | None, spp: int, mitsuba_seed: int):
+    """One pass of a reference render, as a job: (H, W, C) float64 image.
+
+    The scene travels as its XML text; a worker where ``scene_file`` is missing or differs
+    loads the text from a file of its own (phonglab's scenes name no other files).  The
+    loaded scene is kept for the next pass of the same reference in this process.
+    """
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    key = (digest, tuple(sorted((k, str(v)) for k, v in params.items())), variant, max_depth)
+    if key not in _pass_scenes:
+        path = Path(scene_file)
+        if not (path.is_file() and path.read_text() == text):
+            path = Path(tempfile.gettempdir()) / "phonglab-scenes" / digest[:16] / path.name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with exr.atomic_path(path, ".xml") as tmp:
+                Path(tmp).write_text(text)
+        with quiet_mitsuba():
+            loaded = load_scene(path, variant, **params)
+        integrator = (None if max_depth is None
+                      else path_integrator(max_depth, inspect_scene(path, **params)))
+        _pass_scenes.clear()                 # one reference at a time: keep memory bounded
+        _pass_scenes[key] = (loaded, integrator)
+    loaded, integrator = _pass_scenes[key]
+    return render_pass(loaded, spp, mitsuba_seed, integrator=integrator)

@@ -102,44 +102,76 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     the image evaluated and copied to numpy (the first includes JIT compilation).
     """
     spp = check_spp(spp)
+    per_pass = pass_spps(scene, spp, passes, sensor)
+    iterator = range(len(per_pass))
+    if progress:
+        iterator = tqdm(iterator, desc="rendering", unit="pass", leave=False)
+    merged = PassMerge(spp, len(per_pass), keep_passes)
+    times = []
+    t_start = time.perf_counter()
+    for k in iterator:
+        t0 = time.perf_counter()
+        arr = render_pass(scene, per_pass[k], pass_seed(seed, k), sensor, integrator)
+        times.append(time.perf_counter() - t0)
+        merged.add(arr, per_pass[k])
+    return merged.result(time.perf_counter() - t_start, times)
+
+
+def pass_spps(scene, spp: int, passes: int, sensor: int = 0) -> list[int]:
+    """Samples per pixel of each pass of an ``spp`` render in ``passes`` near-equal passes.
+
+    More passes than asked when one ``mi.render`` call would exceed
+    :data:`MAX_SAMPLES_PER_CALL` samples; never more passes than samples.
+    """
     width, height = (int(v) for v in preflight(scene, "the scene", sensor).film().size())
     # Mitsuba refuses (or splits and then fails) a single render of more than 2^32 samples.
     min_passes = -(-spp * width * height // MAX_SAMPLES_PER_CALL)
     passes = max(1, min_passes, min(int(passes), int(spp)))
-    per_pass = [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
-    iterator = range(passes)
-    if progress:
-        iterator = tqdm(iterator, desc="rendering", unit="pass", leave=False)
-    total = None
-    total_sq = None
-    times = []
-    means = []
-    kept = []
-    t_start = time.perf_counter()
-    for k in iterator:
-        t0 = time.perf_counter()
-        img = _render_call(scene, spp=per_pass[k], seed=pass_seed(seed, k), sensor=sensor,
-                           integrator=integrator)
-        dr.eval(img)
-        arr = _to_numpy(img).astype(np.float64)
-        times.append(time.perf_counter() - t0)
-        means.append(arr.reshape(-1, arr.shape[-1]).mean(axis=0))
-        if keep_passes:
-            kept.append(arr)
+    return [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
+
+
+def render_pass(scene, spp: int, mitsuba_seed: int, sensor: int = 0, integrator=None) -> np.ndarray:
+    """One pass: ``mi.render`` with Mitsuba seed ``mitsuba_seed``, as (H, W, C) float64."""
+    img = _render_call(scene, spp=spp, seed=mitsuba_seed, sensor=sensor, integrator=integrator)
+    dr.eval(img)
+    return _to_numpy(img).astype(np.float64)
+
+
+class PassMerge:
+    """The sample-weighted mean of pass images and its per-pixel standard error (module doc).
+
+    Passes are added in pass order (:meth:`add`); the same passes added in the same order
+    give bit-identical results wherever they were rendered.
+    """
+
+    def __init__(self, spp: int, passes: int, keep_passes: bool = False):
+        self.spp, self.passes, self.keep = spp, passes, keep_passes
+        self.total = self.total_sq = None
+        self.means: list[np.ndarray] = []
+        self.weights: list[int] = []
+        self.kept: list[np.ndarray] = []
+
+    def add(self, arr: np.ndarray, w: int) -> None:
+        """Pass image ``arr`` (float64) of ``w`` samples per pixel."""
+        self.means.append(arr.reshape(-1, arr.shape[-1]).mean(axis=0))
+        self.weights.append(w)
+        if self.keep:
+            self.kept.append(arr)
         # Passes of unequal spp are weighted by their sample counts.
-        w = per_pass[k]
-        total = arr * w if total is None else total + arr * w
-        total_sq = arr * arr * w if total_sq is None else total_sq + arr * arr * w
-    seconds = time.perf_counter() - t_start
-    mean = total / spp
-    stderr = None
-    if passes > 1:
-        # Pass means are unbiased estimates with variance σ²/spp_k: weighted sample variance.
-        var_pass = np.maximum(total_sq / spp - mean * mean, 0.0) * spp / (spp - spp / passes)
-        stderr = np.sqrt(var_pass / passes).astype(np.float32)
-    return RenderResult(mean.astype(np.float32), stderr, seconds, times,
-                        pass_means=np.array(means), pass_spp=per_pass,
-                        passes=np.stack(kept) if keep_passes else None)
+        self.total = arr * w if self.total is None else self.total + arr * w
+        self.total_sq = arr * arr * w if self.total_sq is None else self.total_sq + arr * arr * w
+
+    def result(self, seconds: float, pass_seconds: list[float]) -> RenderResult:
+        spp, passes = self.spp, self.passes
+        mean = self.total / spp
+        stderr = None
+        if passes > 1:
+            # Pass means are unbiased estimates with variance σ²/spp_k: weighted sample variance.
+            var_pass = np.maximum(self.total_sq / spp - mean * mean, 0.0) * spp / (spp - spp / passes)
+            stderr = np.sqrt(var_pass / passes).astype(np.float32)
+        return RenderResult(mean.astype(np.float32), stderr, seconds, list(pass_seconds),
+                            pass_means=np.array(self.means), pass_spp=self.weights,
+                            passes=np.stack(self.kept) if self.keep else None)
 
 
 def _render_call(scene, **kwargs):

@@ -32,7 +32,9 @@ rows already present, so an interrupted bench resumes — :mod:`.csvlog`):
   compile measured in a subprocess whose kernel cache (``$HOME/.drjit``) is empty
   (:mod:`.cold_compile`).
 
-Steady state = median of repeats after a warm-up call.  Charts (:mod:`.charts`,
+Each sweep is a list of independent jobs that carry their seeds (:mod:`.jobs`), run
+serially or on a Dask cluster by :mod:`phonglab.parallel` (``--workers``, ``--scheduler``;
+docs/cluster.md) with the same rows.  Steady state = median of repeats after a warm-up call.  Charts (:mod:`.charts`,
 matplotlib, Agg): error against time on log-log axes, one curve per method, the Pareto
 front marked; the stability heatmaps.  :func:`write_markdown` (:mod:`.report`) turns the
 CSVs into BENCHMARKS.md; :func:`run_bench` (:mod:`.run`) runs it all.  Sizes and

@@ -30,6 +30,7 @@ import mitsuba as mi
 from .. import registration
 from ..errors import PhonglabError
 from ..exr import atomic_path
+from ..parallel import Runner
 from ..physics.estimators import kernel_stats
 from ..references import CACHE_DIR, Reference, reference
 from ..render import render_scene
@@ -142,11 +143,11 @@ class CornellSpec:
         return path
 
     def reference(self, spp: int, variant: str = "llvm_ad_rgb",
-                  cache: str | Path | None = None) -> Reference:
-        """The cached reference of this set-up with at least ``spp`` samples (rendered if missing),
-        with the scene's own integrator."""
+                  cache: str | Path | None = None, runner: Runner | None = None) -> Reference:
+        """The cached reference of this set-up with at least ``spp`` samples (rendered if missing,
+        its passes on ``runner``), with the scene's own integrator."""
         return reference(self.scene_file(cache), spp, self.params(), variant, max_depth=None,
-                         cache_dir=cache)
+                         cache_dir=cache, runner=runner)
 
 
 def render_setups(res: int = RENDER_RES) -> dict[str, dict[str, tuple[CornellSpec, CornellSpec]]]:

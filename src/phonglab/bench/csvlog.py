@@ -18,6 +18,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..errors import PhonglabError
+from ..exr import atomic_path
 from .config import LOGS
 
 
@@ -34,9 +35,10 @@ class CsvLog:
                     raise PhonglabError(f"{self.path} has columns {reader.fieldnames}, expected "
                                         f"{fields}; delete it or run with --fresh")
                 self.rows = list(reader)
-        self._keys = {self._key(r) for r in self.rows}
+        self._keys = {self.key_of(r) for r in self.rows}
 
-    def _key(self, row: dict) -> tuple[str, ...]:
+    def key_of(self, row: dict) -> tuple[str, ...]:
+        """The key columns of ``row``, as written."""
         return tuple(fmt_value(row[k]) for k in self.key)
 
     def has(self, **key) -> bool:
@@ -54,11 +56,12 @@ class CsvLog:
             f.flush()
             os.fsync(f.fileno())
         self.rows.append(row)
-        self._keys.add(self._key(row))
+        self._keys.add(self.key_of(row))
 
     def rewrite(self) -> None:
-        """Write :attr:`rows` (changed in place) back over the file."""
-        with self.path.open("w", newline="") as f:
+        """Write :attr:`rows` (changed in place) back over the file (atomically: an interrupted
+        rewrite leaves the old file)."""
+        with atomic_path(self.path, ".csv") as tmp, open(tmp, "w", newline="") as f:
             writer = csv.DictWriter(f, fieldnames=self.fields)
             writer.writeheader()
             writer.writerows(self.rows)

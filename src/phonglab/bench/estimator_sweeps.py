@@ -12,21 +12,54 @@ r"""Sweeps of the reflection-equation estimators: error and time against N, and 
   the verdict is :func:`phonglab.bench.analysis.stability_verdict`.  The bias z-score is
   mean error / (pooled standard error / √S); with a zero standard error it is 0 when the
   estimate is exact to 10⁻⁶ and ∞ otherwise (a silent failure).
+
+Each sweep is a list of jobs (:class:`phonglab.parallel.Job`: one per estimator cell, per
+cost round, per (light, p, θ_i) cell of the stability map) run by
+:func:`phonglab.bench.jobs.run_jobs`, serially or on a Dask cluster; a job carries its seeds
+and measures its own times, after the warm-up its worker process does once
+(:func:`_warm_up`, :func:`_warm_stability`).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
 import numpy as np
 
-from .. import registration
-from ..physics.estimators import METHODS, Problem, ReflectionEstimators, exact_value
+from ..parallel import Job, Runner
+from ..physics.estimators import METHODS, Estimate, Problem, ReflectionEstimators, exact_value
 from .analysis import stability_verdict, stability_z_crit
 from .config import (ESTIMATOR_SCENES, STABILITY_ANGLES, STABILITY_EXPONENTS, STABILITY_LIGHTS,
                      STABILITY_N, VARIANT, Config)
-from .csvlog import open_log, progress_bar
+from .csvlog import open_log
+from .jobs import run_jobs
+
+#: The pure specular lobe of the stability map.
+_SPECULAR = dict(bsdf="phong", diffuse_reflectance=0.0, specular_reflectance=1.0)
+
+
+@functools.lru_cache(maxsize=None)
+def _process_estimators(sweep: str) -> ReflectionEstimators:
+    """The estimators of ``sweep`` ('estimators' or 'stability') in this process (jobs share it)."""
+    first = next(iter(ESTIMATOR_SCENES.values())) if sweep == "estimators" else Problem(**_SPECULAR)
+    return ReflectionEstimators(first)
+
+
+@functools.lru_cache(maxsize=None)
+def _exact(scene: str) -> float:
+    return exact_value(ESTIMATOR_SCENES[scene])
+
+
+@functools.lru_cache(maxsize=None)
+def _warm_up(scene: str, method: str, n: int, repeats: int) -> tuple[Estimate, float]:
+    """Once per process: the first call of ``method`` on ``scene`` (it traces and compiles, or
+    loads from the kernel cache) and the steady time of ``n`` samples after it."""
+    est = _process_estimators("estimators").set(ESTIMATOR_SCENES[scene])
+    first = est.run(method, n, seed=99)
+    steady = float(np.median([est.run(method, n, seed=98 - r).seconds for r in range(repeats)]))
+    return first, steady
 
 
 def _estimator_row(est: ReflectionEstimators, method: str, scene: str, n: int, k: int,
@@ -43,51 +76,66 @@ def _estimator_row(est: ReflectionEstimators, method: str, scene: str, n: int, k
                 nan_count=e.nan_count + e.inf_count, reference=mu)
 
 
-def sweep_estimators(out: Path, cfg: Config, progress: bool = True) -> None:
+def estimator_jit_job(scene: str, method: str, cfg: Config) -> list[tuple[str, dict]]:
+    """Job: the jit.csv row of ``method`` on ``scene`` (first call, steady time, compile stats)."""
+    first, steady = _warm_up(scene, method, cfg.estimator_ns[0], cfg.repeats)
+    return [("jit", dict(group="estimator", method=method, scene=scene, variant=VARIANT,
+                         first_call_s=first.seconds, steady_s=steady, compile_ms=first.compile_ms,
+                         kernels=first.kernels, cache_hits=first.cache_hits))]
+
+
+def estimator_job(scene: str, method: str, n: int, k: int, cfg: Config) -> list[tuple[str, dict]]:
+    """Job: the results.csv row of ``method`` on ``scene`` at ``n`` samples (the k-th N)."""
+    first, _ = _warm_up(scene, method, cfg.estimator_ns[0], cfg.repeats)
+    est = _process_estimators("estimators").set(ESTIMATOR_SCENES[scene])
+    return [("results", _estimator_row(est, method, scene, n, k, _exact(scene), cfg, first.seconds))]
+
+
+def cost_job(scene: str, r: int, methods: tuple[str, ...], cfg: Config) -> list[tuple[str, dict]]:
+    """Job: cost round ``r`` on ``scene``, ``methods`` one after the other (after their warm-up)."""
+    for method in methods:
+        _warm_up(scene, method, cfg.estimator_ns[0], cfg.repeats)
+    est = _process_estimators("estimators").set(ESTIMATOR_SCENES[scene])
+    n = cfg.estimator_ns[-1]
+    return [("cost", dict(scene=scene, method=method, round=r, samples=n,
+                          seconds=est.run(method, n, seed=70_000 + r).seconds))
+            for method in methods]
+
+
+def sweep_estimators(out: Path, cfg: Config, runner: Runner) -> None:
     """Error and steady-state time of each estimator against N, on :data:`ESTIMATOR_SCENES`."""
-    registration.register(VARIANT)
     log, jit = open_log(out, "results"), open_log(out, "jit")
-    ns = cfg.estimator_ns
-    est = ReflectionEstimators(next(iter(ESTIMATOR_SCENES.values())))
-    bar = progress_bar(len(ESTIMATOR_SCENES) * len(METHODS) * len(ns), "estimators", progress)
-    for scene, problem in ESTIMATOR_SCENES.items():
-        est.set(problem)
-        mu = exact_value(problem)
+    jobs, order = [], {"results": [], "jit": []}
+    for scene in ESTIMATOR_SCENES:
         for method in METHODS:
-            # Warm-up: the first call traces and compiles (or loads from the kernel cache).
-            first = est.run(method, ns[0], seed=99)
-            steady_first = float(np.median([est.run(method, ns[0], seed=98 - r).seconds
-                                             for r in range(cfg.repeats)]))
-            if not jit.has(group="estimator", method=method, scene=scene, variant=VARIANT):
-                jit.add(dict(group="estimator", method=method, scene=scene, variant=VARIANT,
-                             first_call_s=first.seconds, steady_s=steady_first,
-                             compile_ms=first.compile_ms, kernels=first.kernels,
-                             cache_hits=first.cache_hits))
-            for k, n in enumerate(ns):
-                bar.update()
-                if not log.has(group="estimator", method=method, scene=scene, variant=VARIANT,
-                               samples=n):
-                    log.add(_estimator_row(est, method, scene, n, k, mu, cfg, first.seconds))
-    bar.close()
-    sweep_cost(out, cfg, est)
+            key = dict(group="estimator", method=method, scene=scene, variant=VARIANT)
+            order["jit"].append(key)
+            if not jit.has(**key):
+                jobs.append(Job(estimator_jit_job, (scene, method, cfg), key=("jit", scene, method)))
+            for k, n in enumerate(cfg.estimator_ns):
+                order["results"].append(dict(key, samples=n))
+                if not log.has(**key, samples=n):
+                    jobs.append(Job(estimator_job, (scene, method, n, k, cfg), key=(scene, method, n)))
+    run_jobs(runner, out, jobs, order, "estimators")
+    sweep_cost(out, cfg, runner)
 
 
-def sweep_cost(out: Path, cfg: Config, est: ReflectionEstimators) -> None:
+def sweep_cost(out: Path, cfg: Config, runner: Runner) -> None:
     """Cost per estimate at the largest N, methods interleaved (rotated order each round).
 
     Load from other processes then falls on all methods alike; the median per method is
-    what the efficiency (σ²·t) comparison uses.
+    what the efficiency (σ²·t) comparison uses.  One job per (problem, round).
     """
     cost = open_log(out, "cost")
-    n = cfg.estimator_ns[-1]
-    for scene, problem in ESTIMATOR_SCENES.items():
-        est.set(problem)
+    jobs, order = [], {"cost": []}
+    for scene in ESTIMATOR_SCENES:
         for r in range(cfg.cost_rounds):
-            order = METHODS[r % len(METHODS):] + METHODS[:r % len(METHODS)]
-            for method in order:
-                if not cost.has(scene=scene, method=method, round=r):
-                    cost.add(dict(scene=scene, method=method, round=r, samples=n,
-                                  seconds=est.run(method, n, seed=70_000 + r).seconds))
+            rotated = METHODS[r % len(METHODS):] + METHODS[:r % len(METHODS)]
+            order["cost"] += [dict(scene=scene, method=m, round=r) for m in rotated]
+            todo = tuple(m for m in rotated if not cost.has(scene=scene, method=m, round=r))
+            if todo:
+                jobs.append(Job(cost_job, (scene, r, todo, cfg), key=("cost", scene, r)))
+    run_jobs(runner, out, jobs, order, "cost")
 
 
 def _stability_row(est: ReflectionEstimators, light: str, method: str, p: float, theta: float,
@@ -117,25 +165,43 @@ def _stability_row(est: ReflectionEstimators, light: str, method: str, p: float,
                 verdict=verdict, reason=reason)
 
 
-def sweep_stability(out: Path, cfg: Config, progress: bool = True) -> None:
-    """The stability map: each estimator × p × θ_i × light at N = :data:`STABILITY_N` samples."""
-    registration.register(VARIANT)
+@functools.lru_cache(maxsize=None)
+def _warm_stability() -> ReflectionEstimators:
+    """Once per process: compile every estimator for both lights before cells are timed."""
+    est = _process_estimators("stability")
+    for method in METHODS:
+        for light in STABILITY_LIGHTS.values():
+            est.set(Problem(**_SPECULAR, **light))
+            est.run(method, STABILITY_N, seed=1)
+    return est
+
+
+def stability_job(cells: tuple[tuple[str, str, float, float, int], ...], seeds: int,
+                  z_crit: float) -> list[tuple[str, dict]]:
+    """Job: the stability.csv rows of ``cells`` ((light, method, p, θ_i, seed) each)."""
+    est = _warm_stability()
+    return [("stability", _stability_row(est, light, method, p, theta, seed, seeds, z_crit))
+            for light, method, p, theta, seed in cells]
+
+
+def sweep_stability(out: Path, cfg: Config, runner: Runner) -> None:
+    """The stability map: each estimator × p × θ_i × light at N = :data:`STABILITY_N` samples.
+
+    One job per (light, p, θ_i): its estimators one after the other, as the serial order has
+    them (each cell ~5 ms, so a job of one cell would cost about as much in scheduling as in
+    work; docs/cluster.md).
+    """
     log = open_log(out, "stability")
     z_crit = stability_z_crit()
-    base = dict(bsdf="phong", diffuse_reflectance=0.0, specular_reflectance=1.0)
-    est = ReflectionEstimators(Problem(**base))
-    for method in METHODS:            # warm-up: compile every estimator before timing cells
-        for light in STABILITY_LIGHTS.values():
-            est.set(Problem(**base, **light))
-            est.run(method, STABILITY_N, seed=1)
     # Methods innermost: the per-(light, method) median time that the MIS comparison uses
     # (analysis.mis_ratios) then sees the same load drift for every method.
     cells = [(lt, m, p, t) for lt in STABILITY_LIGHTS for p in STABILITY_EXPONENTS
              for t in STABILITY_ANGLES for m in METHODS]
-    bar = progress_bar(len(cells), "stability", progress)
+    order = {"stability": [dict(light=lt, method=m, exponent=p, theta_i=t) for lt, m, p, t in cells]}
+    rows: dict[tuple, list] = {}
     for i, (light, method, p, theta) in enumerate(cells):
-        bar.update()
         if not log.has(light=light, method=method, exponent=p, theta_i=theta):
-            log.add(_stability_row(est, light, method, p, theta, 20_000 + i, cfg.stability_seeds,
-                                   z_crit))
-    bar.close()
+            rows.setdefault((light, p, theta), []).append((light, method, p, theta, 20_000 + i))
+    jobs = [Job(stability_job, (tuple(todo), cfg.stability_seeds, z_crit), key=("stability",) + k)
+            for k, todo in rows.items()]
+    run_jobs(runner, out, jobs, order, "stability")

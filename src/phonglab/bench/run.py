@@ -5,6 +5,11 @@ rows resume from its CSV files), draws the charts, writes ``run.json`` (the size
 time of each part, :func:`machine_info`, the load average before and after) and, when
 asked, BENCHMARKS.md (:func:`phonglab.bench.report.write_markdown`).  A partial re-run
 (a resume, or ``--only``) adds to the record of the run it continues.
+
+The sweeps' jobs run on a :class:`phonglab.parallel.Runner` (``--workers``/``--scheduler``):
+serially by default, else on Dask, with the same rows.  ``run.json`` records where they ran
+and, per part, how many jobs there were and their time inside the worker (sum, median,
+max: what docs/cluster.md's time on N machines is computed from).
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import statistics
 import time
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -21,6 +27,7 @@ import mitsuba as mi
 
 from .. import __version__, registration
 from ..errors import PhonglabError
+from ..parallel import Runner
 from .charts import chart_error_time, chart_mis, chart_stability
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
@@ -64,25 +71,36 @@ def process_age() -> float | None:
         return None
 
 
-def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, progress: bool,
-               log: Callable[[str], None]) -> tuple[dict[str, float], list[str]]:
-    """Run the chosen parts in :data:`PARTS` order: (seconds per part, notes)."""
+def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, runner: Runner,
+               log: Callable[[str], None]) -> tuple[dict[str, float], list[str], dict[str, Any]]:
+    """Run the chosen parts in :data:`PARTS` order: (seconds per part, notes, jobs per part)."""
     notes: list[str] = []
     timings: dict[str, float] = {}
-    steps = {"estimators": lambda: sweep_estimators(out, cfg, progress),
-             "stability": lambda: sweep_stability(out, cfg, progress),
-             "renders": lambda: sweep_renders(out, cfg, cache, progress),
-             "variants": lambda: notes.extend(sweep_variants(out, cfg, cache, progress)),
-             "ratios": lambda: (sweep_ratios(out, cfg, progress),
-                                sweep_whitted_units(out, cfg, progress)),
-             "jit": lambda: sweep_cold_compile(out, progress)}
+    jobs: dict[str, Any] = {}
+    steps = {"estimators": lambda: sweep_estimators(out, cfg, runner),
+             "stability": lambda: sweep_stability(out, cfg, runner),
+             "renders": lambda: sweep_renders(out, cfg, runner, cache),
+             "variants": lambda: notes.extend(sweep_variants(out, cfg, runner, cache)),
+             "ratios": lambda: (sweep_ratios(out, cfg, runner),
+                                sweep_whitted_units(out, cfg, runner)),
+             "jit": lambda: sweep_cold_compile(out, runner.progress)}
     for name in PARTS:
         if name in parts:
             ts = time.perf_counter()
+            start = len(runner.timings)
             steps[name]()
             timings[name] = round(time.perf_counter() - ts, 2)
+            jobs[name] = job_summary([t.seconds for t in runner.timings[start:]])
             log(f"bench: {name} done in {timings[name]:.1f} s")
-    return timings, notes
+    return timings, notes, jobs
+
+
+def job_summary(seconds: list[float]) -> dict[str, Any]:
+    """Count, sum, median and max of job times (seconds inside the worker)."""
+    if not seconds:
+        return {"count": 0}
+    return {"count": len(seconds), "sum_s": round(sum(seconds), 3),
+            "median_s": round(statistics.median(seconds), 4), "max_s": round(max(seconds), 3)}
 
 
 def _continue_record(record: dict[str, Any], old: dict[str, Any]) -> None:
@@ -93,30 +111,37 @@ def _continue_record(record: dict[str, Any], old: dict[str, Any]) -> None:
     record["load_before"] = old.get("load_before", record["load_before"])
     record["process_seconds"] = None
     record["mode"] = old.get("mode", record["mode"])
+    old_jobs = old.get("execution", {}).get("jobs", {})
+    record["execution"]["jobs"] = {**old_jobs, **record["execution"]["jobs"]}
 
 
 def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
               markdown: Path | None = None, parts: Iterable[str] = PARTS,
               cache: Path | None = None, progress: bool = True,
-              quick_run: Path | None = None, log: Callable[[str], None] = print) -> dict[str, Any]:
+              quick_run: Path | None = None, log: Callable[[str], None] = print,
+              runner: Runner | None = None) -> dict[str, Any]:
     """Run the sweeps into ``out`` (CSV + PNG), then optionally write ``markdown``.
 
     ``cache`` is the reference cache folder (default: :data:`phonglab.references.CACHE_DIR`).
-    Returns the run record also written to ``out/run.json``.
+    ``runner`` is where the jobs run (default: serially here); it is entered (a cluster
+    started or reached) before any work.  Returns the run record also written to
+    ``out/run.json``.
     """
     out = Path(out)
     parts = list(parts)
     unknown = [p for p in parts if p not in PARTS]
     if unknown:
         raise PhonglabError(f"unknown bench part(s) {', '.join(unknown)}; choose from {', '.join(PARTS)}")
-    out.mkdir(parents=True, exist_ok=True)
-    if fresh:
-        for name in [filename for filename, _, _ in LOGS.values()] + ["run.json"]:
-            (out / name).unlink(missing_ok=True)
-    registration.register(VARIANT)
-    load_before = round(os.getloadavg()[0], 2)
-    t0 = time.perf_counter()
-    timings, notes = _run_parts(out, Config(quick=quick), parts, cache, progress, log)
+    runner = runner or Runner(progress=progress)
+    with runner:                     # a cluster that cannot be reached fails before --fresh deletes
+        out.mkdir(parents=True, exist_ok=True)
+        if fresh:
+            for name in [filename for filename, _, _ in LOGS.values()] + ["run.json"]:
+                (out / name).unlink(missing_ok=True)
+        registration.register(VARIANT)
+        load_before = round(os.getloadavg()[0], 2)
+        t0 = time.perf_counter()
+        timings, notes, jobs = _run_parts(out, Config(quick=quick), parts, cache, runner, log)
     charts = [str(p) for p in chart_error_time(out, out)]
     stability_png = chart_stability(out, out)
     if stability_png:
@@ -128,6 +153,7 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
               "process_seconds": process_age(), "parts": timings,
               "machine": machine_info(), "load_before": load_before,
               "load_after": round(os.getloadavg()[0], 2), "notes": notes, "charts": charts,
+              "execution": {"where": runner.where, "jobs": jobs},
               "command": "phonglab bench" + (" --quick" if quick else "") + f" --out {out}"}
     previous = out / "run.json"
     if previous.is_file() and not fresh and set(parts) != set(PARTS):

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..bench.config import PARTS
+from ..parallel import add_arguments, runner_from_args
 
 
 def add_parser(sub) -> None:
@@ -16,7 +17,9 @@ def add_parser(sub) -> None:
                     "there) unless --fresh. Charts are PNG files beside the CSVs.",
         epilog="examples:\n  phonglab bench --quick --out out/bench-quick\n"
                "  phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md\n"
-               "  phonglab bench --only stability --out out/bench",
+               "  phonglab bench --only stability --out out/bench\n"
+               "  phonglab bench --quick --workers 2\n"
+               "  phonglab bench --scheduler tcp://10.0.0.5:8786",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="small sizes: finishes in < 3 minutes on 2 cores")
     p.add_argument("--out", default="out/bench", help="output folder for CSV/PNG (default out/bench)")
@@ -28,6 +31,7 @@ def add_parser(sub) -> None:
                    help="run.json of a --quick run, whose wall time the report quotes")
     p.add_argument("--cache", default=None, help="reference-image cache folder (default .bench_cache/, or $PHONGLAB_CACHE)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -38,6 +42,8 @@ def run(args) -> int:
                     markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
                     cache=Path(args.cache) if args.cache else None,
                     progress=not args.no_progress,
-                    quick_run=Path(args.quick_run) if args.quick_run else None)
-    print(f"bench ({rec['mode']}) finished in {rec['seconds']:.1f} s; results in {args.out}/")
+                    quick_run=Path(args.quick_run) if args.quick_run else None,
+                    runner=runner_from_args(args))
+    print(f"bench ({rec['mode']}) finished in {rec['seconds']:.1f} s ({rec['execution']['where']}); "
+          f"results in {args.out}/")
     return 0

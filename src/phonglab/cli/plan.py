@@ -9,8 +9,10 @@ to two seconds (``python -X importtime -c 'import phonglab.render'``).
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 from ..errors import PhonglabError
+from ..parallel import add_arguments, runner_from_args
 
 
 def _param(text: str) -> tuple[str, str]:
@@ -29,7 +31,8 @@ def add_parser(sub) -> None:
         epilog="examples:\n"
                "  phonglab plan cornell_phong --target-error 0.02\n"
                "  phonglab plan scenes_xml/gray_direct.xml --target-error 0.01 --json\n"
-               "  phonglab plan glass_slab --set res=64 --make-reference 4096",
+               "  phonglab plan glass_slab --set res=64 --make-reference 4096\n"
+               "  phonglab plan cornell_phong --make-reference 65536 --workers 2",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
     p.add_argument("--target-error", type=float, default=0.01,
@@ -50,6 +53,7 @@ def add_parser(sub) -> None:
     p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
                    help="also render a converged reference (max_depth -1, SPP samples) into "
                         ".bench_cache/, which 'phonglab render --target-error' compares with")
+    add_arguments(p)      # where the reference's passes render (--workers / --scheduler)
     p.set_defaults(func=run)
 
 
@@ -67,14 +71,20 @@ def run(args) -> int:
         if args.pilot_spp < 8:
             raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
         kwargs["pilot_spp"] = args.pilot_spp
-    p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
-                     max_depth=args.max_depth, spp=args.spp, params=params,
-                     max_seconds=args.max_seconds, **kwargs)
-    print(p.to_json() if args.json else p.summary())
-    if args.make_reference is not None:
-        ref = references.reference(path, args.make_reference, params=params, progress=True)
-        if not args.json:
-            print(f"reference: {ref.spp} spp, max_depth -1, {ref.metadata['variant']}, relative "
-                  f"noise {metrics.relative_noise(ref.image, ref.stderr):.3g}, cached in "
-                  f"{ref.path}")
+    # A missing reference's passes run on --workers/--scheduler: reached before the pilot.
+    runner = runner_from_args(args)
+    rendering = (args.make_reference is not None and
+                 references.cached(path, params, min_spp=args.make_reference) is None)
+    with runner if rendering else contextlib.nullcontext():
+        p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
+                         max_depth=args.max_depth, spp=args.spp, params=params,
+                         max_seconds=args.max_seconds, **kwargs)
+        print(p.to_json() if args.json else p.summary())
+        if args.make_reference is not None:
+            ref = references.reference(path, args.make_reference, params=params, progress=True,
+                                       runner=runner)
+            if not args.json:
+                print(f"reference: {ref.spp} spp, max_depth -1, {ref.metadata['variant']}, "
+                      f"relative noise {metrics.relative_noise(ref.image, ref.stderr):.3g}, "
+                      f"cached in {ref.path}")
     return 0

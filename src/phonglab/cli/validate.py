@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 from .. import outputs
+from ..parallel import add_arguments, runner_from_args
 from ..validate.inputs import ValidateError, check_topics, parse_sets
 from ..validate.report import TOPICS, Report
 
@@ -21,6 +22,7 @@ EPILOG = """examples:
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
   phonglab validate --all-builtins --quick --json out/conformance.json
+  phonglab validate --all-builtins --scheduler tcp://10.0.0.5:8786 --json out/conformance.json
 """
 
 
@@ -49,6 +51,7 @@ def add_parser(sub) -> None:
                    help="fewer samples and angles (every topic kept; about 10 s)")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.builtins)")
+    add_arguments(p)         # --workers / --scheduler: where the --all-builtins cases run
     p.set_defaults(func=run)
 
 
@@ -92,8 +95,9 @@ def _all_builtins(args) -> int:
               + (f"  (KNOWN: {','.join(known)})" if known else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
-    result = batch.run_all(options={"seed": args.seed, "quick": args.quick, "topics": args.only},
-                           progress=progress)
+    with runner_from_args(args) as runner:
+        result = batch.run_all(options={"seed": args.seed, "quick": args.quick,
+                                        "topics": args.only}, progress=progress, runner=runner)
     if args.json:
         _write_json(args.json, result)
     print(f"{result['meta']['cases']} cases, {len(result['meta']['failed'])} failing")
@@ -102,6 +106,9 @@ def _all_builtins(args) -> int:
 
 def run(args) -> int:
     params = _check_inputs(args)
+    if not args.all_builtins and (args.workers != 1 or args.scheduler):
+        raise ValidateError("--workers and --scheduler spread the cases of --all-builtins; "
+                            "drop them to validate one BSDF")
     if args.all_builtins:
         return _all_builtins(args)
     from ..validate import core, html   # lazy: Mitsuba and matplotlib load only for a run

@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 import traceback
 
+from ..parallel import Job, Runner
 from . import builtins
 from .core import validate_bsdf
 from .report import TOPICS, Report, Row
@@ -52,14 +53,25 @@ def run_case(case, options: dict | None = None) -> dict:
     return d
 
 
-def run_all(cases=None, options: dict | None = None, progress=None) -> dict:
-    """Every case in order: ``{"meta": {...}, "reports": [run_case(...), ...]}``."""
+def run_all(cases=None, options: dict | None = None, progress=None,
+            runner: Runner | None = None) -> dict:
+    """Every case in order: ``{"meta": {...}, "reports": [run_case(...), ...]}``.
+
+    ``runner`` (:class:`phonglab.parallel.Runner`) is where the cases run: one job each,
+    sent by label (a Case holds Mitsuba objects that do not pickle), ``progress(report)``
+    called as each finishes; the reports come back in case order.  Default: serially here.
+    """
     cases = builtins.cases() if cases is None else cases
-    reports = []
-    for case in cases:
-        reports.append(run_case(case, options))
-        if progress:
-            progress(reports[-1])
+    if runner is None or runner.serial:
+        reports = []
+        for case in cases:
+            reports.append(run_case(case, options))
+            if progress:
+                progress(reports[-1])
+    else:
+        jobs = [Job(run_case, (case.label, options), key=case.label) for case in cases]
+        reports = runner.run(jobs, (lambda job, d: progress(d)) if progress else None,
+                             desc="validate")
     failed = [r["meta"]["case"] for r in reports
               if any(x["status"] == "fail" for x in r["results"])]
     return {"meta": {"cases": len(reports), "failed": failed, "options": dict(options or {})},

@@ -1,0 +1,246 @@
+r"""One execution layer: a list of independent jobs mapped to their results, here or on Dask.
+
+phonglab's heavy work is many independent jobs (bench cells, stability cells, the passes of a
+reference render).  A :class:`Job` is a top-level (picklable) function and its arguments,
+which carry everything the result depends on (its seed included), so the result is the same
+wherever the job runs.  A :class:`Runner` maps a list of jobs to their results:
+
+* **serially** (``workers=1``, no ``scheduler``): in this process, in list order; Dask is not
+  imported;
+* on an **embedded** :class:`distributed.LocalCluster` (``workers=N > 1``): N worker processes
+  with one thread each (Mitsuba and Dr.Jit keep per-thread state and Python plugins must not
+  be loaded concurrently, so parallelism is by process);
+* on a **running cluster** (``scheduler="tcp://HOST:PORT"``, started by hand with
+  ``dask scheduler`` / ``dask worker``; docs/cluster.md).
+
+Every worker process is prepared once by :class:`phonglab.parallel.worker.PhonglabWorker`
+(a ``distributed.WorkerPlugin``): its own Dr.Jit kernel-cache folder, the Mitsuba variant
+set and phonglab's plugins registered.  Results stream back as jobs finish
+(``distributed.as_completed``, a tqdm bar); :meth:`Runner.run` hands each to a callback at
+once (the bench writes its CSV row there, so an interrupted run resumes) and returns them in
+job order, so what is written from them does not depend on which worker was faster.
+
+Faults: a job whose worker dies (killed, out of memory) is rescheduled on another worker by
+the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
+a job whose function raises is re-run up to :data:`RETRIES` times, then its exception is
+raised here.  A scheduler that cannot be reached within :data:`CONNECT_TIMEOUT` seconds is one
+:class:`~phonglab.errors.PhonglabError` sentence.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Hashable, Iterator, Sequence
+
+from tqdm import tqdm
+
+from ..errors import PhonglabError
+from ..registration import register
+
+#: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
+CONNECT_TIMEOUT = 5.0
+#: Re-runs of a job whose function raised (a lost worker is rescheduled regardless).
+RETRIES = 2
+#: The variant jobs run in unless a Runner is told otherwise.
+DEFAULT_VARIANT = "llvm_ad_rgb"
+_resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
+_ADDRESS = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://[^\s/:]+(:\d+)?$")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One independent piece of work: ``fn(*args)``, ``fn`` a module-level function.
+
+    ``key`` names the job (e.g. the CSV row it fills); results are returned in job order.
+    """
+
+    fn: Callable[..., Any]
+    args: tuple = ()
+    key: Hashable = None
+
+
+@dataclass
+class JobTiming:
+    """Seconds a job took inside its worker (``seconds``), and from the start of its batch to
+    its result arriving here (``total``)."""
+
+    key: Hashable
+    seconds: float
+    total: float
+
+
+def call_job(fn: Callable[..., Any], args: tuple, variant: str) -> tuple[Any, float]:
+    """Run one job where it landed: (its result, the wall seconds it took there).
+
+    Sets ``variant`` (and registers phonglab's plugins) when the process is in another one:
+    a job may have switched it (the bench's variant comparison), and in a fresh process
+    without the worker plugin it is not set yet.
+    """
+    import mitsuba as mi  # lazy: `phonglab --help` imports this module (for its options)
+
+    if mi.variant() != _resolved.get(variant, variant):
+        # register() returns the variant it could set (a fallback, with its warning, once).
+        _resolved[variant] = register(variant)
+    t0 = time.perf_counter()
+    result = fn(*args)
+    return result, time.perf_counter() - t0
+
+
+def check_address(address: str) -> str:
+    """``address`` when it looks like a Dask scheduler address, else one sentence."""
+    if not _ADDRESS.match(address or ""):
+        raise PhonglabError(f"--scheduler {address!r} is not a Dask scheduler address; give "
+                            f"tcp://HOST:PORT as printed by `dask scheduler`")
+    return address
+
+
+@dataclass
+class Runner:
+    """Where jobs run: serially, on a LocalCluster of ``workers`` processes, or on ``scheduler``.
+
+    Use as a context manager (the cluster starts on entry and is shut down on exit).
+    """
+
+    workers: int = 1
+    scheduler: str | None = None
+    variant: str = DEFAULT_VARIANT
+    progress: bool = True
+    retries: int = RETRIES
+    timings: list[JobTiming] = field(default_factory=list)
+    _client: Any = field(default=None, repr=False)
+    _cluster: Any = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if int(self.workers) < 1:
+            raise PhonglabError(f"--workers must be at least 1, got {self.workers}")
+        if self.scheduler is not None:
+            check_address(self.scheduler)
+
+    @property
+    def serial(self) -> bool:
+        return self.scheduler is None and int(self.workers) == 1
+
+    @property
+    def where(self) -> str:
+        """Words for the record of a run: 'serial', 'LocalCluster(2)', 'tcp://...'."""
+        if self.serial:
+            return "serial"
+        return self.scheduler or f"LocalCluster({self.workers} processes)"
+
+    def __enter__(self) -> "Runner":
+        if not self.serial:
+            self._client, self._cluster = _connect(self.workers, self.scheduler, self.variant)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        client, cluster, self._client, self._cluster = self._client, self._cluster, None, None
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+    def run(self, jobs: Sequence[Job], on_result: Callable[[Job, Any], None] | None = None,
+            desc: str = "jobs") -> list[Any]:
+        """Results of ``jobs`` in job order; ``on_result(job, result)`` as each one finishes."""
+        jobs = list(jobs)
+        results: list[Any] = [None] * len(jobs)
+        bar = tqdm(total=len(jobs), desc=desc, unit="job", disable=not self.progress,
+                   leave=False, dynamic_ncols=True)
+        try:
+            for i, (result, seconds, total) in self._stream(jobs):
+                results[i] = result
+                self.timings.append(JobTiming(jobs[i].key, seconds, total))
+                if on_result is not None:
+                    on_result(jobs[i], result)
+                bar.update()
+        finally:
+            bar.close()
+        return results
+
+    def _stream(self, jobs: list[Job]) -> Iterator[tuple[int, tuple[Any, float, float]]]:
+        """(index, (result, seconds in the job, seconds end to end)) in finishing order."""
+        if self._client is None:
+            if not self.serial:
+                raise RuntimeError("Runner.run outside its `with` block")
+            for i, job in enumerate(jobs):
+                t0 = time.perf_counter()
+                result, seconds = call_job(job.fn, job.args, self.variant)
+                yield i, (result, seconds, time.perf_counter() - t0)
+            return
+        from distributed import as_completed  # lazy: only a distributed run needs Dask
+
+        t0 = time.perf_counter()
+        futures = [self._client.submit(call_job, job.fn, job.args, self.variant, pure=False,
+                                       retries=self.retries) for job in jobs]
+        index = {future.key: i for i, future in enumerate(futures)}
+        for future in as_completed(futures):
+            result, seconds = future.result()
+            yield index[future.key], (result, seconds, time.perf_counter() - t0)
+            future.release()
+
+
+def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, Any]:
+    """(Client, LocalCluster or None), every worker prepared by the phonglab worker plugin."""
+    from distributed import Client, LocalCluster  # lazy: Dask costs ~1 s to import
+
+    from .worker import PhonglabWorker  # imports distributed
+
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                               dashboard_address=":0", silence_logs=logging.CRITICAL)
+        threads = max(1, (os.cpu_count() or 1) // int(workers))
+        client = Client(cluster)
+    else:
+        threads = None
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError) as exc:
+            raise PhonglabError(f"cannot reach the Dask scheduler at {scheduler} within "
+                                f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}); start one with "
+                                f"`dask scheduler` (docs/cluster.md) or drop --scheduler to run "
+                                f"here") from None
+    try:
+        if scheduler is not None:
+            _wait_for_a_worker(client, scheduler)
+        client.register_plugin(PhonglabWorker(variant, threads=threads))
+    except BaseException:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+        raise
+    return client, cluster
+
+
+def _wait_for_a_worker(client, scheduler: str) -> None:
+    """Jobs sent to a scheduler without workers would wait forever: one sentence instead."""
+    try:
+        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+    except TimeoutError:
+        raise PhonglabError(f"the Dask scheduler at {scheduler} has no workers after "
+                            f"{CONNECT_TIMEOUT:g} s; start one on each machine with `dask worker "
+                            f"{scheduler} --nthreads 1` (docs/cluster.md)") from None
+
+
+def add_arguments(parser) -> None:
+    """``--workers`` and ``--scheduler`` on a subcommand's parser (bench, plan)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--workers", type=int, default=1, metavar="N",
+                       help="run the independent jobs on N local worker processes (a Dask "
+                            "LocalCluster, one thread each; default 1: serially here)")
+    group.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help="run the jobs on a running Dask cluster (docs/cluster.md); results "
+                            "are identical to a serial run")
+
+
+def runner_from_args(args, variant: str = DEFAULT_VARIANT) -> Runner:
+    """The :class:`Runner` of ``--workers``/``--scheduler`` (checked before anything runs)."""
+    return Runner(workers=args.workers, scheduler=args.scheduler, variant=variant,
+                  progress=not getattr(args, "no_progress", False))

@@ -1,0 +1,319 @@
+"""phonglab.parallel: serial, LocalCluster and a real Dask cluster give the same results.
+
+The cluster tests start a real ``dask scheduler`` and two ``dask worker`` processes on the
+loopback interface (random free port, each in its own process group, torn down in a
+``finally``), run ``phonglab bench --quick --only stability`` there and compare its CSV,
+timing columns aside, with a serial run of the same command, bit for bit; the same for four
+conformance cases of ``phonglab validate``.  The slow tier adds the run with one worker
+process killed (SIGKILL) mid-sweep and the whole ``validate --all-builtins`` command.
+Timing columns (wall times, compile statistics) are measurements of the machine, not
+results, and differ from run to run anyway.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+import pytest
+
+from phonglab.bench import csvlog
+from phonglab.bench.config import LOGS, STABILITY_CELLS
+from phonglab.bench.jobs import put_in_order
+from phonglab.cli import main
+from phonglab.errors import PhonglabError
+from phonglab import parallel
+from phonglab.parallel import Runner, check_address
+
+#: Columns that are measured times or compile statistics (machine state, not results).
+TIMING = {"wall_time_s", "first_call_s", "seconds", "t_a", "t_b", "ratio", "steady_s",
+          "compile_ms", "kernels", "cache_hits", "cold_compile_ms", "t_graphics", "t_radiance"}
+#: Methods whose sums Dr.Jit reduces with concurrent float64 atomic adds, so that their last
+#: bits vary from run to run even serially: ``mis_optimal`` (physics.estimators._row_sums,
+#: dr.scatter_reduce(Add, mode=ReduceMode.Local); measured: var_n differed in the last hex
+#: digit between serial runs with 2 Dr.Jit threads, not with 1).
+ATOMIC_SUMS = {"mis_optimal"}
+#: Their float columns agree to summation-order round-off: a float64 sum of n <= 2^14 terms
+#: reordered moves by at most n·2^-53 ≈ 2e-12 of Σ|terms|; 1e-9 relative leaves room for
+#: the cancellation in the variance (Σx² − (Σx)²/n) without hiding a real difference.
+ATOMIC_RTOL = 1e-9
+BIN = Path(sys.executable).parent
+
+
+def results(out: Path) -> dict[str, list[dict]]:
+    """Every CSV of a bench folder, rows in file order, timing columns removed."""
+    found = {}
+    for path in sorted(out.glob("*.csv")):
+        with path.open(newline="") as f:
+            found[path.name] = [{k: v for k, v in r.items() if k not in TIMING}
+                                for r in csv.DictReader(f)]
+    return found
+
+
+def assert_same_results(got: dict, want: dict) -> None:
+    """``got == want``, bit for bit, except the float columns of :data:`ATOMIC_SUMS` rows."""
+    assert got.keys() == want.keys()
+    for name in want:
+        assert len(got[name]) == len(want[name]), name
+        for g, w in zip(got[name], want[name]):
+            if w.get("method") not in ATOMIC_SUMS:
+                assert g == w, name
+                continue
+            assert g.keys() == w.keys()
+            for k in w:
+                try:
+                    a, b = float(g[k]), float(w[k])
+                except ValueError:
+                    assert g[k] == w[k], (name, k)
+                    continue
+                assert a == pytest.approx(b, rel=ATOMIC_RTOL, nan_ok=True), (name, k)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """SIGTERM the process group, then SIGKILL what is left (no leaked workers)."""
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+    except ProcessLookupError:
+        return
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        pass
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """A scheduler and two single-thread workers on 127.0.0.1: yields (address, worker Popens)."""
+    tmp = tmp_path_factory.mktemp("cluster")
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = dict(os.environ, PHONGLAB_WORKER_CACHE=str(tmp / "kernels"), MPLBACKEND="Agg")
+    procs = []
+    try:
+        procs.append(subprocess.Popen(
+            [BIN / "dask", "scheduler", "--host", "127.0.0.1", "--port", str(port),
+             "--no-dashboard"], env=env, cwd=tmp, start_new_session=True,
+            stdout=subprocess.DEVNULL, stderr=(tmp / "scheduler.log").open("w")))
+        for k in range(2):
+            procs.append(subprocess.Popen(
+                [BIN / "dask", "worker", address, "--nthreads", "1", "--nworkers", "1",
+                 "--no-dashboard", "--name", f"w{k}"], env=env, cwd=tmp, start_new_session=True,
+                stdout=subprocess.DEVNULL, stderr=(tmp / f"worker{k}.log").open("w")))
+        from distributed import Client
+
+        with Client(address, timeout=30) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, procs[1:]
+    finally:
+        for proc in reversed(procs):
+            _stop(proc)
+
+
+@pytest.fixture(scope="module")
+def serial_stability(tmp_path_factory):
+    """The CSVs of a serial ``phonglab bench --quick --only stability``."""
+    out = tmp_path_factory.mktemp("serial") / "b"
+    assert main(["bench", "--quick", "--only", "stability", "--out", str(out), "--no-progress"]) == 0
+    return results(out)
+
+
+def bench_cmd(out: Path, *extra: str) -> list[str]:
+    return [str(BIN / "phonglab"), "bench", "--quick", "--only", "stability", "--out", str(out),
+            "--no-progress", *extra]
+
+
+def test_cluster_results_identical_to_serial(cluster, serial_stability, tmp_path):
+    address, _ = cluster
+    out = tmp_path / "b"
+    assert main(["bench", "--quick", "--only", "stability", "--out", str(out), "--no-progress",
+                 "--scheduler", address]) == 0
+    assert_same_results(results(out), serial_stability)
+    assert len(serial_stability["stability.csv"]) == STABILITY_CELLS
+    assert json.loads((out / "run.json").read_text())["execution"]["where"] == address
+
+
+@pytest.mark.slow
+def test_cluster_survives_a_killed_worker(cluster, serial_stability, tmp_path):
+    """SIGKILL one worker process mid-sweep: its job is rescheduled, the CSV is the same."""
+    address, workers = cluster
+    out = tmp_path / "b"
+    log = out / LOGS["stability"][0]
+    bench = subprocess.Popen(bench_cmd(out, "--scheduler", address), stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not (log.is_file() and len(log.read_text().splitlines()) > 60):
+            assert bench.poll() is None and time.monotonic() < deadline
+            time.sleep(0.05)
+        # The worker process itself is the nanny's child; the nanny starts a new one.
+        victim = psutil.Process(workers[0].pid).children(recursive=True)[0]
+        victim.send_signal(signal.SIGKILL)
+        rows_at_kill = len(log.read_text().splitlines()) - 1
+        stdout, stderr = bench.communicate(timeout=300)
+    finally:
+        if bench.poll() is None:
+            _stop(bench)
+    assert rows_at_kill < STABILITY_CELLS          # the sweep was still running
+    assert not victim.is_running() or victim.status() == psutil.STATUS_ZOMBIE
+    assert bench.returncode == 0, stderr
+    assert_same_results(results(out), serial_stability)
+
+
+def test_unreachable_scheduler_is_one_sentence(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1.0)
+    out = tmp_path / "b"
+    out.mkdir()
+    (out / "stability.csv").write_text("kept\n")
+    t0 = time.monotonic()
+    code = main(["bench", "--quick", "--fresh", "--out", str(out),
+                 "--scheduler", f"tcp://127.0.0.1:{free_port()}"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("phonglab: error: cannot reach the Dask scheduler at tcp://127.0.0.1:")
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert time.monotonic() - t0 < 30
+    assert (out / "stability.csv").read_text() == "kept\n"     # --fresh deleted nothing
+
+
+def test_scheduler_without_workers_is_one_sentence(tmp_path, capsys, monkeypatch):
+    from distributed import LocalCluster
+
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1.0)
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                      dashboard_address=":0") as empty:
+        code = main(["bench", "--quick", "--out", str(tmp_path / "b"),
+                     "--scheduler", empty.scheduler_address])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "has no workers after 1 s; start one on each machine with `dask worker" in err
+
+
+@pytest.mark.parametrize("bad", ["127.0.0.1:8786", "tcp://", "http://host:1 2", ""])
+def test_malformed_scheduler_address_is_one_sentence(bad):
+    with pytest.raises(PhonglabError, match="not a Dask scheduler address"):
+        check_address(bad)
+
+
+def test_workers_must_be_positive():
+    with pytest.raises(PhonglabError, match="--workers must be at least 1"):
+        Runner(workers=0)
+
+
+def test_serial_runner_runs_in_order_without_dask():
+    code = ("import math, sys; from phonglab.parallel import Runner, Job\n"
+            "with Runner(progress=False) as r:\n"
+            "    print(r.run([Job(math.factorial, (k,), key=k) for k in range(5)]))\n"
+            "print('distributed' in sys.modules, 'dask' in sys.modules)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[1], timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split("\n")[:2] == ["[1, 1, 2, 6, 24]", "False False"]
+
+
+def test_local_cluster_reference_passes_bit_identical_to_serial(tmp_path):
+    """A reference rendered as one job per pass on a 2-process LocalCluster, merged here,
+    equals the serial render's image and standard error bit for bit (box filter)."""
+    from phonglab import references
+    from phonglab.bench.cornell import CornellSpec
+
+    spec = CornellSpec(walls="diffuse", boxes="phong", res=8)
+    refs = []
+    for name, runner in (("serial", Runner(progress=False)), ("local", Runner(2, progress=False))):
+        cache = tmp_path / name
+        with runner:
+            refs.append(references.reference(spec.scene_file(cache), 32, spec.params(),
+                                             "llvm_ad_rgb", max_depth=None, cache_dir=cache,
+                                             runner=runner))
+        if name == "local":
+            assert len(runner.timings) == references.PASSES        # one job per pass
+    (a, b) = refs
+    assert np.array_equal(a.image, b.image) and np.array_equal(a.stderr, b.stderr)
+    assert np.all(a.stderr > 0)
+
+
+def test_rows_are_put_in_the_serial_order(tmp_path):
+    log = csvlog.open_log(tmp_path, "cost")
+    keys = [dict(scene="s", method=m, round=r) for r in range(2) for m in ("a", "b")]
+    log.add(dict(scene="other", method="x", round=0, samples=1, seconds=0.5))
+    for k in (keys[3], keys[0], keys[2], keys[1]):          # as a cluster returns them
+        log.add(dict(k, samples=1, seconds=1.0))
+    put_in_order(log, keys)
+    again = csvlog.open_log(tmp_path, "cost")
+    assert [(r["scene"], r["method"], r["round"]) for r in again.rows] == \
+        [("other", "x", "0")] + [("s", k["method"], str(k["round"])) for k in keys]
+
+
+def _without_timings(x):
+    """A validate report (JSON data) without its wall-time fields."""
+    if isinstance(x, dict):
+        return {k: _without_timings(v) for k, v in x.items()
+                if k not in ("seconds", "topic_seconds", "wall_seconds")}
+    if isinstance(x, list):
+        return [_without_timings(v) for v in x]
+    return x
+
+
+def test_cluster_validate_cases_identical_to_serial(cluster):
+    """Conformance cases as jobs on the cluster give the serial reports (timings aside)."""
+    from phonglab.validate import batch, builtins
+
+    address, _ = cluster
+    cases = builtins.cases()[:4]
+    options = {"seed": 0, "quick": True, "topics": ["finite", "eval_pdf", "weight"]}
+    serial = batch.run_all(cases, options)
+    with Runner(scheduler=address, progress=False) as runner:
+        distributed = batch.run_all(cases, options, runner=runner)
+        assert len(runner.timings) == len(cases)
+    assert [r["meta"]["case"] for r in distributed["reports"]] == [c.label for c in cases]
+    assert _without_timings(distributed) == _without_timings(serial)
+
+
+@pytest.mark.slow
+def test_cluster_validate_all_builtins_cli_identical_to_serial(cluster, tmp_path):
+    address, _ = cluster
+    base = [str(BIN / "phonglab"), "validate", "--all-builtins", "--quick", "--only", "finite",
+            "--only", "eval_pdf"]
+    runs = {}
+    for name, extra in (("serial", []), ("cluster", ["--scheduler", address])):
+        path = tmp_path / f"{name}.json"
+        proc = subprocess.run(base + ["--json", str(path)] + extra, capture_output=True,
+                              text=True, timeout=600)
+        assert proc.returncode in (0, 1), proc.stderr          # 1: a case fails a row
+        runs[name] = json.loads(path.read_text())
+    assert _without_timings(runs["cluster"]) == _without_timings(runs["serial"])
+
+
+def test_kernel_cache_slots_are_exclusive_and_cleaned(tmp_path):
+    """Each live process holds its own slot; a slot's stale Dr.Jit *.tmp files are removed."""
+    from phonglab.parallel.worker import claim_slot
+
+    stale = tmp_path / "worker-0" / ".drjit" / "0123.llvm.bin.tmp"
+    stale.parent.mkdir(parents=True)
+    stale.write_bytes(b"half a kernel")
+    kept = stale.with_name("0123.llvm.bin")
+    kept.write_bytes(b"a kernel")
+    assert claim_slot(tmp_path) == tmp_path / "worker-0"
+    assert not stale.exists() and kept.exists()
+    # A second claimant (another open file description, as another process would have) is
+    # refused the held slot and gets the next one.
+    assert claim_slot(tmp_path) == tmp_path / "worker-1"
