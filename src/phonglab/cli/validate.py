@@ -11,7 +11,6 @@ import argparse
 import json
 from pathlib import Path
 
-from .. import outputs
 from ..parallel import add_arguments, runner_from_args
 from ..validate.inputs import ValidateError, check_topics, parse_sets
 from ..validate.report import TOPICS, Report
@@ -57,6 +56,7 @@ def add_parser(sub) -> None:
 
 def _check_inputs(args) -> dict:
     """Every check that needs no Mitsuba, in the order a user would fix them."""
+    from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
     check_topics(args.only)
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
