@@ -53,12 +53,12 @@ notebook-figures: setup
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
 
-# The bench on a 2-process LocalCluster and phonglab.parallel's per-job overhead, with the
-# expected time on N workers from its job times (docs/cluster.md).
+# bench --quick and validate --all-builtins --quick serially vs on a 2-process LocalCluster
+# (alternating, ~6 min), phonglab.parallel's per-job overhead and the expected time on N
+# machines: docs/bench/cluster.json, rendered into BENCHMARKS.md (docs/cluster.md).
 .PHONY: bench-cluster
 bench-cluster: setup
-	$(BIN)/phonglab bench --quick --fresh --no-progress --workers 2 --out out/bench-quick-2w
-	$(BIN)/python scripts/parallel_overhead.py --workers 2 --bench out/bench-quick-2w --out out/parallel_overhead.json
+	$(BIN)/python scripts/cluster_bench.py --workers 2 --out docs/bench/cluster.json
 
 # docs/fitting.md's table: phong fitted to Beckmann/GGX roughconductor and roughplastic (~20 s).
 .PHONY: fitting-table
