@@ -9,8 +9,9 @@ Writes ``docs/bench/cluster.json`` (``make bench-cluster``), which
   ``phonglab validate --all-builtins --quick --json``.  Rounds repeat while the next pair is
   expected to fit in ``--budget`` seconds (at least one round); medians and [min, max].
 * **same results**: each pair's validate JSON files are compared with their timing fields
-  removed: the keys in :data:`TIMING_KEYS` at any depth, and of the ``cost`` topic's rows
-  (a timing: :data:`TIMING_TOPICS`) only topic, name and status are kept.
+  removed: the keys in :data:`TIMING_KEYS` at any depth, of the ``cost`` topic's rows
+  (a timing: :data:`TIMING_TOPICS`) only topic, name and status are kept, and durations in
+  text (``mi.chi2``'s "(25.56 ms)" in the chi2 rows' messages: :data:`TIMING_TEXT`) are masked.
 * **per-job overhead**: ``--jobs`` empty jobs (``time.sleep(0)``) through a
   :class:`phonglab.parallel.Runner`, serially and on a LocalCluster of W processes,
   ``--overhead-repeats`` batches each: (wall time of a batch) / jobs, median and spread,
@@ -36,6 +37,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -50,6 +52,9 @@ N_VALUES = (1, 2, 4, 8, 16, 64)
 TIMING_KEYS = ("seconds", "topic_seconds", "wall_seconds")
 #: Topics whose rows are timings: only their topic, name and status are compared.
 TIMING_TOPICS = ("cost",)
+#: Durations inside text: ``mi.chi2`` writes "Histogram sum = 1.000000 (25.56 ms)" into the
+#: chi2 rows' ``messages``; such a "(<number> ms)" or "(<number> s)" is replaced by "(time)".
+TIMING_TEXT = re.compile(r"\(\d+(?:\.\d+)? m?s\)")
 BIN = Path(sys.executable).parent
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -83,13 +88,16 @@ def overhead(workers: int, jobs: int, repeats: int) -> dict:
 
 
 def without_timings(x):
-    """A validate JSON without its timing fields (:data:`TIMING_KEYS`, :data:`TIMING_TOPICS`)."""
+    """A validate JSON without its timing fields (:data:`TIMING_KEYS`, :data:`TIMING_TOPICS`,
+    :data:`TIMING_TEXT`)."""
     if isinstance(x, dict):
         if x.get("topic") in TIMING_TOPICS:
             return {k: x.get(k) for k in ("topic", "name", "status")}
         return {k: without_timings(v) for k, v in x.items() if k not in TIMING_KEYS}
     if isinstance(x, list):
         return [without_timings(v) for v in x]
+    if isinstance(x, str):
+        return TIMING_TEXT.sub("(time)", x)
     return x
 
 
@@ -185,7 +193,8 @@ def summarize(name: str, pairs: list[dict], per_job_ms: float) -> dict:
            "jobs": jobs, "on_n": on_n(jobs, here, per_job_ms), "pairs": pairs}
     if name == "validate":
         rec["identical"] = all(p["identical"] for p in pairs)
-        rec["excluded"] = {"keys": list(TIMING_KEYS), "topics_status_only": list(TIMING_TOPICS)}
+        rec["excluded"] = {"keys": list(TIMING_KEYS), "topics_status_only": list(TIMING_TOPICS),
+                           "text_durations": TIMING_TEXT.pattern}
     return rec
 
 

@@ -83,6 +83,15 @@ def test_without_timings_drops_only_the_timing_fields(cb):
     b = copy.deepcopy(a)
     b["reports"][0]["results"][1]["status"] = "fail"         # a cost row's status still counts
     assert cb.without_timings(a) != cb.without_timings(b)
+    # mi.chi2's messages carry durations: masked, the statistic next to them still compared
+    text = "Histogram sum = 1.000000 (25.56 ms), PDF sum = 1.000007 (11.52 ms)\nChi^2 statistic = 851.47"
+    a["reports"][0]["results"][0]["details"] = {"cells": [{"messages": text}]}
+    b = copy.deepcopy(a)
+    b["reports"][0]["results"][0]["details"]["cells"][0]["messages"] = \
+        text.replace("25.56 ms", "35.04 ms").replace("11.52 ms", "90.38 ms")
+    assert cb.without_timings(a) == cb.without_timings(b)
+    b["reports"][0]["results"][0]["details"]["cells"][0]["messages"] = text.replace("851.47", "851.48")
+    assert cb.without_timings(a) != cb.without_timings(b)
 
 
 def _data(tmp_path) -> RunData:
@@ -95,6 +104,7 @@ def test_cluster_section_renders_the_record(cb, tmp_path):
     assert "| `phonglab bench --quick --fresh` | 2 | 42 [40, 44] | 48 [46, 50] | 0.878 [0.8, 0.957] |" in text
     assert "| 1 | 60 [60, 60] | 75 [75, 75] | 0.8 [0.8, 0.8] |" in text
     assert "identical apart from their timing fields (`seconds`, `topic_seconds`, `wall_seconds`" in text
+    assert "**not** identical" not in text
     assert "cannot beat" in text and "more machines" in text
     assert "| LocalCluster(2) | 6 [5, 9] | 4.6 |" in text
     # N = 16: bench estimators max(0.6, 4/16) + 0.006·90/16 = 0.634; validate total 7 + here (60 − 54)

@@ -518,7 +518,8 @@ def cluster_section(d: RunData) -> list[str]:
                  f"{'identical' if v['identical'] else '**not** identical'} apart from their "
                  f"timing fields ({', '.join(f'`{k}`' for k in v['excluded']['keys'])}; of the "
                  f"{', '.join(f'`{t}`' for t in v['excluded']['topics_status_only'])} rows, "
-                 f"which are timings, only topic, name and status compared).\n")
+                 f"which are timings, only topic, name and status compared; durations in "
+                 f"text, such as `mi.chi2`'s \"(25.56 ms)\" in its messages, masked).\n")
     if cores and cores <= w:
         L.append(f"On {cores} cores a {w}-worker cluster has no cores to add: serial Dr.Jit "
                  f"already spreads each kernel over {'both' if cores == 2 else f'all {cores}'} cores, so the cluster cannot beat "
