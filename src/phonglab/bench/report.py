@@ -508,6 +508,10 @@ def cluster_section(d: RunData) -> list[str]:
          f"on {cores} cores, load average {r['load_before'][0]} before and "
          f"{r['load_after'][0]} after. Speed-up = serial / {w} workers.\n",
          f"| command | rounds | serial (s) | {w} workers (s) | speed-up |", "|---|---|---|---|---|"]
+    if cores and max(r["load_before"][0], r["load_after"][0]) > 0.5 * cores:
+        L.insert(2, f"> **Note:** measured while other processes shared the {cores} cores (load "
+                    f"average above {0.5 * cores:g}): absolute times are inflated and the speed-ups "
+                    f"noisy; rerun `make bench-cluster` on a quiet machine.\n")
     for n in names:
         c = r[n]
         L.append(f"| {named[n]} | {c['rounds']} | {_med(c['serial_s'])} | {_med(c['workers_s'])} "
