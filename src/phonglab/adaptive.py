@@ -83,7 +83,7 @@ from .errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import RenderOutputs, check_file
 from .render import MAX_SPP, pass_seed, preflight
-from .runtime import quiet_mitsuba
+from .runtime import default_variant, quiet_mitsuba
 from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
                      scene_path)
 from .tonemap import auto_exposure, to_srgb
@@ -412,8 +412,8 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
     params = {k: v for k, v in (params or {}).items() if v is not None}
     if max_depth is not None and "max_depth" in declared:
         params["max_depth"] = max_depth
-    with quiet_mitsuba():
-        loaded = load_scene(path, variant, **params)
+    with quiet_mitsuba():   # the active variant may be a scalar one: choose, as a render does
+        loaded = load_scene(path, variant or default_variant(), **params)
     integrator = None
     if max_depth is not None and "max_depth" not in declared:
         integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
