@@ -106,6 +106,8 @@ class Pilot:
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
+        #: per depth: (H, W) channel mean of σ²·w, the relative variance of one sample per pixel
+        self.variance_maps: dict[int, np.ndarray] = {}
 
     @property
     def spp(self) -> int:
@@ -117,16 +119,32 @@ class Pilot:
                                    integrator=path_integrator(depth, self.info),
                                    keep_passes=True)
 
+    def variance_map(self, passes_img: np.ndarray) -> np.ndarray:
+        """(H, W) mean over channels of σ² · w, σ² = s · var_k(pass_k) the variance of one
+        sample: the relative variance a pixel's sample carries (what adaptive sampling
+        allocates by)."""
+        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
+        return (sigma2 * self.weight).mean(axis=-1)
+
     def noise_per_sample(self, passes_img: np.ndarray) -> float:
         """n(1) = √mean(σ² · w), σ² = s · var_k(pass_k) the variance of one sample."""
-        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
-        return math.sqrt(float(np.mean(sigma2 * self.weight)))
+        return math.sqrt(float(np.mean(self.variance_map(passes_img))))
+
+    def measure_model(self, integrator) -> tuple[float, np.ndarray, tuple[float, float]]:
+        """(n(1), variance map, (a, b) of T = a + b·spp) of another integrator of the scene
+        (the planner's cheaper exact models), rendered like the depth pilots."""
+        imgs = render.render_scene(self.scene, self.spp, seed=self.seed, passes=self.passes,
+                                   integrator=integrator, keep_passes=True).passes
+        vmap = self.variance_map(imgs)
+        return (math.sqrt(float(np.mean(vmap))), vmap,
+                _time_model(self.scene, integrator, self.spp_per_pass))
 
     def measure(self, d: int) -> DepthSample:
         """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
         if d not in self.samples:
             if d == -1:
                 self.samples[d] = DepthSample(-1, 0.0, 0.0, self.noise_per_sample(self.full))
+                self.variance_maps[d] = self.variance_map(self.full)
             else:
                 imgs = self._render(d, self.seed).passes
                 self.compiled.add(d)
@@ -135,9 +153,10 @@ class Pilot:
                 se2 = diff.var(axis=0, ddof=1) / self.passes
                 bias2 = float(np.mean((mean * mean - se2) * self.weight))
                 energy = float(mean.sum()) / self.total_energy
+                self.variance_maps[d] = self.variance_map(imgs)
                 self.samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
                                               energy if abs(energy) > 1e-9 else 0.0,
-                                              self.noise_per_sample(imgs))
+                                              math.sqrt(float(np.mean(self.variance_maps[d]))))
         return self.samples[d]
 
     def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1]) -> tuple[int, int]:
