@@ -393,13 +393,14 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
                          variant: str | None = None, seed: int = 0,
                          max_seconds: float | None = None, max_spp: int | None = None,
                          max_depth: int | None = None, min_spp: int = MIN_SPP,
-                         params: dict[str, Any] | None = None,
+                         params: dict[str, Any] | None = None, integrator=None,
                          extra_metadata: dict[str, Any] | None = None) -> AdaptiveResult:
     """Load ``scene``, render it adaptively and write ``out`` (+ .stderr.exr, .png, .spp.exr, .spp.png).
 
     Everything is checked before the render: the arguments (one sentence each), the five
     output files, the scene.  ``max_depth`` applies as in :func:`phonglab.render.render_file`
-    (the scene's ``$max_depth`` default, else its integrator rebuilt with it).
+    (the scene's ``$max_depth`` default, else its integrator rebuilt with it);
+    ``integrator`` (a ``mi.load_dict`` dictionary) replaces the scene's (the planner's models).
     """
     _check(target_error, max_seconds, max_spp, min_spp)
     path = scene_path(scene)
@@ -414,8 +415,9 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
         params["max_depth"] = max_depth
     with quiet_mitsuba():   # the active variant may be a scalar one: choose, as a render does
         loaded = load_scene(path, variant or default_variant(), **params)
-    integrator = None
-    if max_depth is not None and "max_depth" not in declared:
+    if integrator is not None:
+        integrator = mi.load_dict(integrator)
+    elif max_depth is not None and "max_depth" not in declared:
         integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
     result = render_adaptive(loaded, target_error, seed=seed, max_seconds=max_seconds,
                              max_spp=max_spp, min_spp=min_spp, integrator=integrator,
@@ -427,7 +429,8 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
         "estimated_error": round(result.estimated_error, 6), "stopped": result.stopped,
         "spp_mean": round(result.total_spp, 3), "spp_min": int(result.spp.min()),
         "spp_max": int(result.spp.max()), "min_spp": min_spp, "passes": len(result.passes),
-        "seed": seed, "integrator": integ.class_name(), "filter": "the film's, density-"
+        "seed": seed, "integrator": integ.class_name(), "max_depth": max_depth if max_depth is not None
+        else declared.get("max_depth"), "filter": "the film's, density-"
         "normalised (phonglab.adaptive)", "render_seconds": round(result.seconds, 4),
         "params": {k: str(v) for k, v in params.items()},
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,

@@ -84,6 +84,8 @@ def run_planned(args, path: Path, out: Path) -> int:
     print(plan.summary())
     meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
             "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}
+    if plan.uses_wavefront:
+        return _render_plan_wavefront(args, path, out, plan, meta)
     with runtime.quiet_mitsuba():
         result = render_file(path, out, seed=args.seed, extra_metadata=meta,
                              **plan.render_kwargs())
@@ -110,6 +112,41 @@ def run_planned(args, path: Path, out: Path) -> int:
         print(f"  error: not measurable from one pass; predicted {plan.predicted_error:.4g}, "
               f"target {plan.target_error:g}")
     _print_files(out, result)
+    return 0
+
+
+def _render_plan_wavefront(args, path: Path, out: Path, plan, meta: dict) -> int:
+    """Render a plan whose model or sampling goes through phonglab.adaptive; report the error."""
+    from .. import adaptive, metrics, references
+    from ..planner import choice
+
+    uniform = plan.sampling == "uniform"
+    spp = max(2, math.ceil(plan.chosen_spp))
+    integrator = None if plan.model == "path" else choice.model_dict(plan.model, plan.max_depth,
+                                                                     path, plan.params)
+    meta = dict(meta, max_depth=plan.max_depth, model=plan.model, sampling=plan.sampling)
+    with runtime.quiet_mitsuba():
+        result = adaptive.render_file_adaptive(
+            path, out, plan.noise_target, variant=plan.variant, seed=args.seed,
+            max_depth=plan.max_depth, params=plan.params, integrator=integrator,
+            min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None,
+            extra_metadata=meta)
+    print(f"rendered {path} with {plan.model}, {plan.sampling} sampling, max_depth "
+          f"{plan.max_depth} in {plan.variant}: {result.total_spp:.1f} spp on average, "
+          f"{result.seconds:.3g} s (predicted {plan.chosen_seconds:.3g} s steady state)")
+    ref = references.cached(path, params=plan.params,
+                            variant=references.variant_for_color(plan.color))
+    if ref is not None:
+        err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
+        print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} spp); "
+              f"estimated {math.hypot(result.estimated_error, plan.predicted_bias):.4g}, "
+              f"target {plan.target_error:g}")
+    else:
+        print(f"  error: estimated {math.hypot(result.estimated_error, plan.predicted_bias):.4g}"
+              f" (noise {result.estimated_error:.4g} from the samples, depth bias "
+              f"{plan.predicted_bias:.3g} from the pilot); target {plan.target_error:g}")
+    _print_files(out, result)
+    print(f"  spp map: {', '.join(str(p) for p in adaptive.spp_paths(out))}")
     return 0
 
 

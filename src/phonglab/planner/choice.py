@@ -38,7 +38,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..adaptive import MIN_SPP, window_mean
-from ..scenes import SceneInfo
+from ..scenes import SceneInfo, inspect_scene
 from .pilot import Pilot
 
 #: Passes an adaptive render typically takes (pilot and 2-4 more: measured on the bench scenes).
@@ -70,15 +70,17 @@ def delta_lights_only(scene) -> bool:
     return bool(emitters) and all(int(e.flags()) & delta for e in emitters)
 
 
-def model_integrator(model: str, depth: int, info: SceneInfo):
-    """The integrator of a model, keeping the scene's hide_emitters."""
+def model_dict(model: str, depth: int, scene, params: dict | None = None) -> dict:
+    """The ``mi.load_dict`` dictionary of a model's integrator, keeping the scene's
+    hide_emitters (``scene``: a :class:`SceneInfo`, or a scene file read with ``params``)."""
+    info = scene if isinstance(scene, SceneInfo) else inspect_scene(scene, **(params or {}))
     hide = info.integrator_props.get("hide_emitters", "false").lower() == "true"
     if model == "direct":
-        return mi.load_dict({"type": "direct", "hide_emitters": hide})
+        return {"type": "direct", "hide_emitters": hide}
     if model == "whitted":
-        return mi.load_dict({"type": "whitted", "units": "radiance", "max_depth": depth,
-                             "hide_emitters": hide})
-    raise ValueError(model)
+        return {"type": "whitted", "units": "radiance", "max_depth": depth,
+                "hide_emitters": hide}
+    raise ValueError(f"unknown model {model!r}")
 
 
 def adaptive_spp(vmap: np.ndarray, budget2: float) -> float:
@@ -114,7 +116,7 @@ def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_p
     if depth == 2:
         models = ["direct"] + (["whitted"] if delta_lights_only(pilot.scene) else [])
         for model in models:
-            integ = model_integrator(model, depth, pilot.info)
+            integ = mi.load_dict(model_dict(model, depth, pilot.info))
             noise1, mvmap, tm = pilot.measure_model(integ)
             options += price(pilot, model, noise1, mvmap, tm, budget2, pixels, passes)
         if "whitted" not in models:
