@@ -232,13 +232,13 @@ class Wavefront:
 
     def image(self) -> np.ndarray:
         """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring)."""
-        inv = np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0)[:, None]
+        inv = np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0)
         h, w = self.height, self.width
+        src = (self.splat * inv[:, None, None]).reshape(h, w, len(self.offsets), -1)
         total = np.zeros((h, w, self.channels + 1))
         for k, (dy, dx) in enumerate(self.offsets):   # target p = source q + d
-            src = (self.splat[:, k] * inv).reshape(h, w, -1)
             total[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)] += \
-                src[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)]
+                src[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0), k]
         weight = total[..., -1:]
         return np.where(weight > 0, total[..., :-1] / np.where(weight > 0, weight, 1), 0.0)
 

@@ -22,6 +22,7 @@ import mitsuba as mi
 from .. import __version__, registration
 from ..errors import PhonglabError
 from .charts import chart_error_time, chart_stability
+from .adaptive_sweeps import sweep_adaptive
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
@@ -74,7 +75,8 @@ def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, pro
              "renders": lambda: sweep_renders(out, cfg, cache, progress),
              "variants": lambda: notes.extend(sweep_variants(out, cfg, cache, progress)),
              "ratios": lambda: sweep_ratios(out, cfg, progress),
-             "jit": lambda: sweep_cold_compile(out, progress)}
+             "jit": lambda: sweep_cold_compile(out, progress),
+             "adaptive": lambda: sweep_adaptive(out, cfg, progress)}
     for name in PARTS:
         if name in parts:
             ts = time.perf_counter()
