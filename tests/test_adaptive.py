@@ -15,6 +15,8 @@ import pytest
 from scipy import signal
 
 from phonglab import adaptive, cli, exr, metrics, references, render, scenes, stats
+from phonglab.bench import adaptive_sweeps
+from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
 
 
@@ -172,3 +174,34 @@ def test_cli_unwritable_spp_map_refused_before_render(tmp_path, capsys):
                      "-o", str(tmp_path / "x.exr")]) == 2
     assert "spp map" in capsys.readouterr().err
     assert not (tmp_path / "x.exr").exists()
+
+
+class _TinyConfig(bench_config.Config):
+    """The bench part at test size (16², 2 seeds, one target)."""
+
+    adaptive_res = 16
+    adaptive_scenes = ["gray_direct", "check_furnace_enclosure"]
+    adaptive_spps = [4, 16]
+    adaptive_targets = [0.08]
+    adaptive_planned_targets = [0.08]
+    adaptive_seeds = 2
+    adaptive_reference_spp = 1024
+
+
+def test_bench_part_writes_chart_speedups_and_report(tmp_path, monkeypatch, variant_llvm_rgb):
+    """The 'adaptive' bench part at test size: rows of the three methods, equal-error speed-ups
+    with their spread, the overhead verdict, the guard rows, both figures, and its section."""
+    monkeypatch.setattr(adaptive_sweeps, "UNIFORM_SCENE_RES", 8)
+    data = adaptive_sweeps.sweep_adaptive(tmp_path, _TinyConfig())
+    gd = next(s for s in data["scenes"] if s["scene"] == "gray_direct")
+    assert {r["method"] for r in gd["rows"]} == {"uniform", "adaptive", "planned"}
+    for key in ("adaptive", "planned", "planned_render_only"):
+        s = gd["speedups"][key]
+        assert 0 < s["min"] <= s["median"] <= s["max"]
+    assert data["overhead"]["cost_vs_uniform"] > 0 and "met" in data["overhead"]
+    assert {g["neighbourhood"] for g in data["guards"]} == {True, False}
+    assert (tmp_path / "adaptive_error_time.png").is_file()
+    assert (tmp_path / "adaptive_sppmap.png").is_file()
+    text = "\n".join(adaptive_sweeps.report_section(tmp_path, "docs/bench"))
+    assert "Adaptive sampling" in text and "docs/bench/adaptive_error_time.png" in text
+    assert "adaptive" in bench_config.PARTS

@@ -326,7 +326,8 @@ def test_whitted_is_priced_when_every_light_is_a_point_light(tmp_path):
     p = planner.plan(_write(tmp_path, POINT_LIT), TARGET)
     assert p.max_depth == 2
     priced = next(r for r in p.reasons if r.startswith("priced"))
-    assert "whitted, uniform" in priced and "direct, uniform" in priced
+    assert "whitted, uniform" in priced and "whitted, adaptive" in priced
+    assert any(r.startswith("direct-only transport") for r in p.reasons)
 
 
 def test_whitted_radiance_is_path_at_depth_2_under_point_lights(tmp_path, variant_llvm_rgb):
