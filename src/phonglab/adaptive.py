@@ -82,7 +82,7 @@ from . import __version__, exr
 from .errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import RenderOutputs, check_file
-from .render import MAX_SPP, pass_seed, preflight
+from .render import MAX_SPP, available_memory, pass_seed, preflight
 from .runtime import default_variant, quiet_mitsuba
 from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
                      scene_path)
@@ -96,6 +96,10 @@ NEIGHBOURHOOD = 2
 GROWTH = 4
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
+#: Host bytes per pixel and filter offset: float64 filter sums of C + 1 channels and their
+#: float32 device copy, with the moments and temporaries (25 offsets for the gaussian filter:
+#: about 2 KiB a pixel, 2 GiB at 1024²).
+HOST_BYTES_PER_PIXEL_OFFSET = 80
 
 
 @dataclass
@@ -162,6 +166,12 @@ class Wavefront:
         self.offsets = [(iy - radius, ix - radius) for iy in range(self.A.shape[0])
                         for ix in range(self.A.shape[1]) if self.A[iy, ix] > 0]
         npix = self.width * self.height
+        need = HOST_BYTES_PER_PIXEL_OFFSET * len(self.offsets) * npix
+        have = available_memory()
+        if have is not None and need > have:
+            raise PhonglabError(f"{path}: adaptive sampling of a {self.width} x {self.height} "
+                                f"film keeps about {need / 2**30:.1f} GiB of per-pixel sums but "
+                                f"{have / 2**30:.1f} GiB is available; lower the resolution")
         self.n = np.zeros(npix, dtype=np.int64)
         self.s1 = np.zeros((npix, self.channels))
         self.s2 = np.zeros((npix, self.channels))
@@ -294,7 +304,7 @@ def _check(target_error, max_seconds, max_spp, min_spp) -> None:
 
 def allocation(err2: np.ndarray, n: np.ndarray, target_error: float,
                neighbourhood: bool = True) -> np.ndarray:
-    """N_p* = √v_p · mean √v / E², v_p = e_p² N_p, guarded by the 3×3 mean when asked."""
+    """N_p* = √v_p · mean √v / E², v_p = e_p² N_p, guarded by the window mean when asked."""
     v = err2 * n
     v = np.where(np.isfinite(v), v, np.nanmax(np.where(np.isfinite(v), v, 0.0)))
     if neighbourhood:
@@ -331,7 +341,7 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
         passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
                        "seconds": time.perf_counter() - t, "estimated_error": estimate})
         k += 1
-        if estimate <= target_error:
+        if estimate <= target_error and np.all(np.isfinite(err2)):
             break
         want = np.ceil(allocation(err2, wf.n.reshape(shape), target_error,
                                   neighbourhood)).astype(np.int64).ravel()
