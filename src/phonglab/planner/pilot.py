@@ -35,6 +35,19 @@ DEPTH_LADDER = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
 #: Pilot: total samples per pixel, split into this many passes of equal size (same seeds per depth).
 PILOT_SPP = 64
 PILOT_PASSES = 8
+#: Films of more pixels than this get a pilot of the same number of samples per image
+#: (PILOT_SPP · PILOT_PIXELS), at least MIN_PILOT_SPP per pixel: the pilot's statistics are
+#: means over the image (bias b(d), noise n(1)), as precise with fewer samples per pixel over
+#: more pixels, and a pilot of 64 spp at 256² cost as much as the render it plans.
+PILOT_PIXELS = 64 * 64
+MIN_PILOT_SPP = 16
+
+
+def pilot_spp_for(pixels: int, passes: int = PILOT_PASSES) -> int:
+    """Samples per pixel of the default pilot of a film of ``pixels`` (a multiple of passes)."""
+    spp = PILOT_SPP * PILOT_PIXELS / max(pixels, 1)
+    spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
+    return max(passes, spp // passes * passes)
 #: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
 PILOT_SEED = 1
 

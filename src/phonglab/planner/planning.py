@@ -20,7 +20,7 @@ from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_f
 from ..scenes import SceneInfo, inspect_scene, load_scene
 from . import choice
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
-                    DepthSample, Pilot)
+                    DepthSample, Pilot, pilot_spp_for)
 
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
@@ -114,7 +114,7 @@ def render_passes(spp: int) -> int:
     return max(1, min(int(spp), 8)) if spp >= 2 else 1
 
 
-def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int = PILOT_SPP,
+def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int | None = None,
          pilot_passes: int = PILOT_PASSES, seed: int = PILOT_SEED,
          bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
          variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
@@ -125,7 +125,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
     Args:
         scene_path: scene file, or a name in ``scenes_xml/``.
         target_error: E, a relative RMSE (package docstring; ``0.01`` = 1 %).
-        pilot_spp, pilot_passes: pilot samples per pixel and the passes they are split into.
+        pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_spp_for`
+            the film: 64, fewer beyond 64² pixels) and the passes they are split into.
         seed: pilot seed (the render that follows should use another; the CLI uses 0).
         bias_fraction: the depth bias may use this fraction of E.
         polarized: plan a polarized variant (never chosen otherwise).
@@ -143,7 +144,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
             ``path``, a plan beyond ``max_seconds`` or beyond the spp a render takes; SceneError: a scene that cannot be found, parsed or loaded.
     """
     t_start = time.perf_counter()
-    _check_arguments(target_error, pilot_spp, pilot_passes, spp, max_depth)
+    _check_arguments(target_error, PILOT_SPP if pilot_spp is None else pilot_spp, pilot_passes,
+                     spp, max_depth)
     params = {k: v for k, v in (params or {}).items() if v is not None}
     info = inspect_scene(scene_path, **params)
     if info.integrator != "path":
@@ -159,6 +161,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
     sensor = scene.sensors()[0]
     resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
     scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
+    if pilot_spp is None:
+        pilot_spp = pilot_spp_for(resolution[0] * resolution[1], pilot_passes)
     pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed)
     depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
     chosen = pilot.measure(depth)
