@@ -356,3 +356,13 @@ def test_cli_render_planned_wavefront(tmp_path, capsys):
     assert meta["max_depth"] == 2 and meta["target_error"] == 0.05
     if meta["planned"]["model"] != "path" or meta["planned"]["sampling"] == "adaptive":
         assert (tmp_path / "pl.spp.exr").is_file()
+
+
+def test_pilot_keeps_its_samples_per_image_on_large_films():
+    """64 spp up to 64² pixels, then 64·64² samples per image, never below 16 spp, whole passes."""
+    from phonglab.planner.pilot import pilot_spp_for
+
+    assert pilot_spp_for(32 * 32) == 64 and pilot_spp_for(64 * 64) == 64
+    assert pilot_spp_for(80 * 80) == 40
+    assert pilot_spp_for(128 * 128) == 16 and pilot_spp_for(1024 * 1024) == 16
+    assert all(pilot_spp_for(n) % planner.PILOT_PASSES == 0 for n in (100, 5000, 9000, 10 ** 6))
