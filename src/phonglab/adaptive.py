@@ -96,10 +96,10 @@ NEIGHBOURHOOD = 2
 GROWTH = 4
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
-#: Host bytes per pixel and filter offset: float64 filter sums of C + 1 channels and their
-#: float32 device copy, with the moments and temporaries (25 offsets for the gaussian filter:
-#: about 2 KiB a pixel, 2 GiB at 1024²).
-HOST_BYTES_PER_PIXEL_OFFSET = 80
+#: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels, kept in the
+#: JIT backend's memory (host memory on LLVM), with temporaries (25 offsets for the gaussian
+#: filter: about 1 KiB a pixel, 1 GiB at 1024²).
+HOST_BYTES_PER_PIXEL_OFFSET = 40
 
 
 @dataclass
@@ -122,19 +122,21 @@ class AdaptiveResult:
         return float(self.spp.mean())
 
 
-def filter_tables(rfilter, samples: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """(A, B): the pixel integrals of a separable filter w and of w², on offsets d = −R..R.
-
-    ``a(d) = ∫₀¹ w(u − ½ − d) du`` (midpoint rule, ``samples`` points) is the mean weight a
-    sample anywhere in pixel q gives pixel p = q + d; ``A = a ⊗ a``, ``B = b ⊗ b`` (indexed
-    [d_y + R, d_x + R]).
-    """
+def filter_integrals(rfilter, samples: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) on offsets d = −R..R: ``a(d) = ∫₀¹ w(u − ½ − d) du`` and ``b(d) = ∫₀¹ w(...)² du``
+    (midpoint rule, ``samples`` points), the mean weight (and squared weight) a sample
+    anywhere in pixel q gives pixel p = q + d along one axis of a separable filter w."""
     radius = int(math.ceil(float(rfilter.radius()) + 0.5))
     d = np.arange(-radius, radius + 1, dtype=np.float64)
     u = (np.arange(samples) + 0.5) / samples
     x = (u[None, :] - 0.5 - d[:, None]).ravel()
     w = np.array(rfilter.eval(mi.Float(x)), dtype=np.float64).reshape(len(d), samples)
-    a, b = w.mean(axis=1), (w * w).mean(axis=1)
+    return w.mean(axis=1), (w * w).mean(axis=1)
+
+
+def filter_tables(rfilter, samples: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) = (a ⊗ a, b ⊗ b) of :func:`filter_integrals`, indexed [d_y + R, d_x + R]."""
+    a, b = filter_integrals(rfilter, samples)
     return np.outer(a, a), np.outer(b, b)
 
 
@@ -160,7 +162,8 @@ class Wavefront:
         self.width, self.height = (int(v) for v in film.crop_size())
         self.rfilter = film.rfilter()
         self.channels = 1 if mi.is_monochromatic else 3
-        self.A, self.B = filter_tables(self.rfilter)
+        self.a, self.b = filter_integrals(self.rfilter)
+        self.A, self.B = np.outer(self.a, self.a), np.outer(self.b, self.b)
         radius = self.A.shape[0] // 2
         #: offsets d = p − q (target pixel p, the sample's pixel q) the filter reaches
         self.offsets = [(iy - radius, ix - radius) for iy in range(self.A.shape[0])
@@ -175,8 +178,9 @@ class Wavefront:
         self.n = np.zeros(npix, dtype=np.int64)
         self.s1 = np.zeros((npix, self.channels))
         self.s2 = np.zeros((npix, self.channels))
-        #: T[q, k] = Σ_{s in q} w(x_s − centre of q + d_k) · (f_s, 1)
-        self.splat = np.zeros((npix, len(self.offsets), self.channels + 1))
+        #: T[q, k] = Σ_{s in q} w(x_s − centre of q + d_k) · (f_s, 1), on the device (float32;
+        #: only the developed image comes back to the host each pass)
+        self.splat = dr.zeros(mi.Float, npix * len(self.offsets) * (self.channels + 1))
         self.sampler = mi.load_dict({"type": "independent"})
 
     @property
@@ -227,54 +231,62 @@ class Wavefront:
             dr.scatter_reduce(dr.ReduceOp.Add, s1[c], v, idx)
             dr.scatter_reduce(dr.ReduceOp.Add, s2[c], v * v, idx)
         width = len(self.offsets) * (self.channels + 1)
-        splat = dr.zeros(mi.Float, self.pixels * width)
         for k, (dy, dx) in enumerate(self.offsets):
             # weight of target pixel q + d: filter at (sample position − target centre)
             w = (self.rfilter.eval(u.x - (dx + 0.5)) * self.rfilter.eval(u.y - (dy + 0.5)))
             base = idx * width + k * (self.channels + 1)
             for c, v in enumerate(values + [mi.Float(1.0)]):
-                dr.scatter_reduce(dr.ReduceOp.Add, splat, w * v, base + c)
-        dr.eval(s1, s2, splat)
+                dr.scatter_reduce(dr.ReduceOp.Add, self.splat, w * v, base + c)
+        dr.eval(s1, s2, self.splat)
         self.s1 += np.stack([np.array(a, dtype=np.float64) for a in s1], axis=1)
         self.s2 += np.stack([np.array(a, dtype=np.float64) for a in s2], axis=1)
-        self.splat += np.array(splat, dtype=np.float64).reshape(self.splat.shape)
         self.n += np.bincount(index, minlength=self.pixels)
 
     def image(self) -> np.ndarray:
-        """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring)."""
-        inv = np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0)
-        h, w = self.height, self.width
-        src = (self.splat * inv[:, None, None]).reshape(h, w, len(self.offsets), -1)
-        total = np.zeros((h, w, self.channels + 1))
-        for k, (dy, dx) in enumerate(self.offsets):   # target p = source q + d
-            total[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)] += \
-                src[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0), k]
-        weight = total[..., -1:]
-        return np.where(weight > 0, total[..., :-1] / np.where(weight > 0, weight, 1), 0.0)
+        """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring), on the device."""
+        inv = mi.Float(np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0))
+        p = dr.arange(mi.UInt32, self.pixels)
+        px, py = mi.Int32(p % self.width), mi.Int32(p // self.width)
+        width = len(self.offsets) * (self.channels + 1)
+        total = [dr.zeros(mi.Float, self.pixels) for _ in range(self.channels + 1)]
+        for k, (dy, dx) in enumerate(self.offsets):   # source q = target p − d
+            qx, qy = px - dx, py - dy
+            ok = (qx >= 0) & (qx < self.width) & (qy >= 0) & (qy < self.height)
+            q = mi.UInt32(dr.select(ok, qy * self.width + qx, 0))
+            scale = dr.gather(mi.Float, inv, q, ok)
+            base = q * width + k * (self.channels + 1)
+            for c in range(self.channels + 1):
+                total[c] += dr.gather(mi.Float, self.splat, base + c, ok) * scale
+        dr.eval(total)
+        t = np.stack([np.array(a, dtype=np.float64) for a in total], axis=1)
+        t = t.reshape(self.height, self.width, self.channels + 1)
+        weight = t[..., -1:]
+        return np.where(weight > 0, t[..., :-1] / np.where(weight > 0, weight, 1), 0.0)
 
     def variance(self, image: np.ndarray) -> np.ndarray:
         """(H, W, C) the delta-method variance of each filtered pixel (module docstring).
 
         The sum over source pixels q = p − d of ``[B_d (S2 − 2x S1 + x² N) − A_d² (S1 −
         x N)²/N] / (N (N − 1))`` expands into convolutions of per-pixel arrays with the
-        fixed kernels B and A² (x = x_p factors out), done by ``scipy.ndimage.convolve``.
+        fixed separable kernels B and A² (x = x_p factors out), ``scipy.ndimage.convolve1d``.
         """
         h, w, c = self.height, self.width, self.channels
         n = self.n.reshape(h, w, 1).astype(np.float64)
         s1, s2 = self.s1.reshape(h, w, c), self.s2.reshape(h, w, c)
         scale = np.where(n > 1, 1.0 / np.maximum(n * (n - 1.0), 1.0), 0.0)
 
-        def conv(kernel, a):
-            return ndimage.convolve(a, kernel[:, :, None], mode="constant", cval=0.0)
+        def conv(kernel, a):   # the separable 2-D kernel k ⊗ k, as two 1-D passes
+            a = ndimage.convolve1d(a, kernel, axis=0, mode="constant", cval=0.0)
+            return ndimage.convolve1d(a, kernel, axis=1, mode="constant", cval=0.0)
 
-        a2 = self.A * self.A
+        a2 = self.a * self.a
         x = image
-        num = (conv(self.B, s2 * scale) - 2 * x * conv(self.B, s1 * scale)
-               + x * x * conv(self.B, n * scale)
+        num = (conv(self.b, s2 * scale) - 2 * x * conv(self.b, s1 * scale)
+               + x * x * conv(self.b, n * scale)
                - conv(a2, s1 * s1 * scale / np.maximum(n, 1.0)) + 2 * x * conv(a2, s1 * scale)
                - x * x * conv(a2, n * scale))
-        den = conv(self.A, (n > 0).astype(np.float64))
-        lonely = conv(self.A, (n == 1).astype(np.float64)) > 0   # a source of 1 sample: unknown
+        den = conv(self.a, (n > 0).astype(np.float64))
+        lonely = conv(self.a, (n == 1).astype(np.float64)) > 0   # a source of 1 sample: unknown
         var = np.maximum(num, 0.0) / np.maximum(den * den, 1e-300)
         return np.where((den > 0) & ~lonely, var, np.inf)
 
