@@ -22,8 +22,8 @@ image at depth d — and keeps the fastest, with the reason:
   allocation needs N_p = max(√v_p · mean √v / (E² − b²), MIN_SPP) samples, on average
   N̄ = mean N_p; the predicted *gain* is N_m / N̄ (at most mean v / (mean √v)², the
   unguarded optimum).  Its time is b_m·N̄ plus :data:`ADAPTIVE_PASSES` passes of a_m and of
-  the host's per-pass work (:data:`HOST_SECONDS_PER_PIXEL`, measured: the variance estimate
-  and allocation, ~2.4 µs per pixel and pass at 128², numpy).  Adaptive is chosen when it is
+  the host's per-pass work (:data:`HOST_SECONDS_PER_PIXEL`, measured: developing the image,
+  the variance estimate and the allocation, ~0.4 µs per pixel and pass at 128²).  Adaptive is chosen when it is
   predicted at least :data:`ADAPTIVE_MARGIN` faster than uniform: a noisy v map can only
   mislead it by that much.
 
@@ -44,8 +44,9 @@ from .pilot import Pilot
 
 #: Passes an adaptive render typically takes (pilot and 2-4 more: measured on the bench scenes).
 ADAPTIVE_PASSES = 4
-#: Host work per pixel and pass of an adaptive render (estimate, allocation), measured at 128².
-HOST_SECONDS_PER_PIXEL = 3e-6
+#: Host work per pixel and pass of an adaptive render (image, variance, allocation): 6 ms a
+#: pass at 128² (gray_direct, median of 7), rounded up.
+HOST_SECONDS_PER_PIXEL = 5e-7
 #: Adaptive must be predicted this much faster than uniform to be chosen.
 ADAPTIVE_MARGIN = 1.15
 #: Time of Mitsuba's ``direct`` integrator over ``path`` at max_depth 2, equal error (gray_direct,
