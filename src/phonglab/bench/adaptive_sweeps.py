@@ -11,10 +11,11 @@ reference (:func:`phonglab.references.reference`, its noise subtracted from ever
   time is the render's plus the pilot's (``pilot_seconds``), i.e. what the user waits for.
 
 Times are steady state (each configuration compiled once first) and measured side by side in
-one process.  **Speed-up at equal error**: the uniform points give ``e(t) = c/√t`` (fitted,
-slope fixed at −½: an unbiased estimator), so a render of error e in time t would have cost
-uniform sampling ``(c/e)²``; the speed-up ``(c/e)²/t`` is reported per seed (median and
-range).  On the furnace enclosure (every pixel the same variance) adaptive sampling cannot
+one process.  **Speed-up at equal error**: each adaptive (planned) render is followed by a
+uniform render of the scene's integrator at its mean spp (the plan's uniform spp), so load
+drift cancels within the pair; uniform sampling would need ``t_u (e_u/e)²`` to reach the
+render's error e (noise ∝ 1/√time), and the speed-up ``t_u (e_u/e)² / t`` is reported per
+seed and target (median and range).  On the furnace enclosure (every pixel the same variance) adaptive sampling cannot
 win: its speed-up there measures its overhead, target >= 1/1.05.
 
 **Guards** (:func:`guard_rows`): at one target, with and without the neighbourhood rule,
@@ -88,6 +89,7 @@ def _planned(name: str, params: dict, target: float, loaded, info, seed: int) ->
     return {"method": "planned", "target": target, "seed": seed, "render_seconds": seconds,
             "pilot_seconds": plan.pilot_seconds, "seconds": seconds + plan.pilot_seconds,
             "render": f"{plan.model} {plan.sampling}", "variant": plan.variant,
+            "uniform_spp": plan.spp,
             "max_depth": plan.max_depth, "image": result.image}
 
 
@@ -109,26 +111,34 @@ def sweep_scene(name: str, cfg: Config, progress: bool = False) -> dict[str, Any
     for target in cfg.adaptive_targets:
         for seed in range(cfg.adaptive_seeds):
             res, t = _timed(lambda: adaptive.render_adaptive(loaded, target, seed=20 + seed))
-            rows.append({"method": "adaptive", "target": target, "seed": seed, "seconds": t,
-                         "spp": res.total_spp, "passes": len(res.passes),
-                         "estimated_error": res.estimated_error, "error": _error(res.image, ref)})
+            row = {"method": "adaptive", "target": target, "seed": seed, "seconds": t,
+                   "spp": res.total_spp, "passes": len(res.passes),
+                   "estimated_error": res.estimated_error, "error": _error(res.image, ref)}
+            rows.append(_paired(row, loaded, round(res.total_spp), 50 + seed, ref))
         if name != UNIFORM_SCENE and target in cfg.adaptive_planned_targets:
             p = _planned(name, params, target, loaded, info, seed=30)
             p["error"] = _error(p.pop("image"), ref)
-            rows.append(p)
+            rows.append(_paired(p, loaded, p["uniform_spp"], 60, ref))
     return {"scene": name, "params": params, "reference_spp": ref.spp, "rows": rows,
             "speedups": speedups(rows)}
 
 
+def _paired(row: dict, loaded, spp: int, seed: int, ref) -> dict:
+    """Add a uniform render of the scene's integrator at ``spp`` made right after the row's
+    render (load drift cancels within the pair): its time and error."""
+    res, t = _timed(lambda: render.render_scene(loaded, max(1, int(spp)), seed=seed))
+    return dict(row, pair_spp=int(spp), pair_seconds=t, pair_error=_error(res.image, ref))
+
+
 def speedups(rows: list[dict]) -> dict[str, dict[str, float]]:
-    """Per method: median, min, max over rows of (c/e)²/t, c from the uniform rows (e√t)."""
-    uni = [r for r in rows if r["method"] == "uniform" and r["error"] > 0]
-    c2 = math.exp(statistics.median(math.log(r["error"] ** 2 * r["seconds"]) for r in uni))
+    """Per method: median, min, max over rows of the equal-error speed-up against the paired
+    uniform render: t_u (e_u/e)² / t, the time uniform sampling needs for the row's error e
+    (noise ∝ 1/√time) over the row's time."""
     out = {}
     for method, key in (("adaptive", "seconds"), ("planned", "seconds"),
                         ("planned", "render_seconds")):
-        ratios = [c2 / (r["error"] ** 2) / r[key] for r in rows
-                  if r["method"] == method and r["error"] > 0]
+        ratios = [r["pair_seconds"] * (r["pair_error"] / r["error"]) ** 2 / r[key] for r in rows
+                  if r["method"] == method and r["error"] > 0 and "pair_seconds" in r]
         if ratios:
             label = method if key == "seconds" else "planned_render_only"
             out[label] = {"median": statistics.median(ratios), "min": min(ratios),
@@ -227,8 +237,9 @@ def report_section(out: Path, rel: str = ".") -> list[str]:
          "`phonglab.bench.adaptive_sweeps` (docs/adaptive.md): uniform (`mi.render`), adaptive "
          "(`phonglab.adaptive`) and planned (`planner.plan` + its render, pilot included) renders "
          "against a converged reference; steady-state times side by side in one process. "
-         "Speed-up at equal error = (c/e)²/t with e√t = c fitted to the uniform points; median "
-         "[min–max] over seeds and targets.\n",
+         "Speed-up at equal error = t_u (e_u/e)²/t against a uniform render made right after "
+         "at the same mean spp (the plan's uniform spp for planned); median [min–max] over "
+         "seeds and targets.\n",
          "| scene | adaptive speed-up | planned: render only | planned: pilot included |",
          "|---|---|---|---|"]
     for sc in data["scenes"]:
