@@ -348,7 +348,8 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
         t = time.perf_counter()
         traced = wf.trace(counts, pass_seed(seed, k))
         image = wf.image()
-        err2 = relative_error_map(image, wf.variance(image))
+        var = wf.variance(image)
+        err2 = relative_error_map(image, var)
         estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
         passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
                        "seconds": time.perf_counter() - t, "estimated_error": estimate})
@@ -368,7 +369,7 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
             stopped = "max_seconds"
             break
     seconds = time.perf_counter() - t0
-    stderr = np.sqrt(np.nan_to_num(wf.variance(image), posinf=0.0))
+    stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
     return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),
                           wf.n.reshape(shape), seconds, float(target_error), estimate, stopped,
                           passes)
