@@ -171,6 +171,7 @@ def guard_rows(name: str, cfg: Config, target: float) -> list[dict[str, Any]]:
 def chart(data: dict, out: Path) -> Path:
     """adaptive_error_time.png: one log-log panel per scene, Pareto front dashed."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     scenes_ = data["scenes"]
     fig = Figure(figsize=(4.2 * len(scenes_), 3.6), layout="constrained")
@@ -191,7 +192,9 @@ def chart(data: dict, out: Path) -> Path:
             ax.step(ft, fe, where="post", color="k", lw=0.8, ls="--", label="Pareto front")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time [s] (steady state)")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("wall time [s] (steady state; planned: + pilot)")
         ax.set_ylabel("relative RMSE")
         ax.set_title(f"{sc['scene']} ({sc['params']['res']}²)", fontsize=9)
         ax.grid(True, which="both", alpha=0.25)
