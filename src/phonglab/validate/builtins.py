@@ -293,10 +293,13 @@ FINDINGS: tuple[Finding, ...] = (
              "bumpmap/roughconductor"),
             "src/bsdfs/normalmap.cpp:171",
             "by design: eval() is the nested BSDF in the perturbed frame, f(wi', wo') cos theta'_o, "
-            "zeroed where wo and wo' lie on different sides (line 168; bumpmap.cpp:174-177 "
-            "alike); shading normals are not reciprocal w.r.t. the geometric normal "
+            "zeroed where wo and wo' lie on different sides (line 168; bumpmap.cpp:173-176 "
+            "alike, in the frame it builds from the height gradient and si.dp_du, si.dp_dv); "
+            "shading normals are not reciprocal w.r.t. the geometric normal "
             "(Veach 1997, sec. 5.3)",
-            "eval(a, b) / cos b != eval(b, a) / cos a; 12 % of random pairs are 0 one way only",
+            "eval(a, b) / cos b != eval(b, a) / cos a: 0.1366 vs 0.1830 (normalmap, tilted "
+            "normal), 0.1450 vs 0.0277 (bumpmap, height h = u); 12 % of random pairs are 0 one "
+            "way only",
             "f(a, b) = f(b, a) for a reciprocal BRDF",
             "tests/repro/shading_normal_reciprocity.py", bug=False),
     Finding("hair-reciprocity", "reciprocity", ("hair/default", "hair/blond-rough"),
