@@ -17,8 +17,8 @@ BS_PDF = 2348.717041015625
 
 def half_vector_pdf(wi, wo):
     """Mitsuba's side tests wi.m > 0 and wo.m > 0 with m = normalize(wi + wo) (float32 inputs,
-    float64 arithmetic): non-zero only where |wo|^2 - |wi|^2 lies in a window of width
-    |wi + wo|^2 ~ 1.5e-8, thinner than one ulp of a component near 0.86."""
+    float64 arithmetic): non-zero only where |wo|^2 - |wi|^2 lies within
+    |wi + wo|^2 ~ 1.5e-8 of 0, finer than the change one ulp of a component near 0.86 makes."""
     wi, wo = wi.astype(np.float32).astype(np.float64), wo.astype(np.float32).astype(np.float64)
     s = wi + wo
     ok = (np.sum(wi * s, axis=1) > 0) & (np.sum(wo * s, axis=1) > 0)

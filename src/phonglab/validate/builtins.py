@@ -357,14 +357,14 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         ("roughconductor/beckmann-novisible", "roughdielectric/beckmann-a0.1",
          "roughdielectric/ggx-aniso-inverted"),
         "the same rounding as the weight row: bs.pdf vs pdf(bs.wo) at cos theta_i = 1e-4.  "
-        "With the validator's later perturbation (no renormalization) one lane still fails: "
+        "With the validator's later perturbation (no renormalization) one lane still failed: "
         "wi = (-0.50485, 0.86321, 1e-4), wo = (0.50489, -0.86318, 8.6e-6) is a grazing "
-        "retro-reflection, |wi + wo| = 1.2e-4, so m = normalize(wi + wo) carries a float32 "
-        "error of ~6e-8 / 1.2e-4 = 5e-4 rad and wo.m = (1 + wi.wo) / |wi + wo| cancels to "
-        "<= 0: pdf(bs.wo) = 0 against bs.pdf = 2348.7 from the exact sampled m.  Neither "
-        "value is wrong for its input; the 8-ulp sensitivity draws missed the flip: pdf(wi, wo') "
-        "is non-zero only where |wo'|^2 - |wi|^2 lies in a window of width |wi + wo|^2 = 1.5e-8 "
-        "< u, which no random 8u corner hits",
+        "retro-reflection, |wi + wo| = 1.2e-4.  The side tests wi.m > 0 and wo.m > 0 "
+        "(src/bsdfs/roughconductor.cpp:406-407, m = normalize(wi + wo)) both hold only where "
+        "|wo|^2 - |wi|^2 lies within |wi + wo|^2 = 1.5e-8 < u of 0, and the float32 wo has "
+        "|wo|^2 - 1 = -2.75e-8: wo.m = -5.9e-5 and pdf(bs.wo) = 0 against bs.pdf = 2348.7 from "
+        "the exact sampled m.  Neither value is wrong for its input; no random 8u corner hits "
+        "that window, so the sensitivity draws missed the flip",
         fixed_by="commit 'validate: a lane that fails gets its sensitivity over every float32 wo "
         "within 8 ulps' (config.refine, config.box_sensitivity): 36 of the 729 directions within "
         "4 ulps of this wo give pdf 1220.5-3212.0 and the rest 0, so the lane's sensitivity is 1 "

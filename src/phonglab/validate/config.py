@@ -27,8 +27,8 @@ ill-conditioned combination), and the lane's tolerance is REL_TOL + that sensiti
 max_lanes rel_diff / (REL_TOL + sensitivity), which must be ≤ 1.
 
 Random corners can miss a thin set.  At a grazing retro-reflection (|ω_i + ω_o| ≈ 1e-4) a
-microfacet pdf is non-zero only where |ω_o|² − |ω_i|² lies in a window of width |ω_i + ω_o|²
-≈ 1e-8 < u (the side tests ω_i·m > 0, ω_o·m > 0 with m = normalize(ω_i + ω_o)), and every
+microfacet pdf is non-zero only where |ω_o|² − |ω_i|² lies within |ω_i + ω_o|²
+≈ 1.5e-8 < u of 0 (the side tests ω_i·m > 0, ω_o·m > 0 with m = normalize(ω_i + ω_o)), and every
 8u corner lands outside it: pdf = 0 at all of them, against bs.pdf = 2348.7 from the exact m.
 So a lane that fails with the random estimate gets a second, deterministic one,
 :func:`box_sensitivity`: the largest relative change of the evaluated side over EVERY
