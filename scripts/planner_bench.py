@@ -1,22 +1,29 @@
-"""Planner benchmark: planned render vs the default configuration, at equal error, side by side.
+"""Planner benchmark: the planned command vs the default configuration at equal error, whole-command wall time.
 
-For each scene (at a common resolution):
+For each scene (parameters in :data:`SCENES`, a target error E each):
 
-1. a converged reference (max_depth -1, many spp; phonglab.references, cached in
-   .bench_cache/references);
-2. the default configuration, llvm_ad_rgb with max_depth 8 and the scene's spp: its relative
-   RMSE E_def against the reference (mean over repeats with different seeds);
-3. ``planner.plan(scene, target_error=E_def)``: the planned variant, depth and spp;
-4. timing: both configurations are rendered alternately ``--repeats`` times (one pass of
-   phonglab.render.render_scene each, kernels compiled beforehand, so JIT time is excluded) and
-   their median wall times are compared; each timed image also gives an error sample
-   (phonglab.metrics.relative_rmse, the reference's noise subtracted).
+1. a converged reference (max_depth -1, phonglab.references, cached in .bench_cache/references);
+2. the **default configuration** (llvm_ad_rgb, the scene's path integrator at max_depth 8,
+   uniform spp) with its spp *raised until it reaches E*: the error at the scene's spp,
+   measured, gives N = spp·(err/E)² (noise falls as 1/√spp), checked by one more render and
+   corrected once;
+3. timing, alternating, ``--repeats`` times with different seeds: each configuration runs as a
+   **fresh process** (Python start, imports, scene load, JIT compilation, the pilot and planning
+   for the planned one, the render, the EXR written), timed from the parent around the whole
+   process.  The default process is what ``phonglab render SCENE --spp N --max-depth 8``
+   does; the planned one what ``phonglab render SCENE --target-error E`` does
+   (``planner.plan`` then the render the plan chose: ``render_scene`` for uniform path, or
+   ``phonglab.adaptive`` for adaptive sampling and the direct/whitted models).  The processes
+   run this script with ``--child`` so that scene parameters (``res``) can be passed, which
+   ``phonglab render`` has no option for.
+4. each process's image is compared with the reference (relative RMSE, the reference's noise
+   subtracted).
 
-Reported per scene: both configurations, the predicted and achieved error and time of the plan,
-the speed-up (median time of default / planned) and the pilot's own cost. Results are printed
-as a Markdown table and written to .bench_cache/planner_bench.json.
+Reported per scene: the plan (model, sampling, variant, depth, spp), both errors, both wall
+times (median, min-max over seeds), the speed-up T_default/T_planned with its spread, and the
+plan's reasons.  Written to ``--out`` (JSON) and printed as a table.
 
-Run: ``.venv/bin/python scripts/planner_bench.py [--res 128] [--repeats 5] [scene ...]``
+Run: ``.venv/bin/python scripts/planner_bench.py [--res 128] [--repeats 3] [scene ...]``
 (``make bench-planner``).
 """
 
@@ -24,110 +31,178 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
-import mitsuba as mi
 import numpy as np
 
-from phonglab import metrics, planner, references, render, runtime, scenes
+from phonglab import exr, metrics, planner, references, render, runtime, scenes
 
-SCENES = ["gray_direct", "gray_room", "cornell_phong", "glass_slab"]
+#: scene -> (target error E, scene parameters at the bench resolution R)
+SCENES = {
+    "gray_direct": (0.005, lambda r: {"res": r}),
+    "gray_room": (0.01, lambda r: {"res": r}),
+    "cornell_phong": (0.02, lambda r: {"res": r}),
+    "glass_slab": (0.05, lambda r: {"res": r}),
+    "nb_sphere_row": (0.005, lambda r: {"width": 4 * r, "height": r}),
+}
 DEFAULT_VARIANT = "llvm_ad_rgb"
 DEFAULT_DEPTH = 8
 
 
-def timed_render(scene, spp: int, seed: int, integrator, variant: str) -> tuple[np.ndarray, float]:
-    """One pass of render.render_scene in ``variant`` (set first, outside the timing); (image,
-    wall seconds of mi.render, evaluation and the copy to numpy)."""
-    if mi.variant() != variant:
-        runtime.set_variant(variant)
-    result = render.render_scene(scene, spp, seed=seed, integrator=integrator)
-    return result.image, result.pass_seconds[0]
+# --- the two commands, run in a child process -------------------------------------------------
 
-
-def bench_scene(name: str, res: int, repeats: int, ref_factor: int) -> dict:
-    params = {"res": res}
-    info = scenes.inspect_scene(name, **params)
-    # Default configuration: rgb, depth 8, the scene's spp.
+def child_default(scene: str, params: dict, spp: int, seed: int, out: str) -> dict:
+    """What ``phonglab render SCENE --spp N --max-depth 8 --variant llvm_ad_rgb`` does."""
+    info = scenes.inspect_scene(scene, **params)
     with runtime.quiet_mitsuba():
-        scene_def = scenes.load_scene(info.path, DEFAULT_VARIANT, **params)
-    spp_def = int(scene_def.sensors()[0].sampler().sample_count())
-    pilot_def = planner.plan(info.path, 0.05, variant=DEFAULT_VARIANT, max_depth=DEFAULT_DEPTH,
-                             spp=spp_def, params=params)
-    # Reference, converged well below the errors compared (its own noise is subtracted too).
-    ref_spp = max(1024, ref_factor * spp_def)
+        loaded = scenes.load_scene(info.path, DEFAULT_VARIANT, **params)
+    result = render.render_scene(loaded, spp, seed=seed, passes=min(spp, 8) if spp >= 16 else 1,
+                                 integrator=scenes.path_integrator(DEFAULT_DEPTH, info))
+    exr.write(out, result.image, {"spp": spp})
+    return {"spp": spp}
+
+
+def child_planned(scene: str, params: dict, target: float, seed: int, out: str) -> dict:
+    """What ``phonglab render SCENE --target-error E`` does (cli/render.py, run_planned)."""
+    from phonglab import adaptive
+    from phonglab.planner import choice
+
+    plan = planner.plan(scene, target, params=params)
+    if plan.uses_wavefront:
+        uniform = plan.sampling == "uniform"
+        spp = max(2, math.ceil(plan.chosen_spp))
+        integ = None if plan.model == "path" else choice.model_dict(plan.model, plan.max_depth,
+                                                                    scene, params)
+        with runtime.quiet_mitsuba():
+            result = adaptive.render_file_adaptive(
+                scene, out, plan.noise_target, variant=plan.variant, seed=seed,
+                max_depth=plan.max_depth, params=params, integrator=integ,
+                min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
+        spp_mean = result.total_spp
+    else:
+        info = scenes.inspect_scene(scene, **params)
+        with runtime.quiet_mitsuba():
+            loaded = scenes.load_scene(info.path, plan.variant, **params)
+        result = render.render_scene(loaded, plan.spp, seed=seed, passes=plan.passes,
+                                     integrator=scenes.path_integrator(plan.max_depth, info))
+        exr.write(out, result.image, {"spp": plan.spp})
+        spp_mean = plan.spp
+    return {"model": plan.model, "sampling": plan.sampling, "variant": plan.variant,
+            "max_depth": plan.max_depth, "spp": spp_mean, "uniform_path_spp": plan.spp,
+            "pilot_seconds": plan.pilot_seconds, "predicted_seconds": plan.chosen_seconds,
+            "reasons": plan.reasons}
+
+
+def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) -> tuple[float, dict]:
+    """Wall time of one fresh process running a command, and what it reports."""
+    cmd = [sys.executable, __file__, "--child", kind, scene, json.dumps(params), str(value),
+           str(seed), str(out)]
     t0 = time.perf_counter()
-    ref = references.reference(info.path, ref_spp, params=params)
-    ref_seconds = time.perf_counter() - t0
-    ref_noise = metrics.relative_noise(ref.image, ref.stderr)
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    seconds = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{kind} {scene} failed:\n{proc.stderr[-3000:]}")
+    return seconds, json.loads(proc.stdout.strip().splitlines()[-1])
 
-    def error(image) -> float:
-        return metrics.relative_rmse(image, ref.image, ref_stderr=ref.stderr)
 
-    integ_def = scenes.path_integrator(DEFAULT_DEPTH, info)
-    timed_render(scene_def, spp_def, 999, integ_def, DEFAULT_VARIANT)  # compile
-    err_def = [error(timed_render(scene_def, spp_def, 100 + k, integ_def, DEFAULT_VARIANT)[0])
-               for k in range(repeats)]
-    e_def = float(np.mean(err_def))
+# --- the comparison -----------------------------------------------------------------------------
 
-    plan = planner.plan(info.path, e_def, params=params)
+def default_error(scene: str, params: dict, spp: int, ref, seeds) -> float:
+    """Mean relative RMSE of the default configuration at ``spp`` over ``seeds`` (in-process)."""
+    info = scenes.inspect_scene(scene, **params)
     with runtime.quiet_mitsuba():
-        scene_plan = scenes.load_scene(info.path, plan.variant, **params)
-    integ_plan = scenes.path_integrator(plan.max_depth, info)
-    timed_render(scene_plan, plan.spp, 998, integ_plan, plan.variant)  # compile
-    # Alternate the two configurations so that load changes hit both alike.
-    t_def, t_plan, err_plan = [], [], []
+        loaded = scenes.load_scene(info.path, DEFAULT_VARIANT, **params)
+    integ = scenes.path_integrator(DEFAULT_DEPTH, info)
+    errs = [metrics.relative_rmse(render.render_scene(loaded, spp, seed=s, integrator=integ).image,
+                                  ref.image, ref_stderr=ref.stderr) for s in seeds]
+    return float(np.mean(errs))
+
+
+#: Most spp the default configuration is given when it cannot reach E (a depth-8 bias floor).
+MAX_DEFAULT_SPP = 8192
+
+
+def equal_error_spp(scene: str, params: dict, target: float, ref) -> tuple[int, float]:
+    """The default configuration's spp that reaches ``target`` (noise ∝ 1/√spp, corrected
+    twice), capped at :data:`MAX_DEFAULT_SPP` (then its error stays above the target)."""
+    spp = 64
+    err = default_error(scene, params, spp, ref, (11, 12))
+    for _ in range(2):
+        spp = min(max(1, math.ceil(spp * (err / target) ** 2)), MAX_DEFAULT_SPP)
+        err = default_error(scene, params, spp, ref, (13, 14))
+    return spp, err
+
+
+def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) -> dict:
+    target, make_params = SCENES.get(name, (0.02, lambda r: {"res": r}))
+    params = make_params(res)
+    t0 = time.perf_counter()
+    ref = references.reference(name, ref_spp, params=params)
+    ref_seconds = time.perf_counter() - t0
+    spp_def, err_cal = equal_error_spp(name, params, target, ref)
+
+    def error(path: Path) -> float:
+        return metrics.relative_rmse(exr.read_image(path), ref.image, ref_stderr=ref.stderr)
+
+    t_def, t_plan, e_def, e_plan, plan_info = [], [], [], [], None
     for k in range(repeats):
-        _, t = timed_render(scene_def, spp_def, 200 + k, integ_def, DEFAULT_VARIANT)
+        out = workdir / f"{name}-{k}"
+        t, _ = run_child("default", name, params, spp_def, 200 + k, out.with_suffix(".def.exr"))
         t_def.append(t)
-        img, t = timed_render(scene_plan, plan.spp, 300 + k, integ_plan, plan.variant)
+        e_def.append(error(out.with_suffix(".def.exr")))
+        t, plan_info = run_child("planned", name, params, target, 300 + k,
+                                 out.with_suffix(".plan.exr"))
         t_plan.append(t)
-        err_plan.append(error(img))
-    med_def, med_plan = statistics.median(t_def), statistics.median(t_plan)
+        e_plan.append(error(out.with_suffix(".plan.exr")))
+    ratios = [d / p for d, p in zip(t_def, t_plan)]
     return {
-        "scene": name, "res": res, "repeats": repeats,
-        "reference": {"spp": ref.spp, "noise": ref_noise, "seconds": ref_seconds},
+        "scene": name, "res": res, "target_error": target, "repeats": repeats,
+        "reference": {"spp": ref.spp, "noise": metrics.relative_noise(ref.image, ref.stderr),
+                      "seconds": ref_seconds},
         "default": {"variant": DEFAULT_VARIANT, "max_depth": DEFAULT_DEPTH, "spp": spp_def,
-                    "error": e_def, "error_sd": float(np.std(err_def, ddof=1)),
-                    "seconds_median": med_def, "seconds": t_def,
-                    "predicted_error": pilot_def.predicted_error},
-        "planned": {"variant": plan.variant, "max_depth": plan.max_depth, "spp": plan.spp,
-                    "target_error": e_def, "predicted_error": plan.predicted_error,
-                    "error": float(np.mean(err_plan)),
-                    "error_sd": float(np.std(err_plan, ddof=1)),
-                    "predicted_seconds_one_pass": plan.seconds_per_pass
-                    + plan.seconds_per_sample * plan.resolution[0] * plan.resolution[1] * plan.spp,
-                    "seconds_median": med_plan, "seconds": t_plan,
-                    "pilot_seconds": plan.pilot_seconds, "reasons": plan.reasons},
-        "speedup": med_def / med_plan,
-        # Monte Carlo efficiency 1/(time x error²) [Veach 1997, §2.4.3; PBRT 4th ed., §2.1.4]:
-        # the time ratio at exactly equal error when the error is noise-dominated.
-        "efficiency_ratio": (med_def * e_def ** 2) / (med_plan * float(np.mean(err_plan)) ** 2),
-        "speedup_with_pilot": med_def / (med_plan + plan.pilot_seconds),
+                    "calibration_error": err_cal, "error": float(np.mean(e_def)),
+                    "error_sd": float(np.std(e_def, ddof=1)) if repeats > 1 else 0.0,
+                    "seconds": t_def, "seconds_median": statistics.median(t_def)},
+        "planned": {**plan_info, "error": float(np.mean(e_plan)),
+                    "error_sd": float(np.std(e_plan, ddof=1)) if repeats > 1 else 0.0,
+                    "seconds": t_plan, "seconds_median": statistics.median(t_plan)},
+        "speedup": statistics.median(t_def) / statistics.median(t_plan),
+        "speedup_min": min(ratios), "speedup_max": max(ratios),
     }
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] == "--child":
+        kind, scene, params, value, seed, out = argv[1:7]
+        fn = child_default if kind == "default" else child_planned
+        report = fn(scene, json.loads(params), int(value) if kind == "default" else float(value),
+                    int(seed), out)
+        print(json.dumps(report))
+        return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenes", nargs="*", default=SCENES)
+    ap.add_argument("scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--res", type=int, default=128)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--ref-factor", type=int, default=64,
-                    help="reference spp = max(1024, factor x scene spp)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--out", default=str(references.CACHE_DIR / "planner_bench.json"))
     args = ap.parse_args(argv)
     rows = []
-    for name in args.scenes:
-        rows.append(bench_scene(name, args.res, args.repeats, args.ref_factor))
-        print(json.dumps({k: rows[-1][k] for k in ("scene", "speedup")}), flush=True)
+    with tempfile.TemporaryDirectory(prefix="planner-bench-") as tmp:
+        for name in args.scenes:
+            rows.append(bench_scene(name, args.res, args.repeats, args.ref_spp, Path(tmp)))
+            print(json.dumps({k: rows[-1][k] for k in ("scene", "speedup")}), flush=True)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(rows, indent=2))
     print(planner.benchmark_table(rows))
     for r in rows:
-        print(f"\n{r['scene']}: reference {r['reference']['spp']} spp (noise "
-              f"{r['reference']['noise']:.4f}, {r['reference']['seconds']:.1f} s); plan reasons:")
+        print(f"\n{r['scene']}: plan reasons:")
         for reason in r["planned"]["reasons"]:
             print(f"  - {reason}")
     return 0

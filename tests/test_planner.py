@@ -14,10 +14,11 @@ import json
 import math
 
 import drjit as dr
+import mitsuba as mi
 import numpy as np
 import pytest
 
-from phonglab import exr, metrics, planner, references, render, runtime, scenes
+from phonglab import exr, metrics, planner, references, render, runtime, scenes, stats
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
 
@@ -287,3 +288,81 @@ def test_pass_seeds_stay_32_bit():
     scene = scenes.load_scene("gray_direct", "llvm_ad_mono", res=8)
     result = render.render_scene(scene, 2, seed=5000, passes=2)
     assert np.isfinite(result.image).all()
+
+
+# --- step 5: model and sampling -------------------------------------------------------------------
+
+POINT_LIT = """
+<integrator type="path"><integer name="max_depth" value="8"/></integrator>
+<sensor type="perspective"><float name="fov" value="30"/>
+  <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/>
+    <rfilter type="gaussian"/></film></sensor>
+<bsdf type="phong" id="p"><rgb name="diffuse_reflectance" value="0.5, 0.3, 0.2"/>
+  <rgb name="specular_reflectance" value="0.3"/><float name="exponent" value="20"/></bsdf>
+<shape type="sphere"><ref id="p"/></shape>
+<emitter type="point"><point name="position" x="2" y="3" z="4"/>
+  <rgb name="intensity" value="20"/></emitter>
+"""
+
+
+def test_plan_prices_models_and_sampling(plans):
+    """Every plan states its render (model, sampling) and the priced options behind it; at
+    depth > 2 no cheaper exact model exists and it says so."""
+    for name, p in plans.items():
+        assert p.model in ("path", "direct", "whitted") and p.sampling in ("uniform", "adaptive")
+        assert p.chosen_seconds > 0 and p.chosen_spp >= 1
+        assert any(r.startswith("priced") for r in p.reasons)
+        assert any(r.startswith("chosen:") for r in p.reasons)
+        assert p.uses_wavefront == (p.model != "path" or p.sampling == "adaptive")
+    assert plans["cornell_phong"].model == "path"
+    assert any("no cheaper exact model" in r for r in plans["cornell_phong"].reasons)
+    assert any("whitted (radiance units) not considered" in r
+               for r in plans["gray_direct"].reasons)
+
+
+def test_whitted_is_priced_when_every_light_is_a_point_light(tmp_path):
+    p = planner.plan(_write(tmp_path, POINT_LIT), TARGET)
+    assert p.max_depth == 2
+    priced = next(r for r in p.reasons if r.startswith("priced"))
+    assert "whitted, uniform" in priced and "whitted, adaptive" in priced
+    assert any(r.startswith("direct-only transport") for r in p.reasons)
+
+
+def test_whitted_radiance_is_path_at_depth_2_under_point_lights(tmp_path, variant_llvm_rgb):
+    """The exactness the planner relies on: with only point lights, whitted in radiance units
+    and path at max_depth 2 have the same expected image.  Per-channel image means of 8-pass
+    renders, Welch-style z against the two standard errors, Sidak over 3 channels."""
+    scene = scenes.load_scene(_write(tmp_path, POINT_LIT), "llvm_ad_rgb")
+    w = render.render_scene(scene, 64, seed=1, passes=8, integrator=mi.load_dict(
+        {"type": "whitted", "units": "radiance", "max_depth": 2}))
+    p = render.render_scene(scene, 64, seed=2, passes=8,
+                            integrator=mi.load_dict({"type": "path", "max_depth": 2}))
+    (mw, sw), (mp, sp) = w.mean_and_stderr(), p.mean_and_stderr()
+    z = np.abs(mw - mp) / np.sqrt(sw ** 2 + sp ** 2)
+    assert np.all(z <= stats.t_critical(7, stats.ALPHA, 3)), (mw, mp)
+
+
+def test_cli_render_planned_wavefront(tmp_path, capsys):
+    """A plan that renders through phonglab.adaptive (another model or adaptive sampling)
+    writes the image, its stderr and the spp map, and reports the achieved or estimated error."""
+    scene = _write(tmp_path, POINT_LIT)
+    out = tmp_path / "pl.exr"
+    assert main(["render", scene, "--target-error", "0.05", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "chosen:" in text and "error:" in text
+    _, meta = exr.read(out)
+    assert meta["max_depth"] == 2 and meta["target_error"] == 0.05
+    if meta["planned"]["model"] != "path" or meta["planned"]["sampling"] == "adaptive":
+        assert (tmp_path / "pl.spp.exr").is_file()
+
+
+def test_pilot_keeps_its_samples_per_image_on_large_films():
+    """64 spp up to 64² pixels, then 64·64² samples per image, never below 16 spp, whole passes."""
+    from phonglab.planner.pilot import pilot_spp_for
+
+    assert pilot_spp_for(32 * 32) == 64 and pilot_spp_for(64 * 64) == 64
+    assert pilot_spp_for(80 * 80) == 40
+    assert pilot_spp_for(128 * 128) == 16 and pilot_spp_for(1024 * 1024) == 16
+    assert all(pilot_spp_for(n) % planner.PILOT_PASSES == 0 for n in (100, 5000, 9000, 10 ** 6))

@@ -15,7 +15,7 @@ from ..physics.estimators import METHODS, Problem
 
 DEFAULT_OUT = Path("out") / "bench"
 #: The parts of a run, in the order they run (``phonglab bench --only``).
-PARTS = ("estimators", "stability", "renders", "variants", "ratios", "jit")
+PARTS = ("estimators", "stability", "renders", "variants", "ratios", "jit", "adaptive")
 #: The variant every sweep but the variant comparison renders and estimates in.
 VARIANT = "llvm_ad_rgb"
 
@@ -124,3 +124,34 @@ class Config:
     @property
     def ratio_spp(self) -> int:
         return 64 if self.quick else 256
+
+    # --- adaptive sampling (phonglab.bench.adaptive_sweeps) ---
+    @property
+    def adaptive_res(self) -> int:
+        return 32 if self.quick else 128
+
+    @property
+    def adaptive_scenes(self) -> list[str]:
+        return (["gray_direct", "check_furnace_enclosure"] if self.quick else
+                ["gray_direct", "cornell_phong", "check_furnace_enclosure"])
+
+    @property
+    def adaptive_planned_targets(self) -> list[float]:
+        """Targets of the planned points (a plan runs a pilot: seconds each)."""
+        return [0.04] if self.quick else [0.05, 0.02]
+
+    @property
+    def adaptive_spps(self) -> list[int]:
+        return [16, 64, 256] if self.quick else [16, 32, 64, 128, 256, 512]
+
+    @property
+    def adaptive_targets(self) -> list[float]:
+        return [0.04, 0.02] if self.quick else [0.05, 0.03, 0.02, 0.012]
+
+    @property
+    def adaptive_seeds(self) -> int:
+        return 2 if self.quick else 3
+
+    @property
+    def adaptive_reference_spp(self) -> int:
+        return 4096 if self.quick else 8192

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..physics.estimators import METHODS
 from ..planner import benchmark_table
+from .adaptive_sweeps import report_section as adaptive_report_section
 from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
                        stability_z_crit)
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
@@ -424,11 +425,11 @@ def planner_section(d: RunData) -> list[str]:
         return []
     rows = json.loads(planner_json.read_text())
     return ["\n## Planner: planned against the default configuration at equal error\n",
-            "`scripts/planner_bench.py` (run by `make bench`): per scene, the default configuration "
-            "(llvm_ad_rgb, max_depth 8, the scene's spp) and its relative RMSE E against a converged "
-            "reference; then `planner.plan(scene, target_error=E)`, both rendered alternately "
-            "(kernels compiled beforehand), median times. Efficiency ratio = (t·E²)_default / "
-            "(t·E²)_planned, the time ratio at exactly equal error. How the planner decides: "
+            "`scripts/planner_bench.py` (run by `make bench`): per scene a target relative RMSE E; "
+            "the default configuration (llvm_ad_rgb, path at max_depth 8) with its uniform spp raised "
+            "until it reaches E against a converged reference, and `phonglab render --target-error E` "
+            "(plan, then the render it chose), each timed as a whole fresh process (start-up, JIT, "
+            "pilot and planning included), alternately over seeds; medians. How the planner decides: "
             "[docs/planner.md](docs/planner.md).\n",
             benchmark_table(rows), ""]
 
@@ -553,6 +554,10 @@ def cluster_section(d: RunData) -> list[str]:
     return L + [""]
 
 
+def adaptive_section(d: RunData) -> list[str]:
+    return adaptive_report_section(d.out, d.rel)
+
+
 def reproduce_section(d: RunData) -> list[str]:
     minutes = fmt_g(d.run.get("seconds", float("nan")) / 60, 2)
     return [f"\n## Reproduce\n\n```\nmake bench            # full run (about {minutes} min here) + this file\n"
@@ -562,7 +567,8 @@ def reproduce_section(d: RunData) -> list[str]:
 #: The report's sections, in order.
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
             jit_section, renders_section, variants_section, stability_section, mis_section,
-            planner_section, validate_section, fitting_section, cluster_section, reproduce_section)
+            planner_section, adaptive_section, validate_section, fitting_section, cluster_section,
+            reproduce_section)
 
 
 def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> Path:

@@ -28,6 +28,7 @@ import mitsuba as mi
 from .. import __version__, registration
 from ..errors import PhonglabError
 from ..parallel import Runner
+from .adaptive_sweeps import sweep_adaptive
 from .charts import chart_error_time, chart_mis, chart_stability
 from .cold_compile import sweep_cold_compile
 from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
@@ -83,7 +84,9 @@ def _run_parts(out: Path, cfg: Config, parts: list[str], cache: Path | None, run
              "variants": lambda: notes.extend(sweep_variants(out, cfg, runner, cache)),
              "ratios": lambda: (sweep_ratios(out, cfg, runner),
                                 sweep_whitted_units(out, cfg, runner)),
-             "jit": lambda: sweep_cold_compile(out, runner.progress)}
+             "jit": lambda: sweep_cold_compile(out, runner.progress),
+             # timed renders side by side in this process (a ratio is only fair on one machine)
+             "adaptive": lambda: sweep_adaptive(out, cfg, runner.progress)}
     for name in PARTS:
         if name in parts:
             ts = time.perf_counter()

@@ -44,7 +44,8 @@ def add_parser(sub) -> None:
     p.add_argument("--max-depth", type=int, default=None, help="fix max_depth")
     p.add_argument("--spp", type=int, default=None, help="fix spp (the error is then predicted)")
     p.add_argument("--pilot-spp", type=int, default=None,
-                   help="pilot samples per pixel, in 8 passes (default 64)")
+                   help="pilot samples per pixel, in 8 passes (default 64, fewer beyond 64x64 "
+                        "pixels: the same samples per image, at least 16)")
     p.add_argument("--set", dest="params", type=_param, action="append", default=[],
                    metavar="NAME=VALUE", help="a scene <default> value, e.g. res=64 (repeatable)")
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",

@@ -1,29 +1,27 @@
-"""The planner benchmark's table: planned vs default configuration at equal error.
+"""The planner benchmark's table: the planned command against the default one at equal error.
 
-The rows come from ``scripts/planner_bench.py``; :mod:`phonglab.bench` puts the table in
-BENCHMARKS.md.  Efficiency ratio = (T·E²)_default / (T·E²)_planned, the time ratio at exactly
-equal error when the error is noise-dominated (E. Veach, *Robust Monte Carlo Methods for Light
-Transport Simulation*, PhD thesis, Stanford 1997, §2.4.3; *Physically Based Rendering*, 4th
-ed., §2.1.4).
+The rows come from ``scripts/planner_bench.py``: per scene a target error E, the default
+configuration (llvm_ad_rgb, path at max_depth 8, uniform spp raised until it reaches E) and
+``phonglab render --target-error E`` (plan + render), each timed as a whole fresh process
+(start-up, JIT compilation, pilot and planning included); :mod:`phonglab.bench` puts the
+table in BENCHMARKS.md.  Speed-up = median T_default / median T_planned, with the min-max of
+the per-seed ratios.
 """
 
 from __future__ import annotations
 
 
 def benchmark_table(rows: list[dict]) -> str:
-    """Markdown table of ``scripts/planner_bench.py`` rows (planned vs default at equal error)."""
-    out = ["| scene | default (rgb, depth 8, scene spp): time, error | planned: variant, depth, "
-           "spp | planned: time (predicted), error (predicted) | speed-up | efficiency ratio "
-           "| pilot |",
-           "|---|---|---|---|---|---|---|"]
+    """Markdown table of ``scripts/planner_bench.py`` rows (whole-command wall time)."""
+    out = ["| scene | E | default: spp, error, time | planned: render, variant, depth, spp | "
+           "planned: error, time (pilot) | speed-up (min-max over seeds) |",
+           "|---|---|---|---|---|---|"]
     for r in rows:
         d, p = r["default"], r["planned"]
         out.append(
-            f"| {r['scene']} ({r['res']}²) | {d['seconds_median'] * 1e3:.0f} ms, "
-            f"{d['error']:.4f} ± {d['error_sd']:.4f} | {p['variant']}, {p['max_depth']}, "
-            f"{p['spp']} | {p['seconds_median'] * 1e3:.0f} ms "
-            f"({p['predicted_seconds_one_pass'] * 1e3:.0f}), {p['error']:.4f} ± "
-            f"{p['error_sd']:.4f} ({p['predicted_error']:.4f}) | {r['speedup']:.2f}x | "
-            f"{r['efficiency_ratio']:.2f}x | "
-            f"{p['pilot_seconds']:.1f} s |")
+            f"| {r['scene']} ({r['res']}²) | {r['target_error']:g} | {d['spp']} spp, "
+            f"{d['error']:.4f}, {d['seconds_median']:.2f} s | {p['model']} {p['sampling']}, "
+            f"{p['variant']}, {p['max_depth']}, {p['spp']:.1f} | {p['error']:.4f}, "
+            f"{p['seconds_median']:.2f} s ({p['pilot_seconds']:.1f} s) | {r['speedup']:.2f}x "
+            f"({r['speedup_min']:.2f}-{r['speedup_max']:.2f}) |")
     return "\n".join(out)

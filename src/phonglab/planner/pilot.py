@@ -35,6 +35,19 @@ DEPTH_LADDER = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
 #: Pilot: total samples per pixel, split into this many passes of equal size (same seeds per depth).
 PILOT_SPP = 64
 PILOT_PASSES = 8
+#: Films of more pixels than this get a pilot of the same number of samples per image
+#: (PILOT_SPP · PILOT_PIXELS), at least MIN_PILOT_SPP per pixel: the pilot's statistics are
+#: means over the image (bias b(d), noise n(1)), as precise with fewer samples per pixel over
+#: more pixels, and a pilot of 64 spp at 256² cost as much as the render it plans.
+PILOT_PIXELS = 64 * 64
+MIN_PILOT_SPP = 16
+
+
+def pilot_spp_for(pixels: int, passes: int = PILOT_PASSES) -> int:
+    """Samples per pixel of the default pilot of a film of ``pixels`` (a multiple of passes)."""
+    spp = PILOT_SPP * PILOT_PIXELS / max(pixels, 1)
+    spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
+    return max(passes, spp // passes * passes)
 #: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
 PILOT_SEED = 1
 
@@ -106,6 +119,8 @@ class Pilot:
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
+        #: per depth: (H, W) channel mean of σ²·w, the relative variance of one sample per pixel
+        self.variance_maps: dict[int, np.ndarray] = {}
 
     @property
     def spp(self) -> int:
@@ -117,16 +132,32 @@ class Pilot:
                                    integrator=path_integrator(depth, self.info),
                                    keep_passes=True)
 
+    def variance_map(self, passes_img: np.ndarray) -> np.ndarray:
+        """(H, W) mean over channels of σ² · w, σ² = s · var_k(pass_k) the variance of one
+        sample: the relative variance a pixel's sample carries (what adaptive sampling
+        allocates by)."""
+        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
+        return (sigma2 * self.weight).mean(axis=-1)
+
     def noise_per_sample(self, passes_img: np.ndarray) -> float:
         """n(1) = √mean(σ² · w), σ² = s · var_k(pass_k) the variance of one sample."""
-        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
-        return math.sqrt(float(np.mean(sigma2 * self.weight)))
+        return math.sqrt(float(np.mean(self.variance_map(passes_img))))
+
+    def measure_model(self, integrator) -> tuple[float, np.ndarray, tuple[float, float]]:
+        """(n(1), variance map, (a, b) of T = a + b·spp) of another integrator of the scene
+        (the planner's cheaper exact models), rendered like the depth pilots."""
+        imgs = render.render_scene(self.scene, self.spp, seed=self.seed, passes=self.passes,
+                                   integrator=integrator, keep_passes=True).passes
+        vmap = self.variance_map(imgs)
+        return (math.sqrt(float(np.mean(vmap))), vmap,
+                _time_model(self.scene, integrator, self.spp_per_pass))
 
     def measure(self, d: int) -> DepthSample:
         """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
         if d not in self.samples:
             if d == -1:
                 self.samples[d] = DepthSample(-1, 0.0, 0.0, self.noise_per_sample(self.full))
+                self.variance_maps[d] = self.variance_map(self.full)
             else:
                 imgs = self._render(d, self.seed).passes
                 self.compiled.add(d)
@@ -135,9 +166,10 @@ class Pilot:
                 se2 = diff.var(axis=0, ddof=1) / self.passes
                 bias2 = float(np.mean((mean * mean - se2) * self.weight))
                 energy = float(mean.sum()) / self.total_energy
+                self.variance_maps[d] = self.variance_map(imgs)
                 self.samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
                                               energy if abs(energy) > 1e-9 else 0.0,
-                                              self.noise_per_sample(imgs))
+                                              math.sqrt(float(np.mean(self.variance_maps[d]))))
         return self.samples[d]
 
     def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1]) -> tuple[int, int]:

@@ -18,8 +18,9 @@ from ..errors import PlanError
 from ..render import MAX_SPP, check_spp
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene
+from . import choice
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
-                    DepthSample, Pilot)
+                    DepthSample, Pilot, pilot_spp_for)
 
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
@@ -50,6 +51,24 @@ class Plan:
     depths: list[DepthSample] = field(default_factory=list)
     reasons: list[str] = field(default_factory=list)
     overrides: dict[str, Any] = field(default_factory=dict)
+    #: step 5 (:mod:`.choice`): the render's transport model and sampling; ``spp`` and
+    #: ``predicted_seconds`` above stay those of uniform ``path`` at ``max_depth``
+    model: str = "path"
+    sampling: str = "uniform"
+    chosen_spp: float = 0.0          #: samples per pixel of the choice (mean when adaptive)
+    chosen_seconds: float = 0.0      #: its predicted steady-state time
+
+    @property
+    def noise_target(self) -> float:
+        """√(E² − bias²): the noise the render may leave (what an adaptive render aims at)."""
+        return math.sqrt(max(self.target_error ** 2 - self.predicted_bias ** 2,
+                             (0.01 * self.target_error) ** 2))
+
+    @property
+    def uses_wavefront(self) -> bool:
+        """True when the render goes through :mod:`phonglab.adaptive` (adaptive sampling, or
+        a model other than the scene's path integrator)."""
+        return self.sampling == "adaptive" or self.model != "path"
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -73,6 +92,9 @@ class Plan:
             f"  variant   {self.variant}",
             f"  max_depth {self.max_depth}",
             f"  spp       {self.spp}  ({self.passes} passes)",
+            f"  render    {self.model}, {self.sampling} sampling, {self.chosen_spp:.1f} spp"
+            f"{' on average' if self.sampling == 'adaptive' else ''}, about "
+            f"{self.chosen_seconds:.3g} s",
             f"  predicted error {self.predicted_error:.4g} (depth bias {self.predicted_bias:.3g}, "
             f"noise {self.predicted_noise:.4g}); time {self.predicted_seconds:.3g} s "
             f"steady state ({self.seconds_per_sample * 1e9:.3g} ns per sample + "
@@ -92,7 +114,7 @@ def render_passes(spp: int) -> int:
     return max(1, min(int(spp), 8)) if spp >= 2 else 1
 
 
-def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int = PILOT_SPP,
+def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int | None = None,
          pilot_passes: int = PILOT_PASSES, seed: int = PILOT_SEED,
          bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
          variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
@@ -103,7 +125,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
     Args:
         scene_path: scene file, or a name in ``scenes_xml/``.
         target_error: E, a relative RMSE (package docstring; ``0.01`` = 1 %).
-        pilot_spp, pilot_passes: pilot samples per pixel and the passes they are split into.
+        pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_spp_for`
+            the film: 64, fewer beyond 64² pixels) and the passes they are split into.
         seed: pilot seed (the render that follows should use another; the CLI uses 0).
         bias_fraction: the depth bias may use this fraction of E.
         polarized: plan a polarized variant (never chosen otherwise).
@@ -121,7 +144,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
             ``path``, a plan beyond ``max_seconds`` or beyond the spp a render takes; SceneError: a scene that cannot be found, parsed or loaded.
     """
     t_start = time.perf_counter()
-    _check_arguments(target_error, pilot_spp, pilot_passes, spp, max_depth)
+    _check_arguments(target_error, PILOT_SPP if pilot_spp is None else pilot_spp, pilot_passes,
+                     spp, max_depth)
     params = {k: v for k, v in (params or {}).items() if v is not None}
     info = inspect_scene(scene_path, **params)
     if info.integrator != "path":
@@ -137,6 +161,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
     sensor = scene.sensors()[0]
     resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
     scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
+    if pilot_spp is None:
+        pilot_spp = pilot_spp_for(resolution[0] * resolution[1], pilot_passes)
     pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed)
     depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
     chosen = pilot.measure(depth)
@@ -150,13 +176,31 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int =
     _refuse_absurd(info.path, target_error, n, seconds,
                    MAX_SECONDS if max_seconds is None else max_seconds)
     pixels = resolution[0] * resolution[1]
+    option = _choose_render(pilot, depth, chosen, n, seconds, overrides, target_error,
+                            pixels, passes, reasons)
     return Plan(scene=str(info.path), target_error=float(target_error), variant=variant,
                 backend=backend, color=color, max_depth=int(depth), spp=int(n), passes=passes,
                 predicted_error=predicted, predicted_bias=chosen.bias, predicted_noise=noise,
                 predicted_seconds=seconds, seconds_per_sample=b / pixels,
                 seconds_per_pass=a, resolution=resolution, params=dict(params),
                 pilot_spp=pilot.spp, pilot_seconds=time.perf_counter() - t_start,
-                depths=pilot.depths(), reasons=reasons, overrides=overrides)
+                depths=pilot.depths(), reasons=reasons, overrides=overrides,
+                model=option.model, sampling=option.sampling, chosen_spp=float(option.spp),
+                chosen_seconds=option.seconds)
+
+
+def _choose_render(pilot: Pilot, depth: int, sample: DepthSample, n: int, seconds: float,
+                   overrides: dict[str, Any], target_error: float, pixels: int, passes: int,
+                   reasons: list[str]) -> choice.Option:
+    """Step 5 (:mod:`.choice`): model and sampling; uniform path when spp or depth are given."""
+    uniform = choice.Option("path", "uniform", n, seconds, sample.noise_per_sample)
+    if "spp" in overrides or "max_depth" in overrides:
+        reasons.append("render: uniform path, as the spp/max_depth given by the caller imply")
+        return uniform
+    if sample.noise_per_sample == 0.0:
+        return uniform
+    return choice.choose(pilot, depth, sample.bias, target_error, uniform, pixels, passes,
+                         reasons)
 
 
 def _refuse_absurd(path, target_error: float, n: int, seconds: float, max_seconds: float) -> None:

@@ -26,12 +26,14 @@ import numpy as np
 
 from .. import probe
 from . import lanes
-from .config import DRAWS, REL_TOL, excess, perturb, rel_diff, sensitivity
+from .config import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
 from .report import Row
 
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
 CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "
                "8-ulp move of their input directions), must be ≤ 1 (config.sensitivity)")
+BOXED = (CONDITIONED[:-1] + "; a lane that fails gets the evaluated side's sensitivity over "
+         "every float32 wo within 8 ulps per component, config.refine)")
 
 
 SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
@@ -157,17 +159,22 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
     if "weight" in topics:
         ratio = np.where(pd[:, None] > 0, ev / np.where(pd > 0, pd, 1.0)[:, None], 0.0)
         rel = np.max(rel_diff(w, ratio), axis=1)
-        ex = excess(rel, sensitivity(ratio_of, wi, wo, r, ratio) + sens_w)
+        ex, box = refine(rel, sensitivity(ratio_of, wi, wo, r, ratio), sens_w, ratio_of, wi,
+                         wo, ratio)
         rows.append(_row("weight", "weight = eval/pdf per sample", _max(ex), 1.0,
-                         f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {CONDITIONED}",
-                         _worst(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
-                                             "rel_diff": rel})))
+                         f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {BOXED}",
+                         {**_worst(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
+                                                "rel_diff": rel}), **box}))
     if "pdf" in topics:
         rel = rel_diff(bpdf, pd)
-        ex = excess(rel, sensitivity(lambda a, b: probe.pdf(bsdf, a, b), wi, wo, r, pd) + sens_p)
+        def pdf_of(a, b):
+            return probe.pdf(bsdf, a, b)
+
+        ex, box = refine(rel, sensitivity(pdf_of, wi, wo, r, pd), sens_p, pdf_of, wi, wo, pd)
         rows.append(_row("pdf", "bs.pdf = pdf(bs.wo)", _max(ex), 1.0,
-                         f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {CONDITIONED}",
-                         _worst(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel})))
+                         f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {BOXED}",
+                         {**_worst(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel}),
+                          **box}))
     return rows
 
 

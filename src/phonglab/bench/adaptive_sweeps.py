@@ -1,0 +1,265 @@
+r"""Bench part ``adaptive``: error against wall time for uniform, adaptive and planned renders.
+
+Per scene of :attr:`Config.adaptive_scenes` (small resolutions), against a converged full-depth
+reference (:func:`phonglab.references.reference`, its noise subtracted from every error):
+
+* **uniform**: the scene's own integrator through :func:`phonglab.render.render_scene` (one
+  pass, ``mi.render``) at the spp ladder of :attr:`Config.adaptive_spps`;
+* **adaptive**: :func:`phonglab.adaptive.render_adaptive` at the targets of
+  :attr:`Config.adaptive_targets`, several seeds;
+* **planned**: :func:`phonglab.planner.plan` at each target, then the render it chose; its
+  time is the render's plus the pilot's (``pilot_seconds``), i.e. what the user waits for.
+
+Times are steady state (each configuration compiled once first) and measured side by side in
+one process.  **Speed-up at equal error**: each adaptive (planned) render is followed by a
+uniform render of the scene's integrator at its mean spp (the plan's uniform spp), so load
+drift cancels within the pair; uniform sampling would need ``t_u (e_u/e)²`` to reach the
+render's error e (noise ∝ 1/√time), and the speed-up ``t_u (e_u/e)² / t`` is reported per
+seed and target (median and range).  On the furnace enclosure (every pixel the same variance) adaptive sampling cannot
+win: its speed-up there measures its overhead, target >= 1/1.05.
+
+**Guards** (:func:`guard_rows`): at one target, with and without the neighbourhood rule,
+the fraction of pixels whose true error exceeds three standard errors (|x − r| >
+3√(s² + s_r²): 0.27 % if the error estimate is honest and Gaussian) and the fraction whose
+true relative error exceeds three times its budget e_p* (pixels stopped too early).
+
+Writes ``adaptive.json``, ``adaptive_error_time.png`` (one panel per scene, Pareto front
+dashed) and ``adaptive_sppmap.png`` (image and spp map of gray_direct).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+import mitsuba as mi
+import numpy as np
+
+from .. import adaptive, metrics, planner, references, render, scenes
+from ..planner import choice
+from ..runtime import quiet_mitsuba, set_variant
+from .analysis import pareto_front
+from .config import VARIANT, Config
+
+#: The scene whose variance is the same in every pixel (the overhead measurement).
+UNIFORM_SCENE = "check_furnace_enclosure"
+#: Largest acceptable cost of adaptive sampling against uniform on :data:`UNIFORM_SCENE`.
+OVERHEAD_TARGET = 1.05
+#: Resolution of :data:`UNIFORM_SCENE` (40 bounces a sample: 32² is already a long render).
+UNIFORM_SCENE_RES = 32
+
+
+def scene_params(name: str, cfg: Config) -> dict[str, Any]:
+    return {"res": UNIFORM_SCENE_RES if name == UNIFORM_SCENE else cfg.adaptive_res}
+
+
+def _error(image, ref) -> float:
+    return metrics.relative_rmse(image, ref.image, ref_stderr=ref.stderr)
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def _planned(name: str, params: dict, target: float, loaded, info, seed: int) -> dict:
+    """plan() then the render it chose: error and the time a user waits (pilot included)."""
+    with quiet_mitsuba():
+        plan = planner.plan(name, target, params=params)
+        scene = scenes.load_scene(info.path, plan.variant, **params) if plan.variant != VARIANT \
+            else loaded
+    integ = scenes.path_integrator(plan.max_depth, info) if plan.model == "path" else \
+        mi.load_dict(choice.model_dict(plan.model, plan.max_depth, info))
+    if plan.uses_wavefront:
+        spp = max(2, math.ceil(plan.chosen_spp))
+        uniform = plan.sampling == "uniform"
+        run = lambda: adaptive.render_adaptive(  # noqa: E731
+            scene, plan.noise_target, seed=seed, integrator=integ,
+            min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
+    else:
+        run = lambda: render.render_scene(scene, plan.spp, seed=seed, integrator=integ)  # noqa: E731
+    run()                                                   # compile
+    result, seconds = _timed(run)
+    set_variant(VARIANT)                  # the plan may have switched to another variant
+    return {"method": "planned", "target": target, "seed": seed, "render_seconds": seconds,
+            "pilot_seconds": plan.pilot_seconds, "seconds": seconds + plan.pilot_seconds,
+            "render": f"{plan.model} {plan.sampling}", "variant": plan.variant,
+            "uniform_spp": plan.spp,
+            "max_depth": plan.max_depth, "image": result.image}
+
+
+def sweep_scene(name: str, cfg: Config, progress: bool = False) -> dict[str, Any]:
+    """Every row of one scene, and its equal-error speed-ups."""
+    params = scene_params(name, cfg)
+    ref = references.reference(name, cfg.adaptive_reference_spp, params=params)
+    info = scenes.inspect_scene(name, **params)
+    with quiet_mitsuba():
+        loaded = scenes.load_scene(info.path, VARIANT, **params)
+    rows: list[dict[str, Any]] = []
+    render.render_scene(loaded, 4, seed=999)
+    for spp in cfg.adaptive_spps:
+        for seed in range(cfg.adaptive_seeds):
+            res, t = _timed(lambda: render.render_scene(loaded, spp, seed=10 + seed))
+            rows.append({"method": "uniform", "spp": spp, "seed": seed, "seconds": t,
+                         "error": _error(res.image, ref)})
+    adaptive.render_adaptive(loaded, 0.2, seed=998)
+    for target in cfg.adaptive_targets:
+        for seed in range(cfg.adaptive_seeds):
+            res, t = _timed(lambda: adaptive.render_adaptive(loaded, target, seed=20 + seed))
+            row = {"method": "adaptive", "target": target, "seed": seed, "seconds": t,
+                   "spp": res.total_spp, "passes": len(res.passes),
+                   "estimated_error": res.estimated_error, "error": _error(res.image, ref)}
+            rows.append(_paired(row, loaded, round(res.total_spp), 50 + seed, ref))
+        if name != UNIFORM_SCENE and target in cfg.adaptive_planned_targets:
+            p = _planned(name, params, target, loaded, info, seed=30)
+            p["error"] = _error(p.pop("image"), ref)
+            rows.append(_paired(p, loaded, p["uniform_spp"], 60, ref))
+    return {"scene": name, "params": params, "reference_spp": ref.spp, "rows": rows,
+            "speedups": speedups(rows)}
+
+
+def _paired(row: dict, loaded, spp: int, seed: int, ref) -> dict:
+    """Add a uniform render of the scene's integrator at ``spp`` made right after the row's
+    render (load drift cancels within the pair): its time and error."""
+    res, t = _timed(lambda: render.render_scene(loaded, max(1, int(spp)), seed=seed))
+    return dict(row, pair_spp=int(spp), pair_seconds=t, pair_error=_error(res.image, ref))
+
+
+def speedups(rows: list[dict]) -> dict[str, dict[str, float]]:
+    """Per method: median, min, max over rows of the equal-error speed-up against the paired
+    uniform render: t_u (e_u/e)² / t, the time uniform sampling needs for the row's error e
+    (noise ∝ 1/√time) over the row's time."""
+    out = {}
+    for method, key in (("adaptive", "seconds"), ("planned", "seconds"),
+                        ("planned", "render_seconds")):
+        ratios = [r["pair_seconds"] * (r["pair_error"] / r["error"]) ** 2 / r[key] for r in rows
+                  if r["method"] == method and r["error"] > 0 and "pair_seconds" in r]
+        if ratios:
+            label = method if key == "seconds" else "planned_render_only"
+            out[label] = {"median": statistics.median(ratios), "min": min(ratios),
+                          "max": max(ratios), "n": len(ratios)}
+    return out
+
+
+def guard_rows(name: str, cfg: Config, target: float) -> list[dict[str, Any]]:
+    """What the neighbourhood guard does: early-stopped pixels with and without it."""
+    params = scene_params(name, cfg)
+    ref = references.reference(name, cfg.adaptive_reference_spp, params=params)
+    with quiet_mitsuba():
+        loaded = scenes.load_scene(name, VARIANT, **params)
+    out = []
+    for guard in (True, False):
+        for seed in range(cfg.adaptive_seeds):
+            r = adaptive.render_adaptive(loaded, target, seed=40 + seed, neighbourhood=guard)
+            d = r.image.astype(np.float64) - ref.image
+            z = np.abs(d) / np.sqrt(r.stderr.astype(np.float64) ** 2 + ref.stderr ** 2 + 1e-30)
+            true_rel = np.sqrt(np.mean(d * d / (ref.image ** 2 + metrics.REL_EPS), axis=2))
+            est_rel = np.sqrt(adaptive.relative_error_map(r.image, r.stderr.astype(np.float64) ** 2))
+            out.append({"scene": name, "neighbourhood": guard, "seed": seed, "target": target,
+                        "error": _error(r.image, ref), "spp": r.total_spp,
+                        "frac_z_above_3": float(np.mean(z > 3)),
+                        "frac_true_above_3x_estimate": float(np.mean(true_rel > 3 * est_rel)),
+                        "frac_at_min_spp": float(np.mean(r.spp == adaptive.MIN_SPP))})
+    return out
+
+
+def chart(data: dict, out: Path) -> Path:
+    """adaptive_error_time.png: one log-log panel per scene, Pareto front dashed."""
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
+
+    scenes_ = data["scenes"]
+    fig = Figure(figsize=(4.2 * len(scenes_), 3.6), layout="constrained")
+    axes = fig.subplots(1, len(scenes_), squeeze=False)[0]
+    style = {"uniform": "o", "adaptive": "s", "planned": "^"}
+    for ax, sc in zip(axes, scenes_):
+        pts = []
+        for method, marker in style.items():
+            rows = [r for r in sc["rows"] if r["method"] == method and r["error"] > 0]
+            if rows:
+                ax.plot([r["seconds"] for r in rows], [r["error"] for r in rows], marker,
+                        ms=4, alpha=0.8, label=method + (" (pilot incl.)" if method == "planned"
+                                                          else ""))
+                pts += [(r["seconds"], r["error"]) for r in rows]
+        front = pareto_front(pts)
+        if front:
+            ft, fe = zip(*front)
+            ax.step(ft, fe, where="post", color="k", lw=0.8, ls="--", label="Pareto front")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("wall time [s] (steady state; planned: + pilot)")
+        ax.set_ylabel("relative RMSE")
+        ax.set_title(f"{sc['scene']} ({sc['params']['res']}²)", fontsize=9)
+        ax.grid(True, which="both", alpha=0.25)
+        ax.legend(fontsize=7)
+    path = out / "adaptive_error_time.png"
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def sppmap_figure(cfg: Config, out: Path, target: float) -> Path:
+    """adaptive_sppmap.png: gray_direct's adaptive image beside its spp map."""
+    with quiet_mitsuba():
+        loaded = scenes.load_scene("gray_direct", VARIANT, res=max(cfg.adaptive_res, 64))
+    r = adaptive.render_adaptive(loaded, target, seed=1)
+    return adaptive.write_spp_png(out / "adaptive_sppmap.png", r.spp, r.image)
+
+
+def sweep_adaptive(out: Path, cfg: Config, progress: bool = False) -> dict[str, Any]:
+    """Run the part; writes adaptive.json and the two figures into ``out``."""
+    out = Path(out)
+    data: dict[str, Any] = {"scenes": [sweep_scene(n, cfg, progress)
+                                       for n in cfg.adaptive_scenes]}
+    target = cfg.adaptive_targets[len(cfg.adaptive_targets) // 2]
+    data["guards"] = [g for n in cfg.adaptive_scenes if n != UNIFORM_SCENE
+                      for g in guard_rows(n, cfg, target)]
+    uniform = next(s for s in data["scenes"] if s["scene"] == UNIFORM_SCENE)
+    over = uniform["speedups"].get("adaptive", {}).get("median", float("nan"))
+    data["overhead"] = {"scene": UNIFORM_SCENE, "cost_vs_uniform": 1.0 / over,
+                        "target": OVERHEAD_TARGET, "met": bool(1.0 / over <= OVERHEAD_TARGET)}
+    data["charts"] = [str(chart(data, out)), str(sppmap_figure(cfg, out, target))]
+    (out / "adaptive.json").write_text(json.dumps(data, indent=2) + "\n")
+    return data
+
+
+def report_section(out: Path, rel: str = ".") -> list[str]:
+    """The BENCHMARKS.md section of this part (empty when it did not run); ``rel`` is the
+    folder of the figures relative to the Markdown file."""
+    path = Path(out) / "adaptive.json"
+    if not path.is_file():
+        return []
+    data = json.loads(path.read_text())
+    L = ["\n## Adaptive sampling: error against time\n",
+         "`phonglab.bench.adaptive_sweeps` (docs/adaptive.md): uniform (`mi.render`), adaptive "
+         "(`phonglab.adaptive`) and planned (`planner.plan` + its render, pilot included) renders "
+         "against a converged reference; steady-state times side by side in one process. "
+         "Speed-up at equal error = t_u (e_u/e)²/t against a uniform render made right after "
+         "at the same mean spp (the plan's uniform spp for planned); median [min–max] over "
+         "seeds and targets.\n",
+         "| scene | adaptive speed-up | planned: render only | planned: pilot included |",
+         "|---|---|---|---|"]
+    for sc in data["scenes"]:
+        cells = []
+        for m in ("adaptive", "planned_render_only", "planned"):
+            s = sc["speedups"].get(m)
+            cells.append(f"{s['median']:.2f}x [{s['min']:.2f}–{s['max']:.2f}]" if s else "—")
+        L.append(f"| {sc['scene']} ({sc['params']['res']}²) | " + " | ".join(cells) + " |")
+    o = data["overhead"]
+    L.append(f"\nUniform-variance scene ({o['scene']}): adaptive costs {o['cost_vs_uniform']:.3f}x "
+             f"uniform at equal error (target <= {o['target']}: {'met' if o['met'] else 'missed'}).\n")
+    L += ["| scene | neighbourhood guard | error | mean spp | pixels |x−r| > 3σ | "
+          "pixels true error > 3x estimate |", "|---|---|---|---|---|---|"]
+    for g in data["guards"]:
+        L.append(f"| {g['scene']} | {'on' if g['neighbourhood'] else 'off'} | {g['error']:.4f} | "
+                 f"{g['spp']:.1f} | {100 * g['frac_z_above_3']:.2f} % | "
+                 f"{100 * g['frac_true_above_3x_estimate']:.2f} % |")
+    L += ["", f"![error against time]({rel}/adaptive_error_time.png)", "",
+          f"![adaptive image and spp map]({rel}/adaptive_sppmap.png)", ""]
+    return L

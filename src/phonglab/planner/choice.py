@@ -1,0 +1,163 @@
+r"""Step 5 of the plan: the transport model and the sampling that reach E in the least time.
+
+Once the depth d and the uniform spp N of the ``path`` integrator are known (steps 2-3), the
+planner prices every configuration that is **exact** for the same target — the same expected
+image at depth d — and keeps the fastest, with the reason:
+
+* **Models** (only when d = 2: one bounce is all the target needs).  Direct-only transport
+  is ``path`` at ``max_depth`` 2 itself; Mitsuba's ``direct`` integrator (directly seen
+  emitters plus emitter and BSDF sampling with MIS) computes exactly the same paths and was
+  measured no faster (:data:`DIRECT_VS_PATH`), so it is not priced (a pilot render and a JIT
+  compilation each).  ``whitted`` in radiance units (phonglab's integrator:
+  ``f_r cos θ I/r²`` per light, a shadow ray each) is term for term ``path`` at depth 2 when
+  every emitter is a delta light (point, spot, directional: ``mi.EmitterFlags.Delta*``) —
+  there is then no light to sample but the deterministic one, and a pixel's only noise is
+  where its samples land (antialiasing).  Each candidate is rendered like the pilot
+  (:meth:`.pilot.Pilot.measure_model`): its relative noise n_m(1) and its time model
+  T_m = a_m + b_m·spp; it needs N_m = ⌈n_m(1)² / (E² − b²)⌉ samples.
+
+* **Sampling.**  Uniform: N_m samples everywhere.  Adaptive (:mod:`phonglab.adaptive`):
+  with v_p the pilot's per-pixel relative variance of one sample (:attr:`.pilot.Pilot.
+  variance_maps`), guarded as the renderer guards it (v ← max(v, 5×5 mean)), the Neyman
+  allocation needs N_p = max(√v_p · mean √v / (E² − b²), MIN_SPP) samples, on average
+  N̄ = mean N_p; the predicted *gain* is N_m / N̄ (at most mean v / (mean √v)², the
+  unguarded optimum).  Its time is b_m·N̄ plus :data:`ADAPTIVE_PASSES` passes of a_m and of
+  the host's per-pass work (:data:`HOST_SECONDS_PER_PIXEL`, measured: developing the image,
+  the variance estimate and the allocation, ~0.4 µs per pixel and pass at 128²).  Adaptive is chosen when it is
+  predicted at least :data:`ADAPTIVE_MARGIN` faster than uniform: a noisy v map can only
+  mislead it by that much.
+
+The predictions are steady-state times (JIT compilation excluded), as in step 4.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mitsuba as mi
+import numpy as np
+
+from ..adaptive import MIN_SPP, window_mean
+from ..scenes import SceneInfo, inspect_scene
+from .pilot import Pilot
+
+#: Passes an adaptive render typically takes (pilot and 2-4 more: measured on the bench scenes).
+ADAPTIVE_PASSES = 4
+#: Host work per pixel and pass of an adaptive render (image, variance, allocation): 6 ms a
+#: pass at 128² (gray_direct, median of 7), rounded up.
+HOST_SECONDS_PER_PIXEL = 5e-7
+#: Adaptive must be predicted this much faster than uniform to be chosen.
+ADAPTIVE_MARGIN = 1.15
+#: Time of Mitsuba's ``direct`` integrator over ``path`` at max_depth 2, equal error (gray_direct,
+#: 64², 80 spp, priced by this module's pilot: 0.341 s vs 0.350 s; direct adaptive 0.226 s vs
+#: path adaptive 0.228 s): no gain worth a pilot render, so ``direct`` is not priced.
+DIRECT_VS_PATH = 0.97
+
+
+@dataclass
+class Option:
+    """One priced configuration."""
+
+    model: str          #: 'path', 'direct' or 'whitted'
+    sampling: str       #: 'uniform' or 'adaptive'
+    spp: float          #: samples per pixel (mean for adaptive)
+    seconds: float      #: predicted steady-state time
+    noise1: float       #: relative noise of one sample, n(1)
+
+    def label(self) -> str:
+        return f"{self.model}, {self.sampling}"
+
+
+def delta_lights_only(scene) -> bool:
+    """Every emitter of the loaded scene is a point, spot or directional light."""
+    delta = int(mi.EmitterFlags.DeltaPosition) | int(mi.EmitterFlags.DeltaDirection)
+    emitters = scene.emitters()
+    return bool(emitters) and all(int(e.flags()) & delta for e in emitters)
+
+
+def model_dict(model: str, depth: int, scene, params: dict | None = None) -> dict:
+    """The ``mi.load_dict`` dictionary of a model's integrator, keeping the scene's
+    hide_emitters (``scene``: a :class:`SceneInfo`, or a scene file read with ``params``)."""
+    info = scene if isinstance(scene, SceneInfo) else inspect_scene(scene, **(params or {}))
+    hide = info.integrator_props.get("hide_emitters", "false").lower() == "true"
+    if model == "direct":
+        return {"type": "direct", "hide_emitters": hide}
+    if model == "whitted":
+        return {"type": "whitted", "units": "radiance", "max_depth": depth,
+                "hide_emitters": hide}
+    raise ValueError(f"unknown model {model!r}")
+
+
+def adaptive_spp(vmap: np.ndarray, budget2: float) -> float:
+    """Mean samples per pixel the adaptive renderer's allocation predicts (module docstring)."""
+    v = np.maximum(vmap, window_mean(vmap))
+    root = np.sqrt(v)
+    want = root * root.mean() / budget2
+    return float(np.mean(np.maximum(np.ceil(want), MIN_SPP)))
+
+
+def price(pilot: Pilot, model: str, noise1: float, vmap: np.ndarray, time_model, budget2: float,
+          pixels: int, passes: int) -> list[Option]:
+    """The uniform and adaptive options of one model."""
+    a, b = time_model
+    n = max(1, math.ceil(noise1 ** 2 / budget2)) if noise1 > 0 else 1
+    options = [Option(model, "uniform", n, passes * a + b * n, noise1)]
+    mean_spp = adaptive_spp(vmap, budget2)
+    host = HOST_SECONDS_PER_PIXEL * pixels
+    options.append(Option(model, "adaptive", mean_spp,
+                          b * mean_spp + ADAPTIVE_PASSES * (a + host), noise1))
+    return options
+
+
+def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_path: Option,
+           pixels: int, passes: int, reasons: list[str]) -> Option:
+    """Step 5: the fastest exact option (module docstring), with its reasons appended."""
+    budget2 = target_error ** 2 - bias ** 2
+    vmap = pilot.variance_maps[depth]
+    options = [uniform_path]
+    path_adaptive = price(pilot, "path", uniform_path.noise1, vmap, pilot.time_model(depth),
+                          budget2, pixels, passes)[1]
+    options.append(path_adaptive)
+    if depth == 2:
+        reasons.append("direct-only transport: path at max_depth 2 is that model (Mitsuba's "
+                       "'direct' integrator computes the same paths and measured no faster: "
+                       f"{DIRECT_VS_PATH:g}x path's time at equal error on gray_direct), so it "
+                       "is not priced again")
+        if delta_lights_only(pilot.scene):
+            integ = mi.load_dict(model_dict("whitted", depth, pilot.info))
+            noise1, mvmap, tm = pilot.measure_model(integ)
+            options += price(pilot, "whitted", noise1, mvmap, tm, budget2, pixels, passes)
+        else:
+            reasons.append("whitted (radiance units) not considered: not every emitter is a "
+                           "point, spot or directional light, and whitted lights surfaces "
+                           "with those alone")
+    else:
+        reasons.append(f"no cheaper exact model: direct and whitted compute paths of at "
+                       f"most 2 segments, and this scene needs depth {depth}")
+    best_uniform = min((o for o in options if o.sampling == "uniform"), key=lambda o: o.seconds)
+    best_adaptive = min((o for o in options if o.sampling == "adaptive"), key=lambda o: o.seconds)
+    gain = uniform_path.spp / path_adaptive.spp
+    reasons.append(f"sampling: the pilot's per-pixel variance predicts adaptive sampling "
+                   f"needs {path_adaptive.spp:.1f} spp on average against {uniform_path.spp} "
+                   f"uniform (gain {gain:.2f}x in samples; unguarded optimum "
+                   f"{_optimum(vmap):.2f}x)")
+    ranked = sorted(options, key=lambda o: o.seconds)
+    reasons.append("priced (steady state): " + "; ".join(
+        f"{o.label()} {o.spp:.1f} spp {o.seconds:.3g} s" for o in ranked))
+    best = best_uniform
+    if best_adaptive.seconds * ADAPTIVE_MARGIN < best_uniform.seconds:
+        best = best_adaptive
+    elif best_adaptive.seconds < best_uniform.seconds:
+        reasons.append(f"adaptive is predicted less than {ADAPTIVE_MARGIN:g}x faster: uniform "
+                       f"kept")
+    reasons.append(f"chosen: {best.label()}, {best.spp:.1f} spp, about {best.seconds:.3g} s "
+                   f"({uniform_path.seconds / max(best.seconds, 1e-12):.2f}x faster than "
+                   f"uniform path predicted)")
+    return best
+
+
+def _optimum(vmap: np.ndarray) -> float:
+    """mean v / (mean √v)²: the sample ratio of uniform to the ideal allocation."""
+    root = np.sqrt(np.maximum(vmap, 0.0))
+    return float(np.mean(vmap) / max(np.mean(root) ** 2, 1e-300))

@@ -1,0 +1,207 @@
+"""Adaptive sampling (phonglab.adaptive, ``phonglab render --adaptive``).
+
+Statistical tests state their expectation and take their tolerance from the Monte Carlo
+standard error (alpha = phonglab.stats.ALPHA, Sidak across a family); seeds are fixed.
+Scenes are rendered at 16-32 pixels so the file stays in the fast tier.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mitsuba as mi
+import numpy as np
+import pytest
+from scipy import signal
+
+from phonglab import adaptive, cli, exr, metrics, references, render, scenes, stats
+from phonglab.bench import adaptive_sweeps
+from phonglab.bench import config as bench_config
+from phonglab.errors import PhonglabError
+
+
+def _load(name, variant="llvm_ad_rgb", **params):
+    return scenes.load_scene(name, variant, **params)
+
+
+def test_unbiased_image_mean_against_uniform_render(variant_llvm_rgb):
+    """E[mean over pixels] is the same for adaptive and uniform sampling (the density-
+    normalised filter and the data-dependent sample counts add no bias a test can see).
+
+    Six adaptive renders (independent seeds) give a mean and its spread (t, 5 dof); the
+    uniform render's 8 passes give its standard error; Sidak over the 3 channels.
+    """
+    scene = _load("gray_direct", res=24)
+    means = np.array([adaptive.render_adaptive(scene, 0.03, seed=s).image.mean(axis=(0, 1))
+                      for s in range(6)])
+    uniform = render.render_scene(scene, 256, seed=100, passes=8)
+    mu, se_u = uniform.mean_and_stderr()
+    se_a = means.std(axis=0, ddof=1) / math.sqrt(len(means))
+    t = np.abs(means.mean(axis=0) - mu) / np.sqrt(se_a ** 2 + se_u ** 2)
+    assert np.all(t <= stats.t_critical(len(means) - 1, stats.ALPHA, 3)), (means.mean(0), mu, t)
+
+
+def test_uniform_budget_reproduces_mi_render(variant_llvm_rgb):
+    """With every pixel at the same count the wavefront is mi.render: the film's filter and
+    weights, so the per-pixel difference of two independent renders is pure noise.
+
+    Expected: mean over pixels of (x_a − x_u)² / (s_a² + s_u²) ≈ 1 (s from the estimators);
+    the adaptive stderr is conservative (delta method, see adaptive docstring), so the ratio
+    lies in (0.3, 1.5) — a filter or offset bug puts edge pixels off by many sigma.
+    """
+    scene = _load("cornell_phong", res=24)
+    a = adaptive.render_adaptive(scene, 1e-4, seed=1, min_spp=64, max_spp=64)
+    u = render.render_scene(scene, 64, seed=2, passes=8)
+    ratio = np.mean((a.image - u.image) ** 2 / (a.stderr ** 2 + u.stderr ** 2 + 1e-12))
+    assert 0.3 < ratio < 1.5, ratio
+    assert np.all(a.spp == 64)
+
+
+def test_spp_map_follows_the_highlight(variant_llvm_rgb):
+    """gray_direct: black background (no variance), a glossy highlight and a silhouette:
+    the spp map is far from uniform, and the background keeps the pilot's count."""
+    r = adaptive.render_adaptive(_load("gray_direct", res=32), 0.01, seed=3)
+    assert r.spp.min() == adaptive.MIN_SPP
+    assert r.spp.max() >= 4 * r.spp.min()
+    assert np.mean(r.spp == r.spp.min()) > 0.3       # the background
+    assert np.std(r.spp) / np.mean(r.spp) > 0.5
+
+
+def test_spp_map_uniform_on_a_uniform_scene(variant_llvm_rgb):
+    """The furnace enclosure: every pixel sees L = Le/(1 − ρ) = 2 with the same variance, so
+    the allocation N* ∝ √v is the same everywhere up to the estimates' noise."""
+    r = adaptive.render_adaptive(_load("check_furnace_enclosure", res=16), 0.01, seed=4)
+    assert r.spp.max() <= 2 * r.spp.min()
+    assert np.std(r.spp) / np.mean(r.spp) < 0.25
+
+
+def _relmse_spread(err2: np.ndarray, rfilter) -> float:
+    """Standard deviation of mean_i d_i²/(r_i² + ε) for Gaussian errors of relative variance
+    err2_i: Var = 2 Σ_ij ρ_ij² e_i² e_j² / P², ρ the correlation the filter gives
+    neighbouring pixels of white noise (autocorrelation of the filter's pixel table A)."""
+    a, _ = adaptive.filter_tables(rfilter)
+    auto = signal.correlate2d(a, a)
+    rho2 = (auto / auto.max()) ** 2
+    e = err2.mean(axis=2) if err2.ndim == 3 else err2
+    cross = signal.convolve2d(e, rho2, mode="same")
+    return math.sqrt(2.0 * float(np.sum(e * cross)) * err2.shape[-1]) / err2.size
+
+
+@pytest.mark.parametrize("name,target", [("gray_direct", 0.02), ("cornell_phong", 0.05)])
+def test_achieved_error_meets_target(variant_llvm_rgb, name, target):
+    """Against a converged reference (cached, 32², 4096 spp) the achieved relMSE is at most
+    E² plus z·sd, sd the spread of a relMSE of independent-per-sample Gaussian errors with
+    the estimated per-pixel variances (:func:`_relmse_spread`); Sidak over the 2 scenes."""
+    params = {"res": 32}
+    ref = references.reference(name, 4096, params=params)
+    scene = _load(name, **params)
+    r = adaptive.render_adaptive(scene, target, seed=5)
+    achieved = metrics.rel_mse(r.image, ref.image, ref_stderr=ref.stderr)
+    err2 = r.stderr.astype(np.float64) ** 2 / (ref.image.astype(np.float64) ** 2 + metrics.REL_EPS)
+    sd = _relmse_spread(err2, scene.sensors()[0].film().rfilter())
+    assert achieved <= target ** 2 + stats.z_critical(stats.ALPHA, 2) * sd, \
+        (math.sqrt(achieved), target, r.estimated_error)
+
+
+@pytest.mark.parametrize("integrator", ["path", "direct", "whitted"])
+def test_integrators(variant_llvm_rgb, integrator):
+    """path, direct and phonglab's Python whitted (radiance units, so the three agree in
+    expectation at depth 2 with one point light): the adaptive image mean matches a uniform
+    mi.render of the same integrator within their standard errors (Sidak: 3 x 3 channels)."""
+    scene = _load("exponent_series", width=48, height=16, max_depth=2, integrator="path")
+    integ = mi.load_dict({"type": integrator, "max_depth": 2} if integrator != "whitted" else
+                         {"type": "whitted", "max_depth": 2, "units": "radiance"}) \
+        if integrator != "direct" else mi.load_dict({"type": "direct"})
+    means = np.array([adaptive.render_adaptive(scene, 0.02, seed=s, integrator=integ)
+                      .image.mean(axis=(0, 1)) for s in range(4)])
+    u = render.render_scene(scene, 64, seed=9, passes=8, integrator=integ)
+    mu, se_u = u.mean_and_stderr()
+    se_a = means.std(axis=0, ddof=1) / 2.0
+    t = np.abs(means.mean(axis=0) - mu) / np.sqrt(se_a ** 2 + se_u ** 2 + 1e-300)
+    assert np.all(t <= stats.t_critical(3, stats.ALPHA, 9)), (integrator, means.mean(0), mu)
+
+
+def test_mono_and_spectral_variants():
+    """Mono films have one channel, spectral renders are converted per sample to sRGB."""
+    for variant, channels in (("llvm_ad_mono", 1), ("llvm_ad_spectral", 3)):
+        r = adaptive.render_adaptive(_load("gray_direct", variant, res=16), 0.05, seed=1)
+        assert r.image.shape == (16, 16, channels) and np.all(np.isfinite(r.image))
+
+
+def test_scalar_variant_refused():
+    with pytest.raises(PhonglabError, match="JIT variant"):
+        adaptive.render_adaptive(_load("gray_direct", "scalar_rgb", res=4), 0.05)
+
+
+def test_cli_writes_image_stderr_and_spp_map(tmp_path, capsys):
+    out = tmp_path / "gd.exr"
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.1",
+                     "--max-spp", "64", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "adaptively" in text and "spp map" in text
+    image, meta = exr.read(out)
+    spp, _ = exr.read(tmp_path / "gd.spp.exr")
+    stderr, _ = exr.read(tmp_path / "gd.stderr.exr")
+    assert spp.shape[:2] == image.shape[:2] == stderr.shape[:2]
+    assert spp.min() >= adaptive.MIN_SPP and spp.max() <= 64
+    assert meta["adaptive"] is True and meta["target_error"] == 0.1
+    assert (tmp_path / "gd.png").is_file() and (tmp_path / "gd.spp.png").is_file()
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--adaptive", "--target-error", "0"], "target error"),
+    (["--adaptive", "--target-error", "-0.1"], "target error"),
+    (["--adaptive", "--target-error", "nan"], "target error"),
+    (["--adaptive", "--target-error", "inf"], "target error"),
+    (["--adaptive"], "needs --target-error"),
+    (["--adaptive", "--target-error", "0.1", "--max-spp", "0"], "--max-spp"),
+    (["--adaptive", "--target-error", "0.1", "--max-seconds", "-1"], "--max-seconds"),
+    (["--adaptive", "--target-error", "0.1", "--max-seconds", "nan"], "--max-seconds"),
+    (["--adaptive", "--target-error", "0.1", "--spp", "8"], "drop --spp"),
+    (["--max-spp", "8"], "add --adaptive"),
+])
+def test_cli_bad_input_exits_2_before_work(tmp_path, capsys, args, message):
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", *args, "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and err.count("\n") == 1
+    assert not any(tmp_path.iterdir())
+
+
+def test_cli_unwritable_spp_map_refused_before_render(tmp_path, capsys):
+    (tmp_path / "x.spp.exr").mkdir()
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.1",
+                     "-o", str(tmp_path / "x.exr")]) == 2
+    assert "spp map" in capsys.readouterr().err
+    assert not (tmp_path / "x.exr").exists()
+
+
+class _TinyConfig(bench_config.Config):
+    """The bench part at test size (16², 2 seeds, one target)."""
+
+    adaptive_res = 16
+    adaptive_scenes = ["gray_direct", "check_furnace_enclosure"]
+    adaptive_spps = [4, 16]
+    adaptive_targets = [0.08]
+    adaptive_planned_targets = [0.08]
+    adaptive_seeds = 2
+    adaptive_reference_spp = 1024
+
+
+def test_bench_part_writes_chart_speedups_and_report(tmp_path, monkeypatch, variant_llvm_rgb):
+    """The 'adaptive' bench part at test size: rows of the three methods, equal-error speed-ups
+    with their spread, the overhead verdict, the guard rows, both figures, and its section."""
+    monkeypatch.setattr(adaptive_sweeps, "UNIFORM_SCENE_RES", 8)
+    data = adaptive_sweeps.sweep_adaptive(tmp_path, _TinyConfig())
+    gd = next(s for s in data["scenes"] if s["scene"] == "gray_direct")
+    assert {r["method"] for r in gd["rows"]} == {"uniform", "adaptive", "planned"}
+    for key in ("adaptive", "planned", "planned_render_only"):
+        s = gd["speedups"][key]
+        assert 0 < s["min"] <= s["median"] <= s["max"]
+    assert data["overhead"]["cost_vs_uniform"] > 0 and "met" in data["overhead"]
+    assert {g["neighbourhood"] for g in data["guards"]} == {True, False}
+    assert (tmp_path / "adaptive_error_time.png").is_file()
+    assert (tmp_path / "adaptive_sppmap.png").is_file()
+    text = "\n".join(adaptive_sweeps.report_section(tmp_path, "docs/bench"))
+    assert "Adaptive sampling" in text and "docs/bench/adaptive_error_time.png" in text
+    assert "adaptive" in bench_config.PARTS
