@@ -9,8 +9,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import registration
+from ..fit import optimize
 from .bsdfs import METAL, PLASTIC, albedo_curves, fig_albedo, fig_sphere_rows, render_sphere_row
 from .common import save
+from .fitting import fig_lobe_cuts
 from .radiometry import emitter_distance_series, fig_emitter_distances, fig_reflection_equation
 from .refraction import fig_refraction_agreement, refraction_agreement
 from .speed import convergence_curves, fig_convergence
@@ -30,5 +32,6 @@ def write_doc_images(folder: str | Path = "docs/img", dpi: int = 72) -> list[Pat
         "nb_02_furnace.png": fig_albedo(albedo_curves(samples=20000)),
         "nb_03_refraction.png": fig_refraction_agreement(refraction_agreement()),
         "nb_04_convergence.png": fig_convergence(convergence_curves(seeds=8)),
+        "nb_05_lobe_cuts.png": fig_lobe_cuts(optimize.fit("roughconductor", {"alpha": 0.2})),
     }
     return [save(fig, folder / name, dpi=dpi) for name, fig in figs.items()]
