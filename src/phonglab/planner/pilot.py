@@ -25,6 +25,7 @@ import numpy as np
 from .. import render
 from ..metrics import REL_EPS
 from ..scenes import SceneInfo, path_integrator
+from . import ladder
 
 #: ε of the relative error E = √mean((x − r)²/(r² + ε)) (phonglab.metrics.relative_rmse).
 EPS = REL_EPS
@@ -111,16 +112,26 @@ class Pilot:
                  passes: int = PILOT_PASSES, seed: int = PILOT_SEED):
         self.scene, self.info, self.passes, self.seed = scene, info, passes, seed
         self.spp_per_pass = spp // passes
-        self.full = self._render(-1, seed).passes
+        #: one-render depth ladder (:mod:`.ladder`) where it applies, else one render per depth
+        self.one_kernel = ladder.applies(info)
+        self.renders = 0  #: pilot renders made (each spp samples per pixel)
+        self.ladder_images: dict[int, np.ndarray] = {}
+        if self.one_kernel:
+            self.full = self._render_ladder(DEPTH_LADDER)
+        else:
+            self.full = self._render(-1, seed).passes
         # The weights come from an independent full-depth pilot (other seeds): taken from
         # `full` itself they would shrink exactly where a rare bright sample inflates the
         # variance (a caustic firefly raises both), and the noise would be underestimated.
-        self.weight = _weights(self._render(-1, seed + 1).passes)
+        # (A ladder render of the same depths shares the first one's JIT kernel.)
+        self.weight = _weights(self._render_ladder(DEPTH_LADDER, seed + 1) if self.one_kernel
+                               else self._render(-1, seed + 1).passes)
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
         #: per depth: (H, W) channel mean of σ²·w, the relative variance of one sample per pixel
         self.variance_maps: dict[int, np.ndarray] = {}
+        self.time_models: dict[int, tuple[float, float]] = {}
 
     @property
     def spp(self) -> int:
@@ -128,9 +139,32 @@ class Pilot:
         return self.spp_per_pass * self.passes
 
     def _render(self, depth: int, seed: int) -> render.RenderResult:
+        self.renders += 1
         return render.render_scene(self.scene, self.spp, seed=seed, passes=self.passes,
                                    integrator=path_integrator(depth, self.info),
                                    keep_passes=True)
+
+    def _render_ladder(self, depths, seed: int | None = None) -> np.ndarray:
+        """One :class:`.ladder.DepthLadder` render; returns its full-depth pass images.  With
+        the pilot's seed (default) it keeps the pass images of every depth in ``depths``: the
+        same samples as ``full``, so ``full − depth`` is what two renders with the same seeds
+        would give."""
+        self.renders += 1
+        imgs = render.render_scene(self.scene, self.spp,
+                                   seed=self.seed if seed is None else seed,
+                                   passes=self.passes, integrator=ladder.ladder(depths, self.info),
+                                   keep_passes=True).passes
+        full, by_depth = ladder.split(imgs, depths)
+        if seed is None:
+            self.ladder_images.update(by_depth)
+        return full
+
+    def prefetch(self, depths) -> None:
+        """Render the depths not yet measured in one ladder render (one-kernel pilots only)."""
+        missing = [d for d in depths if d > 0 and d not in self.samples
+                   and d not in self.ladder_images]
+        if self.one_kernel and missing:
+            self._render_ladder(missing)
 
     def variance_map(self, passes_img: np.ndarray) -> np.ndarray:
         """(H, W) mean over channels of σ² · w, σ² = s · var_k(pass_k) the variance of one
@@ -159,8 +193,11 @@ class Pilot:
                 self.samples[d] = DepthSample(-1, 0.0, 0.0, self.noise_per_sample(self.full))
                 self.variance_maps[d] = self.variance_map(self.full)
             else:
-                imgs = self._render(d, self.seed).passes
-                self.compiled.add(d)
+                if d in self.ladder_images:
+                    imgs = self.ladder_images.pop(d)
+                else:
+                    imgs = self._render(d, self.seed).passes
+                    self.compiled.add(d)
                 diff = self.full - imgs
                 mean = diff.mean(axis=0)
                 se2 = diff.var(axis=0, ddof=1) / self.passes
@@ -189,6 +226,7 @@ class Pilot:
         if passing is None:
             self.measure(-1)
             return -1, failing
+        self.prefetch(range(failing + 1, passing))
         while passing - failing > 1:
             mid = (passing + failing) // 2
             if self.measure(mid).bias <= allowed:
@@ -198,7 +236,13 @@ class Pilot:
         return passing, failing
 
     def time_model(self, depth: int) -> tuple[float, float]:
-        """(a, b) of T(spp) = a + b·spp at ``depth``, steady state (the kernel compiled first)."""
+        """(a, b) of T(spp) = a + b·spp at ``depth``, steady state (the kernel compiled first);
+        measured once per depth (steps 4 and 5 both ask)."""
+        if depth not in self.time_models:
+            self.time_models[depth] = self._time_model(depth)
+        return self.time_models[depth]
+
+    def _time_model(self, depth: int) -> tuple[float, float]:
         integrator = path_integrator(depth, self.info)
         if depth not in self.compiled:  # compile the kernel before timing
             render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
