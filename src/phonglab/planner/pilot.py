@@ -33,6 +33,9 @@ EPS = REL_EPS
 BIAS_FRACTION = 0.25
 #: Candidate depths, searched in order, then bisected between the last failing and first passing.
 DEPTH_LADDER = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
+#: The depth ladder's renders (:mod:`.ladder`): a stage is rendered when the search reaches it
+#: (each AOV costs film splats per sample, so a shallow scene should not pay for deep depths).
+LADDER_STAGES = ((1, 2, 3, 4), (6, 8, 12, 16), (24, 32, 48, 64))
 #: Pilot: total samples per pixel, split into this many passes of equal size (same seeds per depth).
 PILOT_SPP = 64
 PILOT_PASSES = 8
@@ -117,15 +120,13 @@ class Pilot:
         self.renders = 0  #: pilot renders made (each spp samples per pixel)
         self.ladder_images: dict[int, np.ndarray] = {}
         if self.one_kernel:
-            self.full = self._render_ladder(DEPTH_LADDER)
+            self.full = self._render_ladder(LADDER_STAGES[0])
         else:
             self.full = self._render(-1, seed).passes
         # The weights come from an independent full-depth pilot (other seeds): taken from
         # `full` itself they would shrink exactly where a rare bright sample inflates the
         # variance (a caustic firefly raises both), and the noise would be underestimated.
-        # (A ladder render of the same depths shares the first one's JIT kernel.)
-        self.weight = _weights(self._render_ladder(DEPTH_LADDER, seed + 1) if self.one_kernel
-                               else self._render(-1, seed + 1).passes)
+        self.weight = _weights(self._render(-1, seed + 1).passes)
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
@@ -144,19 +145,17 @@ class Pilot:
                                    integrator=path_integrator(depth, self.info),
                                    keep_passes=True)
 
-    def _render_ladder(self, depths, seed: int | None = None) -> np.ndarray:
-        """One :class:`.ladder.DepthLadder` render; returns its full-depth pass images.  With
-        the pilot's seed (default) it keeps the pass images of every depth in ``depths``: the
-        same samples as ``full``, so ``full − depth`` is what two renders with the same seeds
-        would give."""
+    def _render_ladder(self, depths) -> np.ndarray:
+        """One :class:`.ladder.DepthLadder` render with the pilot's seed: keeps the pass images
+        of every depth in ``depths`` and returns those of full depth (every ladder render of
+        the pilot traces the same samples, so ``full − depth`` is what two renders with the
+        same seeds would give)."""
         self.renders += 1
-        imgs = render.render_scene(self.scene, self.spp,
-                                   seed=self.seed if seed is None else seed,
-                                   passes=self.passes, integrator=ladder.ladder(depths, self.info),
+        imgs = render.render_scene(self.scene, self.spp, seed=self.seed, passes=self.passes,
+                                   integrator=ladder.ladder(depths, self.info),
                                    keep_passes=True).passes
         full, by_depth = ladder.split(imgs, depths)
-        if seed is None:
-            self.ladder_images.update(by_depth)
+        self.ladder_images.update(by_depth)
         return full
 
     def prefetch(self, depths) -> None:
@@ -193,6 +192,8 @@ class Pilot:
                 self.samples[d] = DepthSample(-1, 0.0, 0.0, self.noise_per_sample(self.full))
                 self.variance_maps[d] = self.variance_map(self.full)
             else:
+                if self.one_kernel and d not in self.ladder_images:
+                    self.prefetch(next((st for st in LADDER_STAGES if d in st), (d,)))
                 if d in self.ladder_images:
                     imgs = self.ladder_images.pop(d)
                 else:
