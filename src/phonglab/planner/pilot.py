@@ -61,6 +61,8 @@ def pilot_spp_for(pixels: int, passes: int = PILOT_PASSES) -> int:
     spp = PILOT_SPP * PILOT_PIXELS / max(pixels, 1)
     spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
     return max(passes, spp // passes * passes)
+#: The time model renders 1 and 4 spp (its fit a + b·spp needs two sizes, not many samples).
+TIME_SPP = 1
 #: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
 PILOT_SEED = 1
 
@@ -135,7 +137,9 @@ class Pilot:
         # The weights come from an independent full-depth pilot (other seeds): taken from
         # `full` itself they would shrink exactly where a rare bright sample inflates the
         # variance (a caustic firefly raises both), and the noise would be underestimated.
-        self.weight = _weights(self._render(-1, seed + 1).passes)
+        # (From the first ladder stage's kernel where the ladder applies: no second compile.)
+        self.weight = _weights(self._render_ladder(LADDER_STAGES[0], seed + 1)
+                               if self.one_kernel else self._render(-1, seed + 1).passes)
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
@@ -154,17 +158,20 @@ class Pilot:
                                    integrator=path_integrator(depth, self.info),
                                    keep_passes=True)
 
-    def _render_ladder(self, depths) -> np.ndarray:
-        """One :class:`.ladder.DepthLadder` render with the pilot's seed: keeps the pass images
-        of every depth in ``depths`` and returns those of full depth (every ladder render of
-        the pilot traces the same samples, so ``full − depth`` is what two renders with the
-        same seeds would give)."""
+    def _render_ladder(self, depths, seed: int | None = None) -> np.ndarray:
+        """One :class:`.ladder.DepthLadder` render; returns its full-depth pass images.  With
+        the pilot's seed (default) it keeps the pass images of every depth in ``depths``
+        (every such render traces the same samples, so ``full − depth`` is what two renders
+        with the same seeds would give); with another seed it is an independent full-depth
+        render."""
         self.renders += 1
-        imgs = render.render_scene(self.scene, self.spp, seed=self.seed, passes=self.passes,
+        imgs = render.render_scene(self.scene, self.spp,
+                                   seed=self.seed if seed is None else seed, passes=self.passes,
                                    integrator=ladder.ladder(depths, self.info),
                                    keep_passes=True).passes
         full, by_depth = ladder.split(imgs, depths)
-        self.ladder_images.update(by_depth)
+        if seed is None:
+            self.ladder_images.update(by_depth)
         return full
 
     def prefetch(self, depths) -> None:
@@ -192,7 +199,7 @@ class Pilot:
                                    integrator=integrator, keep_passes=True).passes
         vmap = self.variance_map(imgs)
         return (math.sqrt(float(np.mean(vmap))), vmap,
-                _time_model(self.scene, integrator, self.spp_per_pass))
+                _time_model(self.scene, integrator, TIME_SPP))
 
     def measure(self, d: int) -> DepthSample:
         """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
@@ -256,7 +263,7 @@ class Pilot:
         integrator = path_integrator(depth, self.info)
         if depth not in self.compiled:  # compile the kernel before timing
             render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
-        return _time_model(self.scene, integrator, self.spp_per_pass)
+        return _time_model(self.scene, integrator, TIME_SPP)
 
     def depths(self) -> list[DepthSample]:
         """Every depth measured, finite ones in order, then -1."""
