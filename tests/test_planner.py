@@ -409,7 +409,7 @@ def test_one_kernel_pilot_measures_what_per_depth_renders_measure(monkeypatch):
     d2, f2 = per.search_depth(ALLOWED)
     assert one.one_kernel and not per.one_kernel
     assert (d1, f1) == (d2, f2)
-    assert one.renders <= 3 < per.renders
+    assert one.renders <= 4 < per.renders  # weights, stages 1-2, the bisection gap
     for a, b in zip(one.depths(), per.depths(), strict=True):
         assert a.depth == b.depth
         for x, y in ((a.bias, b.bias), (a.energy_omitted, b.energy_omitted),
