@@ -173,7 +173,7 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
         e_plan.append(error(out.with_suffix(".plan.exr")))
     ratios = [d / p for d, p in zip(t_def, t_plan)]
     return {
-        "scene": name, "res": res, "target_error": target, "repeats": repeats,
+        "scene": name, "res": res, "params": params, "target_error": target, "repeats": repeats,
         "reference": {"spp": ref.spp, "noise": metrics.relative_noise(ref.image, ref.stderr),
                       "seconds": ref_seconds},
         "default": {"variant": DEFAULT_VARIANT, "max_depth": DEFAULT_DEPTH, "spp": spp_def,

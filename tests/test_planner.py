@@ -430,3 +430,17 @@ def test_depth_ladder_stands_in_only_where_it_is_path(tmp_path, variant_llvm_rgb
         assert not ladder.applies(scenes.inspect_scene("cornell_phong", **RES))
     finally:
         mi.set_variant("llvm_ad_rgb")
+
+
+def test_benchmark_table_names_the_film_of_each_row():
+    """Rows of scripts/planner_bench.py: R² films, and W×H where the scene takes width/height."""
+    row = {"scene": "s", "res": 128, "target_error": 0.01, "speedup": 1.5, "speedup_min": 1.2,
+           "speedup_max": 1.8,
+           "default": {"spp": 10, "error": 0.01, "seconds_median": 3.0},
+           "planned": {"model": "path", "sampling": "adaptive", "variant": "llvm_ad_mono",
+                       "max_depth": 2, "spp": 5.0, "error": 0.0099, "seconds_median": 2.0,
+                       "pilot_seconds": 0.5}}
+    wide = dict(row, scene="w", params={"width": 512, "height": 128})
+    table = planner.benchmark_table([row, wide])
+    assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
+    assert "1.50x (1.20-1.80)" in table
