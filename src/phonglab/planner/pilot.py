@@ -17,8 +17,9 @@ images come from :mod:`.ladder`: one full-depth path per sample whose prefix sum
 images ``path`` renders at each depth of a stage of :data:`LADDER_STAGES` (sample for sample,
 tested), so a stage costs one render and one JIT kernel instead of one per depth, and the gap
 the bisection searches is rendered at once (:meth:`Pilot.prefetch`).  Measured side by side
-(128², pilot of 16 spp, steady state, 2 loaded cores): glass_slab's depth search (10 depths)
-3.1 s against 6.6 s with one render per depth; gray_direct (2 depths) 1.4 s against 1.9 s.
+(128², pilot of 16 spp, kernels compiled, pilot and time model): glass_slab (10 depths) 0.60 s
+in 4 renders against 0.88 s in 12 on a quiet machine (3.1 s against 6.6 s at load average
+~5); gray_direct (2 depths) 0.22 s against 0.27 s (1.4 s against 1.9 s loaded).
 Other variants keep one ``path`` render per depth.
 
 The package docstring (:mod:`phonglab.planner`) derives each of them and gives the sources.
