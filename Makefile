@@ -28,7 +28,7 @@ test-all: setup
 # --quick run whose wall time the report quotes. About 3 minutes on 2 quiet cores.
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
-	$(BIN)/python scripts/planner_bench.py --res 64 --repeats 5 --out docs/bench/planner.json
+	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 3 --out docs/bench/planner.json
 	$(BIN)/python -m phonglab.fit.timing --repeats 5 --out docs/bench/fit.json
 	$(BIN)/python scripts/validate_timing.py --repeats 3 --json docs/bench/validate.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
@@ -49,9 +49,10 @@ clean:
 notebook-figures: setup
 	$(BIN)/python -m phonglab.figures docs/img
 
-# Planner: planned vs default configuration at equal error (docs/planner.md).
+# Planner: planned vs default configuration at equal error (docs/planner.md); the 256² row
+# takes ~20 min on 2 loaded cores (its 1024-spp references are cached after the first run).
 bench-planner: setup
-	$(BIN)/python scripts/planner_bench.py --res 128 --repeats 7
+	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 5
 
 # bench --quick and validate --all-builtins --quick serially vs on a 2-process LocalCluster
 # (alternating, ~6 min), phonglab.parallel's per-job overhead and the expected time on N

@@ -23,7 +23,7 @@ Reported per scene: the plan (model, sampling, variant, depth, spp), both errors
 times (median, min-max over seeds), the speed-up T_default/T_planned with its spread, and the
 plan's reasons.  Written to ``--out`` (JSON) and printed as a table.
 
-Run: ``.venv/bin/python scripts/planner_bench.py [--res 128] [--repeats 3] [scene ...]``
+Run: ``.venv/bin/python scripts/planner_bench.py [--res 128 256] [--repeats 3] [scene ...]``
 (``make bench-planner``).
 """
 
@@ -124,6 +124,17 @@ def default_error(scene: str, params: dict, spp: int, ref, seeds) -> float:
     return float(np.mean(errs))
 
 
+#: Reference samples per pixel at 128² and below.
+REF_SPP = 4096
+
+
+def reference_spp(res: int) -> int:
+    """Reference spp of the bench at resolution ``res``: :data:`REF_SPP` up to 128², then the
+    same samples per image, at least 1024 spp (its noise, known from its passes, is subtracted
+    from every error measured against it)."""
+    return max(1024, min(REF_SPP, REF_SPP * 128 * 128 // (res * res)))
+
+
 #: Most spp the default configuration is given when it cannot reach E (a depth-8 bias floor).
 MAX_DEFAULT_SPP = 8192
 
@@ -162,7 +173,7 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
         e_plan.append(error(out.with_suffix(".plan.exr")))
     ratios = [d / p for d, p in zip(t_def, t_plan)]
     return {
-        "scene": name, "res": res, "target_error": target, "repeats": repeats,
+        "scene": name, "res": res, "params": params, "target_error": target, "repeats": repeats,
         "reference": {"spp": ref.spp, "noise": metrics.relative_noise(ref.image, ref.stderr),
                       "seconds": ref_seconds},
         "default": {"variant": DEFAULT_VARIANT, "max_depth": DEFAULT_DEPTH, "spp": spp_def,
@@ -188,16 +199,23 @@ def main(argv=None) -> int:
         return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=list(SCENES))
-    ap.add_argument("--res", type=int, default=128)
+    ap.add_argument("--res", type=int, nargs="+", default=[128],
+                    help="bench resolutions R (every scene at each; a film of R x R, 4R x R "
+                         "for nb_sphere_row)")
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--ref-spp", type=int, default=None,
+                    help=f"reference spp (default {REF_SPP} at 128² and below, fewer on "
+                         f"larger films: reference_spp())")
     ap.add_argument("--out", default=str(references.CACHE_DIR / "planner_bench.json"))
     args = ap.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory(prefix="planner-bench-") as tmp:
-        for name in args.scenes:
-            rows.append(bench_scene(name, args.res, args.repeats, args.ref_spp, Path(tmp)))
-            print(json.dumps({k: rows[-1][k] for k in ("scene", "speedup")}), flush=True)
+        for res in args.res:
+            for name in args.scenes:
+                ref_spp = args.ref_spp or reference_spp(res)
+                rows.append(bench_scene(name, res, args.repeats, ref_spp, Path(tmp)))
+                print(json.dumps({k: rows[-1][k] for k in ("scene", "res", "speedup")}),
+                      flush=True)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(rows, indent=2))
     print(planner.benchmark_table(rows))

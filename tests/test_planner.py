@@ -366,3 +366,81 @@ def test_pilot_keeps_its_samples_per_image_on_large_films():
     assert pilot_spp_for(80 * 80) == 40
     assert pilot_spp_for(128 * 128) == 16 and pilot_spp_for(1024 * 1024) == 16
     assert all(pilot_spp_for(n) % planner.PILOT_PASSES == 0 for n in (100, 5000, 9000, 10 ** 6))
+
+
+# --- the one-render depth ladder (planner/ladder.py) ---------------------------------------------
+
+@pytest.mark.parametrize("name,variant", [("cornell_phong", "llvm_ad_rgb"),
+                                          ("glass_slab", "llvm_ad_rgb"),
+                                          ("gray_room", "llvm_ad_mono")])
+def test_depth_ladder_is_path_at_every_depth(name, variant):
+    """Expectation: the ladder's image at depth d is Mitsuba's path at max_depth d and its full
+    image path at -1 -- sample for sample with the same seed (the ladder draws the sampler's
+    dimensions in path.cpp's order), so up to float rounding of the sums, not just within MC
+    error; glass_slab covers delta chains, gray_room a mono variant."""
+    from phonglab.planner import ladder
+
+    info = scenes.inspect_scene(name, **RES)
+    with runtime.quiet_mitsuba():
+        scene = scenes.load_scene(info.path, variant, **RES)
+    depths = (1, 2, 3, 5, 8)
+    got = render.render_scene(scene, 8, seed=3, integrator=ladder.ladder(depths, info)).image
+    full, by_depth = ladder.split(got[None], depths)
+    for d, img in [(-1, full[0])] + [(d, by_depth[d][0]) for d in depths]:
+        want = render.render_scene(scene, 8, seed=3,
+                                   integrator=scenes.path_integrator(d, info)).image
+        assert img.shape == want.shape
+        np.testing.assert_allclose(img, want, rtol=1e-4, atol=1e-5, err_msg=f"depth {d}")
+
+
+def test_one_kernel_pilot_measures_what_per_depth_renders_measure(monkeypatch):
+    """The pilot's depth search from one ladder render (plus one for the weights) gives the
+    same b(d), energy and n(1) as one path render per depth with the same seeds, in fewer
+    renders."""
+    from phonglab.planner import ladder, pilot
+
+    info = scenes.inspect_scene("cornell_phong", **RES)
+    with runtime.quiet_mitsuba():
+        scene = scenes.load_scene(info.path, "llvm_ad_rgb", **RES)
+    one = pilot.Pilot(scene, info, 16, 8, 1)
+    d1, f1 = one.search_depth(ALLOWED)
+    monkeypatch.setattr(ladder, "applies", lambda info: False)
+    per = pilot.Pilot(scene, info, 16, 8, 1)
+    d2, f2 = per.search_depth(ALLOWED)
+    assert one.one_kernel and not per.one_kernel
+    assert (d1, f1) == (d2, f2)
+    assert one.renders <= 4 < per.renders  # weights, stages 1-2, the bisection gap
+    for a, b in zip(one.depths(), per.depths(), strict=True):
+        assert a.depth == b.depth
+        for x, y in ((a.bias, b.bias), (a.energy_omitted, b.energy_omitted),
+                     (a.noise_per_sample, b.noise_per_sample)):
+            assert x == pytest.approx(y, rel=1e-3, abs=1e-6)
+
+
+def test_depth_ladder_stands_in_only_where_it_is_path(tmp_path, variant_llvm_rgb):
+    """RGB/mono scenes that show their emitters: yes; hide_emitters or spectral: no."""
+    from phonglab.planner import ladder
+
+    assert ladder.applies(scenes.inspect_scene("cornell_phong", **RES))
+    hidden = _write(tmp_path, '<integrator type="path"><boolean name="hide_emitters" '
+                              'value="true"/></integrator>')
+    assert not ladder.applies(scenes.inspect_scene(hidden))
+    mi.set_variant("llvm_ad_spectral")
+    try:
+        assert not ladder.applies(scenes.inspect_scene("cornell_phong", **RES))
+    finally:
+        mi.set_variant("llvm_ad_rgb")
+
+
+def test_benchmark_table_names_the_film_of_each_row():
+    """Rows of scripts/planner_bench.py: R² films, and W×H where the scene takes width/height."""
+    row = {"scene": "s", "res": 128, "target_error": 0.01, "speedup": 1.5, "speedup_min": 1.2,
+           "speedup_max": 1.8,
+           "default": {"spp": 10, "error": 0.01, "seconds_median": 3.0},
+           "planned": {"model": "path", "sampling": "adaptive", "variant": "llvm_ad_mono",
+                       "max_depth": 2, "spp": 5.0, "error": 0.0099, "seconds_median": 2.0,
+                       "pilot_seconds": 0.5}}
+    wide = dict(row, scene="w", params={"width": 512, "height": 128})
+    table = planner.benchmark_table([row, wide])
+    assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
+    assert "1.50x (1.20-1.80)" in table

@@ -56,7 +56,8 @@ M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., §2.1.4
 Russian roulette).
 
 Modules: :mod:`.planning` (:class:`Plan`, :func:`plan` and its steps), :mod:`.pilot` (the
-pilot renders, depth search, weights, noise and time model), :mod:`.benchmark` (the table of
+pilot renders, depth search, weights, noise and time model), :mod:`.ladder` (one render that
+gives the image at several depths), :mod:`.benchmark` (the table of
 ``scripts/planner_bench.py``).
 """
 

@@ -19,9 +19,17 @@ def benchmark_table(rows: list[dict]) -> str:
     for r in rows:
         d, p = r["default"], r["planned"]
         out.append(
-            f"| {r['scene']} ({r['res']}²) | {r['target_error']:g} | {d['spp']} spp, "
+            f"| {r['scene']} ({_film(r)}) | {r['target_error']:g} | {d['spp']} spp, "
             f"{d['error']:.4f}, {d['seconds_median']:.2f} s | {p['model']} {p['sampling']}, "
             f"{p['variant']}, {p['max_depth']}, {p['spp']:.1f} | {p['error']:.4f}, "
             f"{p['seconds_median']:.2f} s ({p['pilot_seconds']:.1f} s) | {r['speedup']:.2f}x "
             f"({r['speedup_min']:.2f}-{r['speedup_max']:.2f}) |")
     return "\n".join(out)
+
+
+def _film(row: dict) -> str:
+    """The film size of a row: W×H when its scene parameters give width and height, else R²."""
+    params = row.get("params") or {}
+    if "width" in params and "height" in params:
+        return f"{params['width']}×{params['height']}"
+    return f"{row['res']}²"
