@@ -407,7 +407,8 @@ def mis_section(d: RunData) -> list[str]:
           f"to equal error. At equal samples it is the better of the two in {lower} of these "
           f"{len(shown)} cells: the rest of the gap is its cost per estimate (a second kernel "
           f"launch for the pilot and the 2×2 solves on the host, against one launch for `mis`; "
-          f"see the medians above), which a loaded machine inflates most.\n",
+          f"see the medians above): a fixed cost per estimate, as large as a whole `mis` "
+          f"estimate at N = {STABILITY_N}, which a larger N would amortize.\n",
           "| light | p | θ_i | mis_optimal, equal time | equal samples | power mis, equal time | "
           "power mis, equal samples | optimal / power (equal time) | near-zero-variance |",
           "|---|---|---|---|---|---|---|---|---|"]
