@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
 from ..errors import PhonglabError
 from ..exr import atomic_path
@@ -91,8 +90,3 @@ def number(row: dict, key: str) -> float:
     except (KeyError, TypeError, ValueError):
         return float("nan")
 
-
-def progress_bar(total: int, desc: str, enabled: bool) -> tqdm:
-    """A progress bar over ``total`` rows (nothing is shown unless ``enabled``)."""
-    return tqdm(total=total, desc=desc, unit="row", disable=not enabled, leave=False,
-                dynamic_ncols=True)
