@@ -39,6 +39,16 @@ def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
     assert failing == {PLANTED[name]}, report.table(report.failing)
 
 
+def test_failing_chi2_writes_nothing_into_the_working_directory(variant_llvm_rgb, tmp_path,
+                                                                monkeypatch):
+    # mi.chi2 dumps chi2_data.py on a failed test unless run quietly, as the topic runs it
+    monkeypatch.chdir(tmp_path)
+    report = validate_bsdf("defect_pdf_mismatch", plugins=[DEFECTS / "pdf_mismatch.py"],
+                           quick=True, seed=0, topics=["chi2"])
+    assert {r.topic for r in report.failing} == {"chi2"}
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("bsdf", ["diffuse", "lambert", "phong"])
 def test_correct_bsdfs_pass_quick(variant_llvm_rgb, bsdf):
     report = validate_bsdf(bsdf, quick=True, seed=0)

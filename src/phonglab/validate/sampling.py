@@ -14,8 +14,9 @@ is histogrammed on its non-delta part only, whose ∫pdf is then < 1 in step wit
 
 Guards: a cell whose histogram is empty while ∫pdf > 0 fails (``mi.chi2`` would accept an
 empty histogram vacuously); a cell where both are empty (e.g. the BSDF is black at that
-incidence) is not tested.  ``mi.chi2`` writes ``chi2_data.py`` into the working directory on
-failure: the test runs in a temporary directory.
+incidence) is not tested.  ``mi.chi2`` writes ``chi2_data.py`` into the working directory on failure
+only when not ``quiet`` (mitsuba/python/chi2.py, ``run``: ``if not quiet: ... _dump_tables()``);
+the test runs quietly, so it writes nothing and the process's directory is left alone.
 
 Delta lobes cannot be histogrammed: for a BSDF whose every component is a delta lobe the
 topic instead checks each sampled direction against the law of reflection (reflect(wi)) or
@@ -25,10 +26,7 @@ to 1e-4 per component of the unit vector (float32 trigonometry is good to ~1e-6)
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
-import tempfile
 
 import drjit as dr
 import mitsuba as mi
@@ -40,17 +38,6 @@ from .report import Row
 
 #: Tolerance of a delta sample's direction, per vector component (see the module docstring).
 DIRECTION_TOL = 1e-4
-
-
-@contextlib.contextmanager
-def _in_tempdir():
-    old = os.getcwd()
-    with tempfile.TemporaryDirectory(prefix="phonglab-chi2-") as d:
-        os.chdir(d)
-        try:
-            yield
-        finally:
-            os.chdir(old)
 
 
 def _adapters(bsdf, wi: np.ndarray):
@@ -80,14 +67,13 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, seed: int) -> dict:
     test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
                                  pdf_func=pdf_func, sample_dim=3, sample_count=opts.chi2_samples,
                                  res=opts.chi2_res, ires=opts.chi2_ires, seed=seed)
-    with _in_tempdir():
-        test.tabulate_histogram()
-        test.tabulate_pdf()
-        hist_sum = float(dr.sum(test.histogram)[0]) if dr.width(test.histogram) else 0.0
-        pdf_sum = float(test.pdf_sum[0])
-        if hist_sum == 0 and pdf_sum < 1e-6:
-            return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
-        ok = hist_sum > 0 and test.run(significance_level=level, test_count=1, quiet=True)
+    test.tabulate_histogram()
+    test.tabulate_pdf()
+    hist_sum = float(dr.sum(test.histogram)[0]) if dr.width(test.histogram) else 0.0
+    pdf_sum = float(test.pdf_sum[0])
+    if hist_sum == 0 and pdf_sum < 1e-6:
+        return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
+    ok = hist_sum > 0 and test.run(significance_level=level, test_count=1, quiet=True)
     p = float(test.p_value) if test.p_value is not None else 0.0
     cell = {"wi": wi.tolist(), "p_value": p if math.isfinite(p) else 0.0,
             "hist_sum": hist_sum / opts.chi2_samples, "pdf_sum": pdf_sum,
