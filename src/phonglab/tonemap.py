@@ -10,11 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
 import numpy as np
-
-matplotlib.use("Agg", force=False)
-import matplotlib.pyplot as plt  # noqa: E402  (after choosing the non-interactive backend)
+from PIL import Image
 
 
 def auto_exposure(image: np.ndarray, darken_only: bool = False) -> float:
@@ -47,5 +44,5 @@ def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> P
     srgb = to_srgb(image, exposure)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    plt.imsave(path, srgb, cmap="gray" if srgb.ndim == 2 else None, vmin=0.0, vmax=1.0)
+    Image.fromarray(np.round(srgb * 255.0).astype(np.uint8)).save(path, format="PNG")
     return path
