@@ -96,3 +96,15 @@ def test_preview_exposure_only_darkens_images_beyond_one():
     assert ev < 0
     np.testing.assert_allclose(np.percentile(graphics, 99) * 2.0 ** ev, 0.8, rtol=1e-9)
     assert auto_exposure(np.zeros((4, 4, 3))) == 0.0
+
+
+def test_render_file_with_another_sampler_records_it(tmp_path, variant_llvm_rgb):
+    from phonglab import exr, render
+
+    out = tmp_path / "gd.exr"
+    r = render.render_file("gray_direct", out, spp=40, sampler="multijitter", progress=False)
+    assert r.pass_spp == [6] * 8 and r.metadata["spp"] == 48
+    assert r.metadata["sampler"] == "MultijitterSampler"
+    assert exr.read(out)[1]["sampler"] == "MultijitterSampler"
+    plain = render.render_file("gray_direct", tmp_path / "p.exr", spp=40, progress=False)
+    assert plain.metadata["sampler"] == "IndependentSampler" and plain.metadata["spp"] == 40

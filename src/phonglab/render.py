@@ -29,8 +29,9 @@ from tqdm import tqdm
 from . import __version__
 from .errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs
+from .runtime import quiet_mitsuba
 from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
-                     scene_path)
+                     scene_path, sensor_with_sampler)
 from .tonemap import auto_exposure
 
 
@@ -90,7 +91,7 @@ def check_spp(spp: int) -> int:
     return int(spp)
 
 
-def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 0,
+def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int | mi.Sensor = 0,
                  progress: bool = False, integrator=None,
                  keep_passes: bool = False) -> RenderResult:
     """Render ``scene`` with ``spp`` samples per pixel split into ``passes`` equal passes.
@@ -100,9 +101,14 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     mean (module docstring).  ``integrator`` overrides the scene's; ``keep_passes`` keeps
     every pass image in :attr:`RenderResult.passes`.  ``pass_seconds`` times each pass with
     the image evaluated and copied to numpy (the first includes JIT compilation).
+    ``sensor`` is a sensor number of the scene or a sensor of its own
+    (:func:`phonglab.scenes.sensor_with_sampler`); a stratified sampler may round each pass's
+    count up (:func:`pass_spps`), and the render then has more than ``spp`` samples
+    (:attr:`RenderResult.pass_spp`).
     """
     spp = check_spp(spp)
     per_pass = pass_spps(scene, spp, passes, sensor)
+    spp = sum(per_pass)
     iterator = range(len(per_pass))
     if progress:
         iterator = tqdm(iterator, desc="rendering", unit="pass", leave=False)
@@ -117,20 +123,39 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int = 
     return merged.result(time.perf_counter() - t_start, times)
 
 
-def pass_spps(scene, spp: int, passes: int, sensor: int = 0) -> list[int]:
+def pass_spps(scene, spp: int, passes: int, sensor: int | mi.Sensor = 0) -> list[int]:
     """Samples per pixel of each pass of an ``spp`` render in ``passes`` near-equal passes.
 
     More passes than asked when one ``mi.render`` call would exceed
-    :data:`MAX_SAMPLES_PER_CALL` samples; never more passes than samples.
+    :data:`MAX_SAMPLES_PER_CALL` samples; never more passes than samples.  Each count is one
+    the sensor's sampler takes as it is: with a stratified sampler every pass has the count
+    ⌈spp/passes⌉ rounded up to one it can stratify (``multijitter``: rows × columns, 7 → 8),
+    so the render may have more than ``spp`` samples.
     """
-    width, height = (int(v) for v in preflight(scene, "the scene", sensor).film().size())
+    chosen = preflight(scene, "the scene", sensor)
+    width, height = (int(v) for v in chosen.film().size())
     # Mitsuba refuses (or splits and then fails) a single render of more than 2^32 samples.
     min_passes = -(-spp * width * height // MAX_SAMPLES_PER_CALL)
     passes = max(1, min_passes, min(int(passes), int(spp)))
+    if chosen.sampler().class_name() != "IndependentSampler":  # equal, stratifiable passes
+        return [sampler_count(chosen.sampler(), -(-spp // passes))] * passes
     return [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
 
 
-def render_pass(scene, spp: int, mitsuba_seed: int, sensor: int = 0, integrator=None) -> np.ndarray:
+def sampler_count(sampler, n: int) -> int:
+    """The samples per pixel ``sampler`` draws when asked for ``n`` (``n`` for ``independent``)."""
+    if sampler.class_name() == "IndependentSampler":
+        return int(n)
+    with quiet_mitsuba():  # "sample count rounded up": the caller is asking, not rendering
+        previous = sampler.sample_count()
+        sampler.set_sample_count(int(n))
+        taken = int(sampler.sample_count())
+        sampler.set_sample_count(previous)
+    return taken
+
+
+def render_pass(scene, spp: int, mitsuba_seed: int, sensor: int | mi.Sensor = 0,
+                integrator=None) -> np.ndarray:
     """One pass: ``mi.render`` with Mitsuba seed ``mitsuba_seed``, as (H, W, C) float64."""
     img = _render_call(scene, spp=spp, seed=mitsuba_seed, sensor=sensor, integrator=integrator)
     dr.eval(img)
@@ -193,7 +218,8 @@ def _render_call(scene, **kwargs):
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
-                png: bool = True, extra_metadata: dict[str, Any] | None = None) -> RenderResult:
+                png: bool = True, extra_metadata: dict[str, Any] | None = None,
+                sampler: str | None = None) -> RenderResult:
     """Load, render and write ``out`` (EXR with provenance) plus its standard error and a PNG.
 
     Everything that can be checked is checked before the render starts: the output files
@@ -218,13 +244,18 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
     sensor = preflight(loaded, path)
     spp = int(spp or sensor.sampler().sample_count())
+    if sampler is not None:
+        info = inspect_scene(path, **params)
+        if sampler != info.sampler:
+            sensor = preflight(loaded, path, sensor_with_sampler(info, sampler))
     passes = passes or (min(spp, 8) if spp >= 16 else 1)
     result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
-                          integrator=integrator)
+                          integrator=integrator, sensor=sensor)
     integrator = integrator or loaded.integrator()
     result.metadata = {
         "scene": str(path), "scene_sha256": file_hash(path), "variant": mi.variant(),
-        "spp": spp, "passes": passes, "seed": seed,
+        "spp": int(sum(result.pass_spp)), "passes": passes, "seed": seed,
+        "sampler": sensor.sampler().class_name(),
         "integrator": integrator.class_name() if hasattr(integrator, "class_name") else str(type(integrator)),
         "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
@@ -262,15 +293,17 @@ def available_memory() -> int | None:
     return min(limits) if limits else None
 
 
-def preflight(scene, path: str | Path, sensor: int = 0):
-    """The scene's sensor number ``sensor``, once the render is known to be possible.
+def preflight(scene, path: str | Path, sensor: int | mi.Sensor = 0):
+    """The scene's sensor number ``sensor`` (or ``sensor`` itself, a sensor built apart from
+    the scene), once the render is known to be possible.
 
     Raises:
         SceneError: no sensor, a film without pixels, or a film whose render would need more
             memory than this process can have (estimated as BASE_BYTES + BYTES_PER_PIXEL per
             pixel: the render is refused before anything is allocated).
     """
-    sensors = scene.sensors()
+    sensors = [sensor] if isinstance(sensor, mi.Sensor) else scene.sensors()
+    sensor = 0 if isinstance(sensor, mi.Sensor) else sensor
     if not sensors:
         raise SceneError(f"{path}: the scene has no <sensor>; add a camera (e.g. <sensor "
                          f"type=\"perspective\">) with a <film>")

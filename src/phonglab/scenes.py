@@ -23,6 +23,7 @@ import numpy as np
 
 from . import registration
 from .errors import SceneError
+from .runtime import quiet_mitsuba
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SCENES_DIR = REPO_ROOT / "scenes_xml"
@@ -238,6 +239,9 @@ class SceneInfo:
     integrator_dict_why: str = ""
     gray_values: int = 0                                  #: gray colour values seen
     bsdf_types: set[str] = field(default_factory=set)     #: every <bsdf type=...> in the file
+    #: the first top-level ``<sensor>``, ``$name``\ s substituted ("" when the file has none)
+    sensor_xml: str = ""
+    sampler: str = "independent"                          #: that sensor's sampler type
 
     @property
     def color(self) -> str:
@@ -322,7 +326,38 @@ def inspect_scene(scene: str | Path, **params) -> SceneInfo:
         info.integrator_props = {c.get("name"): c.get("value") for c in integ
                                  if c.get("name") and c.get("value") is not None}
     info.integrator_dict, info.integrator_dict_why = _integrator_dict(integ)
+    sensor = root.find("sensor")
+    if sensor is not None:
+        info.sensor_xml = ET.tostring(sensor, encoding="unicode")
+        sampler = sensor.find("sampler")
+        info.sampler = sampler.get("type", "independent") if sampler is not None else "independent"
     return info
+
+
+def sensor_with_sampler(info: SceneInfo, sampler: str, version: str = "3.0.0"):
+    """The scene's first sensor rebuilt with a sampler of type ``sampler`` (same camera, film
+    and sample count), for ``mi.render(scene, sensor=...)`` in the active variant.
+
+    Raises:
+        SceneError: the file has no top-level ``<sensor>``, or that sensor cannot be built on
+            its own (it refers to objects defined elsewhere in the scene, say).
+    """
+    if not info.sensor_xml:
+        raise SceneError(f"{info.path}: no top-level <sensor> to rebuild with the {sampler!r} "
+                         f"sampler; render it with its own sampler.")
+    el = ET.fromstring(info.sensor_xml)
+    node = el.find("sampler")
+    if node is None:
+        node = ET.SubElement(el, "sampler")
+    node.set("type", sampler)
+    el.set("version", version)
+    try:
+        with quiet_mitsuba():  # mono variants: "film output set to luminance", as load_scene
+            return mi.load_string(ET.tostring(el, encoding="unicode"))
+    except Exception as exc:  # Mitsuba's loader: a reference, a property the sampler refuses
+        why = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        raise SceneError(f"{info.path}: its sensor cannot be rebuilt with the {sampler!r} "
+                         f"sampler ({why}); render it with its own sampler.") from exc
 
 
 _VALUE_TYPES = {"integer": int, "float": float, "string": str,
