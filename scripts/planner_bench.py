@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from phonglab import exr, metrics, planner, references, render, runtime, scenes
+from planner_bench_child import DEFAULT_DEPTH, DEFAULT_VARIANT  # scripts/, beside this file
 
 #: scene -> (target error E, scene parameters at the bench resolution R)
 SCENES = {
@@ -51,57 +52,13 @@ SCENES = {
     "glass_slab": (0.05, lambda r: {"res": r}),
     "nb_sphere_row": (0.005, lambda r: {"width": 4 * r, "height": r}),
 }
-DEFAULT_VARIANT = "llvm_ad_rgb"
-DEFAULT_DEPTH = 8
-
-
-# --- the two commands, run in a child process -------------------------------------------------
-
-def child_default(scene: str, params: dict, spp: int, seed: int, out: str) -> dict:
-    """What ``phonglab render SCENE --spp N --max-depth 8 --variant llvm_ad_rgb`` does."""
-    info = scenes.inspect_scene(scene, **params)
-    with runtime.quiet_mitsuba():
-        loaded = scenes.load_scene(info.path, DEFAULT_VARIANT, **params)
-    result = render.render_scene(loaded, spp, seed=seed, passes=min(spp, 8) if spp >= 16 else 1,
-                                 integrator=scenes.path_integrator(DEFAULT_DEPTH, info))
-    exr.write(out, result.image, {"spp": spp})
-    return {"spp": spp}
-
-
-def child_planned(scene: str, params: dict, target: float, seed: int, out: str) -> dict:
-    """What ``phonglab render SCENE --target-error E`` does (cli/render.py, run_planned)."""
-    from phonglab import adaptive
-    from phonglab.planner import choice
-
-    plan = planner.plan(scene, target, params=params)
-    if plan.uses_wavefront:
-        uniform = plan.sampling == "uniform"
-        spp = max(2, math.ceil(plan.chosen_spp))
-        integ = None if plan.model == "path" else choice.model_dict(plan.model, plan.max_depth,
-                                                                    scene, params)
-        with runtime.quiet_mitsuba():
-            result = adaptive.render_file_adaptive(
-                scene, out, plan.noise_target, variant=plan.variant, seed=seed,
-                max_depth=plan.max_depth, params=params, integrator=integ,
-                min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
-        spp_mean = result.total_spp
-    else:
-        info = scenes.inspect_scene(scene, **params)
-        with runtime.quiet_mitsuba():
-            loaded = scenes.load_scene(info.path, plan.variant, **params)
-        result = render.render_scene(loaded, plan.spp, seed=seed, passes=plan.passes,
-                                     integrator=scenes.path_integrator(plan.max_depth, info))
-        exr.write(out, result.image, {"spp": plan.spp})
-        spp_mean = plan.spp
-    return {"model": plan.model, "sampling": plan.sampling, "variant": plan.variant,
-            "max_depth": plan.max_depth, "spp": spp_mean, "uniform_path_spp": plan.spp,
-            "pilot_seconds": plan.pilot_seconds, "predicted_seconds": plan.chosen_seconds,
-            "reasons": plan.reasons}
+#: The two commands, each run as a fresh process of its own (imports as the CLI's).
+CHILD = Path(__file__).with_name("planner_bench_child.py")
 
 
 def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) -> tuple[float, dict]:
     """Wall time of one fresh process running a command, and what it reports."""
-    cmd = [sys.executable, __file__, "--child", kind, scene, json.dumps(params), str(value),
+    cmd = [sys.executable, str(CHILD), kind, scene, json.dumps(params), str(value),
            str(seed), str(out)]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -190,13 +147,6 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if argv and argv[0] == "--child":
-        kind, scene, params, value, seed, out = argv[1:7]
-        fn = child_default if kind == "default" else child_planned
-        report = fn(scene, json.loads(params), int(value) if kind == "default" else float(value),
-                    int(seed), out)
-        print(json.dumps(report))
-        return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--res", type=int, nargs="+", default=[128],

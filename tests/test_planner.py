@@ -359,13 +359,17 @@ def test_cli_render_planned_wavefront(tmp_path, capsys):
 
 
 def test_pilot_keeps_its_samples_per_image_on_large_films():
-    """64 spp up to 64² pixels, then 64·64² samples per image, never below 16 spp, whole passes."""
-    from phonglab.planner.pilot import pilot_spp_for
+    """64 spp up to 64² pixels, then 64·64² samples per image, never below 4 spp, in at most
+    8 whole passes of at least 1 spp."""
+    from phonglab.planner.pilot import pilot_size
 
-    assert pilot_spp_for(32 * 32) == 64 and pilot_spp_for(64 * 64) == 64
-    assert pilot_spp_for(80 * 80) == 40
-    assert pilot_spp_for(128 * 128) == 16 and pilot_spp_for(1024 * 1024) == 16
-    assert all(pilot_spp_for(n) % planner.PILOT_PASSES == 0 for n in (100, 5000, 9000, 10 ** 6))
+    assert pilot_size(32 * 32) == (64, 8) and pilot_size(64 * 64) == (64, 8)
+    assert pilot_size(80 * 80) == (40, 8)
+    assert pilot_size(128 * 128) == (16, 8) and pilot_size(256 * 256) == (4, 4)
+    assert pilot_size(1024 * 1024) == (4, 4)
+    for n in (100, 5000, 9000, 10 ** 6):
+        spp, passes = pilot_size(n)
+        assert 2 <= passes <= planner.PILOT_PASSES and spp % passes == 0 and spp >= 4
 
 
 # --- the one-render depth ladder (planner/ladder.py) ---------------------------------------------
@@ -444,3 +448,73 @@ def test_benchmark_table_names_the_film_of_each_row():
     table = planner.benchmark_table([row, wide])
     assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
     assert "1.50x (1.20-1.80)" in table
+
+
+# --- the stratified sampler (planner step 5, render's sampler) ----------------------------------
+
+def test_sensor_with_sampler_keeps_the_camera_and_film():
+    info = scenes.inspect_scene("gray_direct", **RES)
+    assert info.sampler == "independent" and "<sensor" in info.sensor_xml
+    with runtime.quiet_mitsuba():
+        scene = scenes.load_scene("gray_direct", "llvm_ad_rgb", **RES)
+    sensor = scenes.sensor_with_sampler(info, "multijitter")
+    assert sensor.sampler().class_name() == "MultijitterSampler"
+    assert list(sensor.film().size()) == list(scene.sensors()[0].film().size())
+    assert render.pass_spps(scene, 40, 8, sensor) == [6] * 8   # 5 -> 2 x 3 strata
+    assert render.pass_spps(scene, 40, 8) == [5] * 8
+    # Unbiased: the image sums of both samplers agree within their standard errors
+    # (expectation: equal; 4 sigma, alpha ~ 6e-5).
+    mj = render.render_scene(scene, 256, seed=3, passes=8, sensor=sensor)
+    ind = render.render_scene(scene, 256, seed=4, passes=8)
+    diff = float(mj.image.sum() - ind.image.sum())
+    se = math.sqrt(float((mj.stderr.astype(np.float64) ** 2).sum()
+                         + (ind.stderr.astype(np.float64) ** 2).sum()))
+    assert abs(diff) < 4 * se, (diff, se)
+    # ... and the stratified one is the less noisy (gray_direct: ~3x lower variance at 32 spp).
+    assert float((mj.stderr ** 2).sum()) < 0.7 * float((ind.stderr ** 2).sum())
+
+
+def test_a_sensor_that_cannot_stand_alone_is_one_sentence(tmp_path):
+    path = _write(tmp_path, '<shape type="sphere"/>')
+    info = scenes.inspect_scene(path)
+    with pytest.raises(scenes.SceneError, match="no top-level <sensor>"):
+        scenes.sensor_with_sampler(info, "multijitter")
+
+
+def test_stratification_gain_recovers_a_known_ratio():
+    """Synthetic passes: independent ones of s_i samples with per-sample variance sigma^2,
+    stratified ones whose pass variance is sigma^2/(s_s g); the estimate is g within 5 of its
+    standard errors (chi-square: sqrt(2/dof) relative, 1 dof per value with 2 passes)."""
+    rng = np.random.default_rng(7)
+    shape, sigma2, s_i, s_s, g = (64, 64, 3), 0.04, 2, 8, 3.0
+    indep = 0.5 + rng.normal(0, math.sqrt(sigma2 / s_i), (8,) + shape)
+    strat = 0.5 + rng.normal(0, math.sqrt(sigma2 / (s_s * g)), (2,) + shape)
+    w = np.full(shape, 1.0)
+    est = planner.pilot.stratification_gain(indep, s_i, w, strat, s_s, w)
+    rel_se = math.sqrt(2 / strat[0].size + 2 / (7 * indep[0].size))
+    assert abs(est / g - 1) < 5 * rel_se, est
+
+
+def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plans):
+    """Each plan measures multijitter's gain and prices it; at E = 0.01 gray_direct (direct
+    light, ~3-5x lower variance stratified) chooses it, and the render run as the plan says
+    (render_kwargs) reaches the target against the converged reference."""
+    for name, p in plans.items():
+        assert any(r.startswith("sampler: multijitter") for r in p.reasons), name
+    target = 0.01
+    p = planner.plan("gray_direct", target, params=RES)
+    assert p.sampler == "multijitter", p.summary()
+    kw = p.render_kwargs()
+    assert kw["sampler"] == "multijitter" and kw["spp"] < p.spp
+    assert kw["spp"] / kw["passes"] >= planner.pilot.STRATIFIED_PASS_SPP
+    info = scenes.inspect_scene("gray_direct", **RES)
+    scene = scenes.load_scene("gray_direct", p.variant, **RES)
+    ref = references.reference("gray_direct", max(1024, 16 * p.spp), params=RES)
+    errs = []
+    for seed in range(3):
+        result = render.render_scene(scene, kw["spp"], seed=seed, passes=kw["passes"],
+                                     sensor=scenes.sensor_with_sampler(info, kw["sampler"]),
+                                     integrator=scenes.path_integrator(p.max_depth, info))
+        errs.append(metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr))
+    # the gain is measured on 8-spp passes and these hold more: the error errs low
+    assert max(errs) <= 1.15 * target, (errs, p.summary())

@@ -82,13 +82,18 @@ def _planned(name: str, params: dict, target: float, loaded, info, seed: int) ->
             scene, plan.noise_target, seed=seed, integrator=integ,
             min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
     else:
-        run = lambda: render.render_scene(scene, plan.spp, seed=seed, integrator=integ)  # noqa: E731
+        kw = plan.render_kwargs()
+        sensor = scenes.sensor_with_sampler(info, kw["sampler"]) if "sampler" in kw else 0
+        run = lambda: render.render_scene(scene, kw["spp"], seed=seed, integrator=integ,  # noqa: E731
+                                          passes=kw["passes"], sensor=sensor)
     run()                                                   # compile
     result, seconds = _timed(run)
     set_variant(VARIANT)                  # the plan may have switched to another variant
     return {"method": "planned", "target": target, "seed": seed, "render_seconds": seconds,
             "pilot_seconds": plan.pilot_seconds, "seconds": seconds + plan.pilot_seconds,
-            "render": f"{plan.model} {plan.sampling}", "variant": plan.variant,
+            "render": f"{plan.model} {plan.sampling}" + (f" {plan.sampler}" if plan.sampler
+                                                          != "independent" else ""),
+            "variant": plan.variant,
             "uniform_spp": plan.spp,
             "max_depth": plan.max_depth, "image": result.image}
 

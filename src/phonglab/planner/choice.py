@@ -27,6 +27,16 @@ image at depth d — and keeps the fastest, with the reason:
   predicted at least :data:`ADAPTIVE_MARGIN` faster than uniform: a noisy v map can only
   mislead it by that much.
 
+* **Sampler.**  The scene's ``independent`` sampler draws every dimension of every sample at
+  random; Mitsuba's ``multijitter`` (correlated multi-jittered sampling, Kensler 2013)
+  stratifies each 2D projection of a pixel's samples — the pixel position, the first light
+  sample, the first BSDF sample — and stays unbiased.  The pilot measures its gain g (the
+  ratio of relative variances at equal samples, :func:`.pilot.stratification_gain`, from
+  the weights render, drawn with it) and the uniform option with it needs ⌈N/g⌉ samples in
+  :func:`stratified_passes` passes, at :data:`STRATIFIED_COST` times the time per sample.  It is chosen when it is
+  the fastest; adaptive sampling keeps ``independent`` (its passes give pixels unequal
+  counts, which a per-pixel stratification would need to know ahead).
+
 The predictions are steady-state times (JIT compilation excluded), as in step 4.
 """
 
@@ -64,9 +74,30 @@ class Option:
     spp: float          #: samples per pixel (mean for adaptive)
     seconds: float      #: predicted steady-state time
     noise1: float       #: relative noise of one sample, n(1)
+    sampler: str = "independent"  #: Mitsuba sampler of a uniform render
+    passes: int = 0     #: passes of a uniform render (0: the planner's default)
 
     def label(self) -> str:
-        return f"{self.model}, {self.sampling}"
+        extra = f" ({self.sampler})" if self.sampler != "independent" else ""
+        return f"{self.model}, {self.sampling}{extra}"
+
+
+#: The stratified sampler priced against ``independent`` (Mitsuba's ``multijitter``).
+STRATIFIED = "multijitter"
+#: Time per sample of :data:`STRATIFIED` over ``independent`` (its permutations per
+#: dimension; every count it is asked for is a kernel of its own, so it is not timed apart):
+#: measured 1.06-1.11x on gray_direct, gray_room, cornell_phong and glass_slab, 1.24x on
+#: nb_sphere_row (128², max_depth 8, 256-1024 spp, medians of 3).
+STRATIFIED_COST = 1.15
+#: A stratified render's passes hold at least this many samples each (stratification gains
+#: with the samples a pass holds; 2 passes at least, for a standard error).
+STRATIFIED_PASS_SPP = 32
+
+
+def stratified_passes(spp: int) -> int:
+    """Passes of a stratified uniform render of ``spp`` samples: 2 to 8, of >= 32 each
+    (of ``spp``/2 when that is fewer)."""
+    return max(2, min(8, int(spp) // STRATIFIED_PASS_SPP))
 
 
 def delta_lights_only(scene) -> bool:
@@ -110,6 +141,25 @@ def price(pilot: Pilot, model: str, noise1: float, vmap: np.ndarray, time_model,
     return options
 
 
+def price_stratified(pilot: Pilot, depth: int, noise1: float, budget2: float,
+                     reasons: list[str]) -> Option:
+    """Uniform ``path`` with the :data:`STRATIFIED` sampler: ⌈N/g⌉ samples, its own timing."""
+    gain = pilot.gain
+    # passes of at least the pilot's pass size: the gain was measured there, and smaller
+    # passes stratify less (gray_direct at 32²: 2 spp where 4 independent ones were needed
+    # missed E by 1.3x)
+    n = max(2 * pilot.stratified_pass_spp, math.ceil(noise1 ** 2 / max(gain, 1e-9) / budget2))
+    passes = stratified_passes(n)
+    a, b = pilot.time_model(depth)
+    b *= STRATIFIED_COST
+    reasons.append(f"sampler: {STRATIFIED} (stratified) measured {gain:.2f}x lower variance "
+                   f"than independent at equal samples ({pilot.stratified_pass_spp} spp "
+                   f"passes, full depth), so uniform needs {n} spp instead of "
+                   f"{math.ceil(noise1 ** 2 / budget2)}")
+    return Option("path", "uniform", n, passes * a + b * n, noise1 / math.sqrt(max(gain, 1e-9)),
+                  sampler=STRATIFIED, passes=passes)
+
+
 def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_path: Option,
            pixels: int, passes: int, reasons: list[str]) -> Option:
     """Step 5: the fastest exact option (module docstring), with its reasons appended."""
@@ -135,6 +185,8 @@ def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_p
     else:
         reasons.append(f"no cheaper exact model: direct and whitted compute paths of at "
                        f"most 2 segments, and this scene needs depth {depth}")
+    if pilot.stratified is not None:
+        options.append(price_stratified(pilot, depth, uniform_path.noise1, budget2, reasons))
     best_uniform = min((o for o in options if o.sampling == "uniform"), key=lambda o: o.seconds)
     best_adaptive = min((o for o in options if o.sampling == "adaptive"), key=lambda o: o.seconds)
     gain = uniform_path.spp / path_adaptive.spp

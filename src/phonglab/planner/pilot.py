@@ -54,14 +54,21 @@ PILOT_PASSES = 8
 #: means over the image (bias b(d), noise n(1)), as precise with fewer samples per pixel over
 #: more pixels, and a pilot of 64 spp at 256² cost as much as the render it plans.
 PILOT_PIXELS = 64 * 64
-MIN_PILOT_SPP = 16
+MIN_PILOT_SPP = 4
+#: The stratified pilot render (weights and the sampler's gain) is made of passes of this many
+#: samples per pixel (at least 2 passes): the gain it measures is that of such passes, and a
+#: planned stratified render's passes hold at least as many.
+STRATIFIED_PASS_SPP = 8
 
 
-def pilot_spp_for(pixels: int, passes: int = PILOT_PASSES) -> int:
-    """Samples per pixel of the default pilot of a film of ``pixels`` (a multiple of passes)."""
+def pilot_size(pixels: int, passes: int = PILOT_PASSES) -> tuple[int, int]:
+    """(samples per pixel, passes) of the default pilot of a film of ``pixels``: the samples of
+    PILOT_SPP over PILOT_PIXELS pixels, between MIN_PILOT_SPP and PILOT_SPP per pixel, in at
+    most ``passes`` passes (fewer when there are fewer samples; spp a multiple of them)."""
     spp = PILOT_SPP * PILOT_PIXELS / max(pixels, 1)
     spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
-    return max(passes, spp // passes * passes)
+    passes = max(2, min(passes, spp))
+    return spp // passes * passes, passes
 #: The time model renders 1 and 4 spp (its fit a + b·spp needs two sizes, not many samples).
 TIME_SPP = 1
 #: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
@@ -96,6 +103,28 @@ def _weights(passes_img: np.ndarray) -> np.ndarray:
     return 1.0 / q / np.maximum(1.0 + (3.0 * r2 - EPS) * se2 / (q * q), 0.5)
 
 
+def stratification_gain(indep: np.ndarray, indep_spp: int, indep_weights: np.ndarray,
+                        strat: np.ndarray, strat_spp: int, strat_weights: np.ndarray) -> float:
+    r"""How many times fewer samples a stratified sampler needs than the independent one.
+
+    ``indep`` and ``strat`` are (P, H, W, C) pass images of ``indep_spp`` and ``strat_spp``
+    samples per pass.  For i.i.d. samples ``s · var_k(pass_k)`` is the variance of one sample
+    whatever s is; for stratified ones it is the variance an image of s samples per pixel has,
+    times s, which falls as strata refine.  The gain is the ratio of the two relative
+    variances, ``mean(s_i var_i · w) / mean(s_s var_s · w)``, each weighted by the *other*
+    render's weights (:func:`_weights`), so that no variance is weighted by a mean drawn from
+    the same samples.  It holds for passes of ``strat_spp`` samples; passes of more samples
+    gain at least as much (jittered strata only refine: Owen, "Monte Carlo and quasi-Monte
+    Carlo for statistics", 2009; Pharr, Jakob & Humphreys, PBR 4th ed., §8.5), so using it
+    for a longer render errs towards more samples.
+    """
+    v_indep = float(np.mean(indep.var(axis=0, ddof=1) * indep_spp * indep_weights))
+    v_strat = float(np.mean(strat.var(axis=0, ddof=1) * strat_spp * strat_weights))
+    if v_strat <= 0.0:
+        return 1.0 if v_indep <= 0.0 else math.inf
+    return v_indep / v_strat
+
+
 def _time_model(scene, integrator, spp_small: int, repeats: int = 3) -> tuple[float, float]:
     """(a, b) of T(spp) = a + b·spp from alternating one-pass renders of spp_small and 4·spp_small.
 
@@ -124,13 +153,14 @@ class Pilot:
     """
 
     def __init__(self, scene, info: SceneInfo, spp: int = PILOT_SPP,
-                 passes: int = PILOT_PASSES, seed: int = PILOT_SEED):
+                 passes: int = PILOT_PASSES, seed: int = PILOT_SEED, stratified=None):
         self.scene, self.info, self.passes, self.seed = scene, info, passes, seed
         self.spp_per_pass = spp // passes
         #: one-render depth ladder (:mod:`.ladder`) where it applies, else one render per depth
         self.one_kernel = ladder.applies(info)
         self.renders = 0  #: pilot renders made (each spp samples per pixel)
         self.ladder_images: dict[int, np.ndarray] = {}
+        self.stratified = stratified
         if self.one_kernel:
             self.full = self._render_ladder(LADDER_STAGES[0])
         else:
@@ -139,8 +169,29 @@ class Pilot:
         # `full` itself they would shrink exactly where a rare bright sample inflates the
         # variance (a caustic firefly raises both), and the noise would be underestimated.
         # (From the first ladder stage's kernel where the ladder applies: no second compile.)
-        self.weight = _weights(self._render_ladder(LADDER_STAGES[0], seed + 1)
-                               if self.one_kernel else self._render(-1, seed + 1).passes)
+        # With a stratified sensor it is that sampler's render, in 2 passes: it also measures
+        # the sampler's gain (:func:`stratification_gain`) at no extra cost.
+        spp, passes, sensor = self.spp, self.passes, 0
+        if stratified is not None:  # passes of STRATIFIED_PASS_SPP: the gain is theirs
+            spp = max(self.spp, 2 * STRATIFIED_PASS_SPP)
+            passes, sensor = spp // STRATIFIED_PASS_SPP, stratified
+        second = render.render_scene(self.scene, spp, seed=seed + 1, passes=passes,
+                                     sensor=sensor, keep_passes=True,
+                                     integrator=ladder.ladder(LADDER_STAGES[0], info)
+                                     if self.one_kernel else path_integrator(-1, info))
+        self.renders += 1
+        second_full = ladder.split(second.passes, LADDER_STAGES[0])[0] if self.one_kernel \
+            else second.passes
+        self.weight = _weights(second_full)
+        #: n(1)² of the scene's sampler over that of the stratified one at its pass size
+        #: (1 without a stratified sensor): the factor fewer samples it needs (full depth)
+        self.gain = 1.0
+        self.stratified_pass_spp = 0
+        if stratified is not None:
+            self.stratified_pass_spp = int(second.pass_spp[0])
+            self.gain = stratification_gain(self.full, self.spp_per_pass, self.weight,
+                                            second_full, self.stratified_pass_spp,
+                                            _weights(self.full))
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
@@ -257,14 +308,11 @@ class Pilot:
         """(a, b) of T(spp) = a + b·spp at ``depth``, steady state (the kernel compiled first);
         measured once per depth (steps 4 and 5 both ask)."""
         if depth not in self.time_models:
-            self.time_models[depth] = self._time_model(depth)
+            integrator = path_integrator(depth, self.info)
+            if depth not in self.compiled:  # compile the kernel before timing
+                render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
+            self.time_models[depth] = _time_model(self.scene, integrator, TIME_SPP)
         return self.time_models[depth]
-
-    def _time_model(self, depth: int) -> tuple[float, float]:
-        integrator = path_integrator(depth, self.info)
-        if depth not in self.compiled:  # compile the kernel before timing
-            render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
-        return _time_model(self.scene, integrator, TIME_SPP)
 
     def depths(self) -> list[DepthSample]:
         """Every depth measured, finite ones in order, then -1."""

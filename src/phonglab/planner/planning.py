@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import PlanError
+from ..errors import PlanError, SceneError
 from ..render import MAX_SPP, check_spp
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
-from ..scenes import SceneInfo, inspect_scene, load_scene
+from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
 from . import choice
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
-                    DepthSample, Pilot, pilot_spp_for)
+                    DepthSample, Pilot, pilot_size)
 
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
@@ -57,6 +57,8 @@ class Plan:
     sampling: str = "uniform"
     chosen_spp: float = 0.0          #: samples per pixel of the choice (mean when adaptive)
     chosen_seconds: float = 0.0      #: its predicted steady-state time
+    sampler: str = "independent"     #: Mitsuba sampler of the render (uniform path)
+    chosen_passes: int = 0           #: passes of the chosen uniform render
 
     @property
     def noise_target(self) -> float:
@@ -79,7 +81,12 @@ class Plan:
         return json.dumps(self.to_dict(), indent=indent)
 
     def render_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`phonglab.render.render_file` that apply the plan."""
+        """Keyword arguments of :func:`phonglab.render.render_file` that apply the plan (a
+        uniform ``path`` render: the chosen sampler, spp and passes)."""
+        if self.sampler != "independent" and self.sampling == "uniform" and self.model == "path":
+            return {"spp": int(math.ceil(self.chosen_spp)), "variant": self.variant,
+                    "max_depth": self.max_depth, "passes": self.chosen_passes,
+                    "sampler": self.sampler}
         return {"spp": self.spp, "variant": self.variant, "max_depth": self.max_depth,
                 "passes": self.passes}
 
@@ -92,7 +99,8 @@ class Plan:
             f"  variant   {self.variant}",
             f"  max_depth {self.max_depth}",
             f"  spp       {self.spp}  ({self.passes} passes)",
-            f"  render    {self.model}, {self.sampling} sampling, {self.chosen_spp:.1f} spp"
+            f"  render    {self.model}, {self.sampling} sampling ({self.sampler} sampler), "
+            f"{self.chosen_spp:.1f} spp"
             f"{' on average' if self.sampling == 'adaptive' else ''}, about "
             f"{self.chosen_seconds:.3g} s",
             f"  predicted error {self.predicted_error:.4g} (depth bias {self.predicted_bias:.3g}, "
@@ -125,8 +133,9 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     Args:
         scene_path: scene file, or a name in ``scenes_xml/``.
         target_error: E, a relative RMSE (package docstring; ``0.01`` = 1 %).
-        pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_spp_for`
-            the film: 64, fewer beyond 64² pixels) and the passes they are split into.
+        pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
+            of the film: 64, fewer beyond 64² pixels, at least 4) and the passes they are split
+            into (at most ``pilot_passes``).
         seed: pilot seed (the render that follows should use another; the CLI uses 0).
         bias_fraction: the depth bias may use this fraction of E.
         polarized: plan a polarized variant (never chosen otherwise).
@@ -162,8 +171,9 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
     scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
     if pilot_spp is None:
-        pilot_spp = pilot_spp_for(resolution[0] * resolution[1], pilot_passes)
-    pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed)
+        pilot_spp, pilot_passes = pilot_size(resolution[0] * resolution[1], pilot_passes)
+    stratified = _stratified_sensor(info, overrides, reasons)
+    pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed, stratified=stratified)
     depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
     chosen = pilot.measure(depth)
     n = _choose_spp(chosen, target_error, spp, scene_spp, reasons)
@@ -186,7 +196,23 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
                 pilot_spp=pilot.spp, pilot_seconds=time.perf_counter() - t_start,
                 depths=pilot.depths(), reasons=reasons, overrides=overrides,
                 model=option.model, sampling=option.sampling, chosen_spp=float(option.spp),
-                chosen_seconds=option.seconds)
+                chosen_seconds=option.seconds, sampler=option.sampler,
+                chosen_passes=option.passes or passes)
+
+
+def _stratified_sensor(info: SceneInfo, overrides: dict[str, Any], reasons: list[str]):
+    """The scene's sensor with :data:`.choice.STRATIFIED` sampling, when the plan may price it:
+    the scene samples independently and the caller fixed neither spp nor depth."""
+    if info.sampler != "independent" or "spp" in overrides or "max_depth" in overrides:
+        if info.sampler != "independent":
+            reasons.append(f"sampler: the scene's own {info.sampler!r} (only an independent "
+                           f"one is replaced)")
+        return None
+    try:
+        return sensor_with_sampler(info, choice.STRATIFIED)
+    except SceneError as exc:
+        reasons.append(f"sampler: independent kept ({exc})")
+        return None
 
 
 def _choose_render(pilot: Pilot, depth: int, sample: DepthSample, n: int, seconds: float,
