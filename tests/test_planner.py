@@ -445,9 +445,13 @@ def test_benchmark_table_names_the_film_of_each_row():
                        "max_depth": 2, "spp": 5.0, "error": 0.0099, "seconds_median": 2.0,
                        "pilot_seconds": 0.5}}
     wide = dict(row, scene="w", params={"width": 512, "height": 128})
-    table = planner.benchmark_table([row, wide])
+    strat = dict(row, scene="m", speedup=1.2, planned=dict(row["planned"], sampling="uniform",
+                                                         sampler="multijitter"))
+    table = planner.benchmark_table([row, wide, strat])
     assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
     assert "1.50x (1.20-1.80)" in table
+    assert "path uniform (multijitter), llvm_ad_mono" in table
+    assert "at least 1.5x faster (median) on 2 of 3 rows" in table
 
 
 # --- the stratified sampler (planner step 5, render's sampler) ----------------------------------

@@ -430,7 +430,8 @@ def planner_section(d: RunData) -> list[str]:
             "the default configuration (llvm_ad_rgb, path at max_depth 8) with its uniform spp raised "
             "until it reaches E against a converged reference, and `phonglab render --target-error E` "
             "(plan, then the render it chose), each timed as a whole fresh process (start-up, JIT, "
-            "pilot and planning included), alternately over seeds; medians. How the planner decides: "
+            "pilot and planning included; each process imports what that command imports), "
+            "alternately over seeds; medians. How the planner decides: "
             "[docs/planner.md](docs/planner.md).\n",
             benchmark_table(rows), ""]
 

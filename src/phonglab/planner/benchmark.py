@@ -18,12 +18,17 @@ def benchmark_table(rows: list[dict]) -> str:
            "|---|---|---|---|---|---|"]
     for r in rows:
         d, p = r["default"], r["planned"]
+        sampler = p.get("sampler", "independent")
+        render = f"{p['model']} {p['sampling']}" + (f" ({sampler})" if sampler != "independent"
+                                                    else "")
         out.append(
             f"| {r['scene']} ({_film(r)}) | {r['target_error']:g} | {d['spp']} spp, "
-            f"{d['error']:.4f}, {d['seconds_median']:.2f} s | {p['model']} {p['sampling']}, "
+            f"{d['error']:.4f}, {d['seconds_median']:.2f} s | {render}, "
             f"{p['variant']}, {p['max_depth']}, {p['spp']:.1f} | {p['error']:.4f}, "
             f"{p['seconds_median']:.2f} s ({p['pilot_seconds']:.1f} s) | {r['speedup']:.2f}x "
             f"({r['speedup_min']:.2f}-{r['speedup_max']:.2f}) |")
+    fast = sum(r["speedup"] >= 1.5 for r in rows)
+    out.append(f"\nPlanned at least 1.5x faster (median) on {fast} of {len(rows)} rows.")
     return "\n".join(out)
 
 
