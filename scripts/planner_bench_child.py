@@ -53,10 +53,9 @@ def child_planned(scene: str, params: dict, target: float, seed: int, out: str) 
         with runtime.quiet_mitsuba():
             loaded = scenes.load_scene(info.path, plan.variant, **params)
         kw = plan.render_kwargs()
-        sensor = scenes.sensor_with_sampler(info, kw["sampler"]) if "sampler" in kw else 0
         result = render.render_scene(loaded, kw["spp"], seed=seed, passes=kw["passes"],
                                      integrator=scenes.path_integrator(plan.max_depth, info),
-                                     sensor=sensor)
+                                     sensor=plan.uniform_sensor(info))
         spp_mean = int(sum(result.pass_spp))
         exr.write(out, result.image, {"spp": spp_mean})
     return {"model": plan.model, "sampling": plan.sampling, "variant": plan.variant,

@@ -517,7 +517,7 @@ def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plan
     errs = []
     for seed in range(3):
         result = render.render_scene(scene, kw["spp"], seed=seed, passes=kw["passes"],
-                                     sensor=scenes.sensor_with_sampler(info, kw["sampler"]),
+                                     sensor=p.uniform_sensor(info),
                                      integrator=scenes.path_integrator(p.max_depth, info))
         errs.append(metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr))
     # the gain is measured on 8-spp passes and these hold more: the error errs low

@@ -144,8 +144,6 @@ def pass_spps(scene, spp: int, passes: int, sensor: int | mi.Sensor = 0) -> list
 
 def sampler_count(sampler, n: int) -> int:
     """The samples per pixel ``sampler`` draws when asked for ``n`` (``n`` for ``independent``)."""
-    if sampler.class_name() == "IndependentSampler":
-        return int(n)
     with quiet_mitsuba():  # "sample count rounded up": the caller is asking, not rendering
         previous = sampler.sample_count()
         sampler.set_sample_count(int(n))

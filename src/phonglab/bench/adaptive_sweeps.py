@@ -83,7 +83,7 @@ def _planned(name: str, params: dict, target: float, loaded, info, seed: int) ->
             min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
     else:
         kw = plan.render_kwargs()
-        sensor = scenes.sensor_with_sampler(info, kw["sampler"]) if "sampler" in kw else 0
+        sensor = plan.uniform_sensor(info)
         run = lambda: render.render_scene(scene, kw["spp"], seed=seed, integrator=integ,  # noqa: E731
                                           passes=kw["passes"], sensor=sensor)
     run()                                                   # compile

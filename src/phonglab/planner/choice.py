@@ -89,15 +89,16 @@ STRATIFIED = "multijitter"
 #: measured 1.06-1.11x on gray_direct, gray_room, cornell_phong and glass_slab, 1.24x on
 #: nb_sphere_row (128², max_depth 8, 256-1024 spp, medians of 3).
 STRATIFIED_COST = 1.15
-#: A stratified render's passes hold at least this many samples each (stratification gains
-#: with the samples a pass holds; 2 passes at least, for a standard error).
-STRATIFIED_PASS_SPP = 32
+#: A planned stratified render's passes hold at least this many samples each when it has
+#: enough (stratification gains with the samples a pass holds; 2 passes at least, for a
+#: standard error).  The pilot's own passes: :data:`.pilot.STRATIFIED_PASS_SPP`.
+RENDER_PASS_SPP = 32
 
 
 def stratified_passes(spp: int) -> int:
     """Passes of a stratified uniform render of ``spp`` samples: 2 to 8, of >= 32 each
     (of ``spp``/2 when that is fewer)."""
-    return max(2, min(8, int(spp) // STRATIFIED_PASS_SPP))
+    return max(2, min(8, int(spp) // RENDER_PASS_SPP))
 
 
 def delta_lights_only(scene) -> bool:

@@ -164,33 +164,30 @@ class Pilot:
         if self.one_kernel:
             self.full = self._render_ladder(LADDER_STAGES[0])
         else:
-            self.full = self._render(-1, seed).passes
+            self.full = self._render(-1, seed)
         # The weights come from an independent full-depth pilot (other seeds): taken from
         # `full` itself they would shrink exactly where a rare bright sample inflates the
         # variance (a caustic firefly raises both), and the noise would be underestimated.
         # (From the first ladder stage's kernel where the ladder applies: no second compile.)
-        # With a stratified sensor it is that sampler's render, in 2 passes: it also measures
-        # the sampler's gain (:func:`stratification_gain`) at no extra cost.
-        spp, passes, sensor = self.spp, self.passes, 0
-        if stratified is not None:  # passes of STRATIFIED_PASS_SPP: the gain is theirs
+        # With a stratified sensor it is that sampler's render, in passes of
+        # STRATIFIED_PASS_SPP: it also measures the sampler's gain (:func:`stratification_gain`)
+        # at no extra cost.
+        size: dict = {}
+        if stratified is not None:
             spp = max(self.spp, 2 * STRATIFIED_PASS_SPP)
-            passes, sensor = spp // STRATIFIED_PASS_SPP, stratified
-        second = render.render_scene(self.scene, spp, seed=seed + 1, passes=passes,
-                                     sensor=sensor, keep_passes=True,
-                                     integrator=ladder.ladder(LADDER_STAGES[0], info)
-                                     if self.one_kernel else path_integrator(-1, info))
-        self.renders += 1
-        second_full = ladder.split(second.passes, LADDER_STAGES[0])[0] if self.one_kernel \
-            else second.passes
-        self.weight = _weights(second_full)
+            size = {"spp": spp, "passes": spp // STRATIFIED_PASS_SPP, "sensor": stratified}
+        second = (self._render_ladder(LADDER_STAGES[0], seed + 1, **size) if self.one_kernel
+                  else self._render(-1, seed + 1, **size))
+        self.weight = _weights(second)
         #: n(1)² of the scene's sampler over that of the stratified one at its pass size
         #: (1 without a stratified sensor): the factor fewer samples it needs (full depth)
         self.gain = 1.0
         self.stratified_pass_spp = 0
         if stratified is not None:
-            self.stratified_pass_spp = int(second.pass_spp[0])
+            self.stratified_pass_spp = render.pass_spps(self.scene, size["spp"], size["passes"],
+                                                        stratified)[0]
             self.gain = stratification_gain(self.full, self.spp_per_pass, self.weight,
-                                            second_full, self.stratified_pass_spp,
+                                            second, self.stratified_pass_spp,
                                             _weights(self.full))
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
@@ -204,23 +201,26 @@ class Pilot:
         """Samples per pixel of each pilot render (passes × samples per pass)."""
         return self.spp_per_pass * self.passes
 
-    def _render(self, depth: int, seed: int) -> render.RenderResult:
+    def _pilot_render(self, integrator, seed: int, spp: int | None = None,
+                      passes: int | None = None, sensor=0) -> np.ndarray:
+        """The pass images of one pilot render (the pilot's spp and passes unless given)."""
         self.renders += 1
-        return render.render_scene(self.scene, self.spp, seed=seed, passes=self.passes,
-                                   integrator=path_integrator(depth, self.info),
-                                   keep_passes=True)
+        return render.render_scene(self.scene, spp or self.spp, seed=seed,
+                                   passes=passes or self.passes, sensor=sensor,
+                                   integrator=integrator, keep_passes=True).passes
 
-    def _render_ladder(self, depths, seed: int | None = None) -> np.ndarray:
+    def _render(self, depth: int, seed: int, **size) -> np.ndarray:
+        """The pass images of a ``path`` render at ``depth`` (``size``: :meth:`_pilot_render`)."""
+        return self._pilot_render(path_integrator(depth, self.info), seed, **size)
+
+    def _render_ladder(self, depths, seed: int | None = None, **size) -> np.ndarray:
         """One :class:`.ladder.DepthLadder` render; returns its full-depth pass images.  With
         the pilot's seed (default) it keeps the pass images of every depth in ``depths``
         (every such render traces the same samples, so ``full − depth`` is what two renders
         with the same seeds would give); with another seed it is an independent full-depth
         render."""
-        self.renders += 1
-        imgs = render.render_scene(self.scene, self.spp,
-                                   seed=self.seed if seed is None else seed, passes=self.passes,
-                                   integrator=ladder.ladder(depths, self.info),
-                                   keep_passes=True).passes
+        imgs = self._pilot_render(ladder.ladder(depths, self.info),
+                                  self.seed if seed is None else seed, **size)
         full, by_depth = ladder.split(imgs, depths)
         if seed is None:
             self.ladder_images.update(by_depth)
@@ -247,8 +247,7 @@ class Pilot:
     def measure_model(self, integrator) -> tuple[float, np.ndarray, tuple[float, float]]:
         """(n(1), variance map, (a, b) of T = a + b·spp) of another integrator of the scene
         (the planner's cheaper exact models), rendered like the depth pilots."""
-        imgs = render.render_scene(self.scene, self.spp, seed=self.seed, passes=self.passes,
-                                   integrator=integrator, keep_passes=True).passes
+        imgs = self._pilot_render(integrator, self.seed)
         vmap = self.variance_map(imgs)
         return (math.sqrt(float(np.mean(vmap))), vmap,
                 _time_model(self.scene, integrator, TIME_SPP))
@@ -265,7 +264,7 @@ class Pilot:
                 if d in self.ladder_images:
                     imgs = self.ladder_images.pop(d)
                 else:
-                    imgs = self._render(d, self.seed).passes
+                    imgs = self._render(d, self.seed)
                     self.compiled.add(d)
                 diff = self.full - imgs
                 mean = diff.mean(axis=0)

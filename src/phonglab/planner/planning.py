@@ -90,6 +90,12 @@ class Plan:
         return {"spp": self.spp, "variant": self.variant, "max_depth": self.max_depth,
                 "passes": self.passes}
 
+    def uniform_sensor(self, info: SceneInfo):
+        """The sensor of the plan's uniform render of the scene ``info`` describes: 0 (its own)
+        or its first sensor rebuilt with the chosen sampler (``render_scene(sensor=...)``)."""
+        sampler = self.render_kwargs().get("sampler")
+        return sensor_with_sampler(info, sampler) if sampler else 0
+
     def summary(self) -> str:
         """The plan and its reasons, as the CLI prints them."""
         w, h = self.resolution
