@@ -12,7 +12,9 @@ import math
 import mitsuba as mi
 import numpy as np
 import pytest
-from scipy import signal
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage, signal
 
 from phonglab import adaptive, cli, exr, metrics, references, render, scenes, stats
 from phonglab.bench import adaptive_sweeps
@@ -22,6 +24,47 @@ from phonglab.errors import PhonglabError
 
 def _load(name, variant="llvm_ad_rgb", **params):
     return scenes.load_scene(name, variant, **params)
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(1, 12), w=st.integers(1, 12), c=st.integers(1, 4), taps=st.integers(0, 3),
+       seed=st.integers(0, 2 ** 16))
+def test_separable_filter_is_scipy_convolve1d_twice(h, w, c, taps, seed):
+    """The numpy filter the variance estimate uses equals scipy.ndimage's zero-padded
+    convolution along both axes (any size, also images smaller than the kernel)."""
+    rng = np.random.default_rng(seed)
+    a, kernel = rng.random((h, w, c)), rng.random(2 * taps + 1)
+    expected = ndimage.convolve1d(ndimage.convolve1d(a, kernel, axis=0, mode="constant"),
+                                  kernel, axis=1, mode="constant")
+    np.testing.assert_allclose(adaptive.separable_filter(kernel, a), expected, rtol=1e-12,
+                               atol=1e-12)
+    v = a[..., 0]
+    box = ndimage.uniform_filter(v, 2 * taps + 1, mode="constant")
+    ones = ndimage.uniform_filter(np.ones_like(v), 2 * taps + 1, mode="constant")
+    np.testing.assert_allclose(adaptive.window_mean(v, taps), box / ones, rtol=1e-10)
+
+
+def test_spp_map_png_colours_each_pixel_by_its_count(tmp_path):
+    """The spp map preview: each film pixel a uniform square scaled up to >= 256 pixels a
+    side, the least-sampled pixel at viridis' dark end, the most-sampled at its bright end."""
+    from matplotlib import colormaps
+    from PIL import Image
+
+    spp = np.full((4, 8), 16)
+    spp[1, 2], spp[3, 7] = 4, 1024
+    path = adaptive.write_spp_map_png(tmp_path / "m.spp.png", spp)
+    png = np.asarray(Image.open(path).convert("RGB"))
+    scale = adaptive.SPP_PNG_MIN_SIDE // 4
+    left = (png.shape[1] - 8 * scale) // 2
+    lut = np.round(colormaps["viridis"]([0.0, 1.0])[:, :3] * 255)
+
+    def square(y, x):   # the colours of film pixel (y, x) in the preview (title line: 14 px)
+        block = png[14 + y * scale:14 + (y + 1) * scale, left + x * scale:left + (x + 1) * scale]
+        return np.unique(block.reshape(-1, 3), axis=0)
+
+    np.testing.assert_array_equal(square(1, 2), lut[:1])
+    np.testing.assert_array_equal(square(3, 7), lut[1:])
+    assert len(square(0, 0)) == 1 and not np.array_equal(square(0, 0), lut[:1])
 
 
 def test_unbiased_image_mean_against_uniform_render(variant_llvm_rgb):
