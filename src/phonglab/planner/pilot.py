@@ -69,8 +69,11 @@ def pilot_size(pixels: int, passes: int = PILOT_PASSES) -> tuple[int, int]:
     spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
     passes = max(2, min(passes, spp))
     return spp // passes * passes, passes
-#: The time model renders 1 and 4 spp (its fit a + b·spp needs two sizes, not many samples).
+#: The time model renders 1 spp and enough spp for TIME_SAMPLES samples (at least 2): its fit
+#: a + b·spp needs two sizes, not many samples (4 spp at 128², 2 at 256² and beyond, where
+#: 4 spp cost deep rgb scenes ~0.2 s of the pilot).
 TIME_SPP = 1
+TIME_SAMPLES = 4 * 128 * 128
 #: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
 PILOT_SEED = 1
 
@@ -125,14 +128,17 @@ def stratification_gain(indep: np.ndarray, indep_spp: int, indep_weights: np.nda
     return v_indep / v_strat
 
 
-def _time_model(scene, integrator, spp_small: int, repeats: int = 3) -> tuple[float, float]:
-    """(a, b) of T(spp) = a + b·spp from alternating one-pass renders of spp_small and 4·spp_small.
+def _time_model(scene, integrator, spp_small: int = TIME_SPP,
+                repeats: int = 3) -> tuple[float, float]:
+    """(a, b) of T(spp) = a + b·spp from alternating one-pass renders of spp_small and
+    spp_big = max(2·spp_small, ⌈TIME_SAMPLES / pixels⌉) samples per pixel.
 
     Each render goes through :func:`phonglab.render.render_scene`, the loop the planned render
     runs, and its ``pass_seconds[0]`` (``mi.render``, evaluation and the copy to numpy) is the
     time.  Medians of ``repeats`` renders each; the kernel must already be compiled.
     """
-    spp_big = 4 * spp_small
+    w, h = (int(v) for v in scene.sensors()[0].film().size())
+    spp_big = max(2 * spp_small, -(-TIME_SAMPLES // (w * h)))
     t_small, t_big = [], []
     for k in range(repeats):
         for spp, bucket in ((spp_small, t_small), (spp_big, t_big)):
@@ -250,7 +256,7 @@ class Pilot:
         imgs = self._pilot_render(integrator, self.seed)
         vmap = self.variance_map(imgs)
         return (math.sqrt(float(np.mean(vmap))), vmap,
-                _time_model(self.scene, integrator, TIME_SPP))
+                _time_model(self.scene, integrator))
 
     def measure(self, d: int) -> DepthSample:
         """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
@@ -310,7 +316,7 @@ class Pilot:
             integrator = path_integrator(depth, self.info)
             if depth not in self.compiled:  # compile the kernel before timing
                 render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
-            self.time_models[depth] = _time_model(self.scene, integrator, TIME_SPP)
+            self.time_models[depth] = _time_model(self.scene, integrator)
         return self.time_models[depth]
 
     def depths(self) -> list[DepthSample]:
