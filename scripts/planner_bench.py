@@ -9,13 +9,13 @@ For each scene (parameters in :data:`SCENES`, a target error E each):
    corrected once;
 3. timing, alternating, ``--repeats`` times with different seeds: each configuration runs as a
    **fresh process** (Python start, imports, scene load, JIT compilation, the pilot and planning
-   for the planned one, the render, the EXR written), timed from the parent around the whole
-   process.  The default process is what ``phonglab render SCENE --spp N --max-depth 8``
-   does; the planned one what ``phonglab render SCENE --target-error E`` does
-   (``planner.plan`` then the render the plan chose: ``render_scene`` for uniform path, or
-   ``phonglab.adaptive`` for adaptive sampling and the direct/whitted models).  The processes
-   run this script with ``--child`` so that scene parameters (``res``) can be passed, which
-   ``phonglab render`` has no option for.
+   for the planned one, the render, the files written), timed from the parent around the whole
+   process.  The processes *are* the commands a user types: ``phonglab render SCENE --spp N
+   --max-depth 8 --variant llvm_ad_rgb -D res=R`` (default) and ``phonglab render SCENE
+   --target-error E -D res=R`` (planned: ``planner.plan``, the render the plan chose, its
+   error against the cached reference printed), each writing what the command writes (EXR,
+   standard-error EXR, PNG preview; the spp map too for an adaptive plan).  What the plan
+   chose is read back from the planned EXR's header.
 4. each process's image is compared with the reference (relative RMSE, the reference's noise
    subtracted).
 
@@ -42,7 +42,10 @@ from pathlib import Path
 import numpy as np
 
 from phonglab import exr, metrics, planner, references, render, runtime, scenes
-from planner_bench_child import DEFAULT_DEPTH, DEFAULT_VARIANT  # scripts/, beside this file
+
+#: The default configuration: ``phonglab render``'s default variant, path at max_depth 8.
+DEFAULT_VARIANT = "llvm_ad_rgb"
+DEFAULT_DEPTH = 8
 
 #: scene -> (target error E, scene parameters at the bench resolution R)
 SCENES = {
@@ -52,20 +55,42 @@ SCENES = {
     "glass_slab": (0.05, lambda r: {"res": r}),
     "nb_sphere_row": (0.005, lambda r: {"width": 4 * r, "height": r}),
 }
-#: The two commands, each run as a fresh process of its own (imports as the CLI's).
-CHILD = Path(__file__).with_name("planner_bench_child.py")
+#: The ``phonglab`` command of this interpreter's environment (its console script).
+PHONGLAB = Path(sys.executable).with_name("phonglab")
+
+
+def command(kind: str, scene: str, params: dict, value, seed: int, out: Path) -> list[str]:
+    """The ``phonglab render`` command line of the default (``value`` = spp) or planned
+    (``value`` = E) configuration."""
+    base = [str(PHONGLAB)] if PHONGLAB.exists() else [sys.executable, "-m", "phonglab.cli"]
+    cmd = base + ["render", scene, "-o", str(out), "--seed", str(seed)]
+    cmd += [a for k, v in params.items() for a in ("-D", f"{k}={v}")]
+    if kind == "default":
+        return cmd + ["--spp", str(value), "--max-depth", str(DEFAULT_DEPTH),
+                      "--variant", DEFAULT_VARIANT]
+    return cmd + ["--target-error", str(value)]
 
 
 def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) -> tuple[float, dict]:
-    """Wall time of one fresh process running a command, and what it reports."""
-    cmd = [sys.executable, str(CHILD), kind, scene, json.dumps(params), str(value),
-           str(seed), str(out)]
+    """Wall time of one fresh ``phonglab render`` process, and what its EXR header records
+    (for a planned one: the plan and the samples the render took)."""
+    cmd = command(kind, scene, params, value, seed, out)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     seconds = time.perf_counter() - t0
     if proc.returncode != 0:
-        raise RuntimeError(f"{kind} {scene} failed:\n{proc.stderr[-3000:]}")
-    return seconds, json.loads(proc.stdout.strip().splitlines()[-1])
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stderr[-3000:]}")
+    meta = exr.read(out)[1]
+    if kind == "default":
+        return seconds, {"spp": meta["spp"]}
+    plan = meta["planned"]
+    plan = json.loads(plan) if isinstance(plan, str) else plan
+    spp = meta.get("spp_mean", meta.get("spp"))
+    return seconds, {"model": plan["model"], "sampling": plan["sampling"],
+                     "variant": plan["variant"], "sampler": plan["sampler"],
+                     "max_depth": plan["max_depth"], "spp": float(spp),
+                     "uniform_path_spp": plan["spp"], "pilot_seconds": plan["pilot_seconds"],
+                     "predicted_seconds": plan["chosen_seconds"], "reasons": plan["reasons"]}
 
 
 # --- the comparison -----------------------------------------------------------------------------

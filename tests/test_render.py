@@ -27,6 +27,22 @@ def test_render_cli_writes_exr_png_and_provenance(tmp_path, capsys, variant_llvm
     assert out.with_suffix(".png").stat().st_size > 1000
 
 
+def test_render_cli_sets_scene_parameters(tmp_path, capsys, variant_llvm_rgb):
+    """-D NAME=VALUE reaches the scene (film size) in every render mode, and is recorded;
+    a malformed one or a name the scene does not use exits 2 with one sentence."""
+    for mode in (["--spp", "4"], ["--target-error", "0.05"],
+                 ["--adaptive", "--target-error", "0.2"]):
+        out = tmp_path / f"{mode[0].strip('-')}.exr"
+        assert cli.main(["render", "gray_direct", "-D", "res=24", *mode, "-o", str(out)]) == 0
+        image, meta = exr.read(out)
+        assert image.shape[:2] == (24, 24), mode
+        assert meta["params"]["res"] == "24", mode
+    capsys.readouterr()
+    assert cli.main(["render", "gray_direct", "-D", "colour=red", "--spp", "1",
+                     "-o", str(tmp_path / "x.exr")]) == 2
+    assert "does not use the parameter" in capsys.readouterr().err
+
+
 def test_render_passes_give_an_honest_standard_error(variant_llvm_rgb, scenes_dir):
     """Per-pixel SE from passes predicts the spread of independent renders: the difference of
     two independent renders, divided by its SE, has unit variance (pixels are correlated by

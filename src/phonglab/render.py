@@ -217,7 +217,8 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
                 png: bool = True, extra_metadata: dict[str, Any] | None = None,
-                sampler: str | None = None) -> RenderResult:
+                sampler: str | None = None,
+                params: dict[str, Any] | None = None) -> RenderResult:
     """Load, render and write ``out`` (EXR with provenance) plus its standard error and a PNG.
 
     Everything that can be checked is checked before the render starts: the output files
@@ -225,8 +226,10 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
     sensor, a film of at least one pixel, the memory it needs).  ``max_depth`` applies to
     the scene's own integrator: through its ``$max_depth`` default when it has one, else by
     rebuilding the integrator with ``max_depth`` set (refused, with the reason, when that
-    integrator takes no depth).  ``extra_metadata`` is added to the EXR header (the planner
-    records its plan there).  The files are replaced as one set.
+    integrator takes no depth).  ``params`` are values for the scene's ``<default>`` entries
+    (``{"res": 256}``; ``spp`` and ``max_depth`` given above win).  ``extra_metadata`` is
+    added to the EXR header (the planner records its plan there).  The files are replaced as
+    one set.
     """
     path = scene_path(scene)
     outputs = RenderOutputs.beside(out, png)
@@ -234,8 +237,9 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
     if spp is not None:
         check_spp(spp)
     declared = scene_defaults(path)
-    params = {k: v for k, v in (("spp", spp), ("max_depth", max_depth))
-              if v is not None and k in declared}
+    params = dict({k: v for k, v in (params or {}).items() if v is not None},
+                  **{k: v for k, v in (("spp", spp), ("max_depth", max_depth))
+                     if v is not None and k in declared})
     loaded = load_scene(path, variant, **params)
     integrator = None
     if max_depth is not None and "max_depth" not in declared:
@@ -256,6 +260,7 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
         "sampler": sensor.sampler().class_name(),
         "integrator": integrator.class_name() if hasattr(integrator, "class_name") else str(type(integrator)),
         "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
+        "params": {k: str(v) for k, v in params.items()},
         "phonglab_version": __version__, "mitsuba_version": mi.__version__,
     }
     result.metadata.update(extra_metadata or {})

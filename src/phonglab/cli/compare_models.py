@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import PhonglabError
+from .options import add_scene_params
 
 
 def add_parser(sub) -> None:
@@ -28,8 +28,7 @@ def add_parser(sub) -> None:
                    help="path length for all three (default: the scene's, else 5)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
-    p.add_argument("-D", "--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="set one of the scene's <default> parameters (repeatable), e.g. -D width=240")
+    add_scene_params(p, "-D", "--param", "--set")
     p.add_argument("-o", "--output", default=None,
                    help="output folder (default: out/compare_<scene>)")
     p.set_defaults(func=run)
@@ -41,12 +40,7 @@ def run(args) -> int:
     from ..compare_models import compare_models, format_table
     from ..scenes import scene_path
 
-    params = {}
-    for item in args.param:
-        name, sep, value = item.partition("=")
-        if not sep or not name:
-            raise PhonglabError(f"--param expects NAME=VALUE, got {item!r}; e.g. -D width=240.")
-        params[name] = value
+    params = dict(args.params)
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / f"compare_{path.stem}")
     result = compare_models(path, out, spp=args.spp, path_spp=args.path_spp, seed=args.seed,

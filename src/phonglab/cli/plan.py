@@ -13,13 +13,7 @@ import contextlib
 
 from ..errors import PhonglabError
 from ..parallel import add_arguments, runner_from_args
-
-
-def _param(text: str) -> tuple[str, str]:
-    name, sep, value = text.partition("=")
-    if not sep or not name:
-        raise argparse.ArgumentTypeError(f"expected NAME=VALUE (a scene <default>), got {text!r}")
-    return name, value
+from .options import add_scene_params
 
 
 def add_parser(sub) -> None:
@@ -46,8 +40,7 @@ def add_parser(sub) -> None:
     p.add_argument("--pilot-spp", type=int, default=None,
                    help="pilot samples per pixel, in 8 passes (default 64, fewer beyond 64x64 "
                         "pixels: the same samples per image, at least 16)")
-    p.add_argument("--set", dest="params", type=_param, action="append", default=[],
-                   metavar="NAME=VALUE", help="a scene <default> value, e.g. res=64 (repeatable)")
+    add_scene_params(p)
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",
                    help="refuse a plan predicted to take longer (default: planner.MAX_SECONDS, "
                         "one hour; 'inf' allows any)")

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .. import runtime
 from ..errors import PhonglabError
+from .options import add_scene_params
 
 
 def add_parser(sub) -> None:
@@ -46,6 +47,7 @@ def add_parser(sub) -> None:
                         "writes the spp map beside the EXR (<out>.spp.exr, <out>.spp.png)")
     p.add_argument("--max-spp", type=int, default=None, metavar="N",
                    help="with --adaptive: at most N samples in any pixel")
+    add_scene_params(p)
     p.set_defaults(func=run)
 
 
@@ -63,7 +65,7 @@ def run(args) -> int:
     if args.target_error is not None:
         return run_planned(args, path, out)
     result = render_file(path, out, spp=args.spp, variant=args.variant, seed=args.seed,
-                         max_depth=args.max_depth)
+                         max_depth=args.max_depth, params=dict(args.params))
     meta = result.metadata
     print(f"rendered {path} with {meta['spp']} spp in {meta['variant']} "
           f"({result.seconds:.2f} s, first pass {result.pass_seconds[0]:.2f} s incl. JIT)")
@@ -80,7 +82,7 @@ def run_planned(args, path: Path, out: Path) -> int:
     RenderOutputs.beside(out).check()       # before the pilot, not only before the render
     plan = planner.plan(path, args.target_error, variant=args.variant,
                         max_depth=args.max_depth, spp=args.spp,
-                        max_seconds=args.max_seconds)
+                        max_seconds=args.max_seconds, params=dict(args.params))
     print(plan.summary())
     meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
             "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}
@@ -88,14 +90,16 @@ def run_planned(args, path: Path, out: Path) -> int:
         return _render_plan_wavefront(args, path, out, plan, meta)
     with runtime.quiet_mitsuba():
         result = render_file(path, out, seed=args.seed, extra_metadata=meta,
-                             **plan.render_kwargs())
+                             params=plan.params, **plan.render_kwargs())
     times = result.pass_seconds
     # Steady state: the first pass may include JIT compilation; count it as a median pass.
     steady = statistics.median(times[1:]) * len(times) if len(times) > 1 else result.seconds
-    print(f"rendered {path} with {plan.spp} spp, max_depth {plan.max_depth} in {plan.variant}: "
+    print(f"rendered {path} with {result.metadata['spp']} spp ({plan.sampler} sampler), "
+          f"max_depth {plan.max_depth} in {plan.variant}: "
           f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
-          f"{plan.predicted_seconds:.3g} s)")
-    ref = references.cached(path, variant=references.variant_for_color(plan.color))
+          f"{plan.chosen_seconds or plan.predicted_seconds:.3g} s)")
+    ref = references.cached(path, params=plan.params,
+                            variant=references.variant_for_color(plan.color))
     if ref is not None:
         err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
         print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} "
@@ -165,7 +169,8 @@ def run_adaptive(args, path: Path, out: Path) -> int:
     with runtime.quiet_mitsuba():
         result = adaptive.render_file_adaptive(
             path, out, args.target_error, variant=args.variant, seed=args.seed,
-            max_seconds=args.max_seconds, max_spp=args.max_spp, max_depth=args.max_depth)
+            max_seconds=args.max_seconds, max_spp=args.max_spp, max_depth=args.max_depth,
+            params=dict(args.params))
     meta = result.metadata
     why = {"target": "the estimated error meets the target",
            "max_spp": "pixels reached --max-spp", "max_seconds": "--max-seconds ran out"}
