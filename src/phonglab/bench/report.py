@@ -427,11 +427,12 @@ def planner_section(d: RunData) -> list[str]:
     rows = json.loads(planner_json.read_text())
     return ["\n## Planner: planned against the default configuration at equal error\n",
             "`scripts/planner_bench.py` (run by `make bench`): per scene a target relative RMSE E; "
-            "the default configuration (llvm_ad_rgb, path at max_depth 8) with its uniform spp raised "
-            "until it reaches E against a converged reference, and `phonglab render --target-error E` "
-            "(plan, then the render it chose), each timed as a whole fresh process (start-up, JIT, "
-            "pilot and planning included; each process imports what that command imports), "
-            "alternately over seeds; medians. How the planner decides: "
+            "the default configuration (`phonglab render SCENE --spp N --max-depth 8 --variant "
+            "llvm_ad_rgb -D res=R`, its N raised until it reaches E against a converged reference) "
+            "and `phonglab render SCENE --target-error E -D res=R` (plan, then the render it "
+            "chose), each timed as the whole command in a fresh process (start-up, JIT, pilot and "
+            "planning, the files it writes and the error it prints included), alternately over "
+            "seeds; medians. How the planner decides: "
             "[docs/planner.md](docs/planner.md).\n",
             benchmark_table(rows), ""]
 
