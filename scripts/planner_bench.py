@@ -83,8 +83,7 @@ def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) 
     meta = exr.read(out)[1]
     if kind == "default":
         return seconds, {"spp": meta["spp"]}
-    plan = meta["planned"]
-    plan = json.loads(plan) if isinstance(plan, str) else plan
+    plan = meta["planned"]   # exr.read decodes every header value from JSON
     spp = meta.get("spp_mean", meta.get("spp"))
     return seconds, {"model": plan["model"], "sampling": plan["sampling"],
                      "variant": plan["variant"], "sampler": plan["sampler"],

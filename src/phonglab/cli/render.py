@@ -75,7 +75,7 @@ def run(args) -> int:
 
 def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan, report predicted and achieved error and time."""
-    from .. import metrics, planner, references
+    from .. import metrics, planner
     from ..outputs import RenderOutputs
     from ..render import render_file
 
@@ -97,12 +97,11 @@ def run_planned(args, path: Path, out: Path) -> int:
     print(f"rendered {path} with {result.metadata['spp']} spp ({plan.sampler} sampler), "
           f"max_depth {plan.max_depth} in {plan.variant}: "
           f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
-          f"{plan.chosen_seconds or plan.predicted_seconds:.3g} s)")
-    ref = references.cached(path, params=plan.params,
-                            variant=references.variant_for_color(plan.color))
-    if ref is not None:
-        err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
-        print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} "
+          f"{plan.chosen_seconds:.3g} s)")
+    achieved = _reference_error(path, plan, result.image)
+    if achieved is not None:
+        err, ref_spp = achieved
+        print(f"  error: achieved {err:.4g} against the cached reference ({ref_spp} "
               f"spp, max_depth -1); predicted {plan.predicted_error:.4g}, target "
               f"{plan.target_error:g}")
     elif result.stderr is not None:
@@ -121,7 +120,7 @@ def run_planned(args, path: Path, out: Path) -> int:
 
 def _render_plan_wavefront(args, path: Path, out: Path, plan, meta: dict) -> int:
     """Render a plan whose model or sampling goes through phonglab.adaptive; report the error."""
-    from .. import adaptive, metrics, references
+    from .. import adaptive
     from ..planner import choice
 
     uniform = plan.sampling == "uniform"
@@ -138,11 +137,10 @@ def _render_plan_wavefront(args, path: Path, out: Path, plan, meta: dict) -> int
     print(f"rendered {path} with {plan.model}, {plan.sampling} sampling, max_depth "
           f"{plan.max_depth} in {plan.variant}: {result.total_spp:.1f} spp on average, "
           f"{result.seconds:.3g} s (predicted {plan.chosen_seconds:.3g} s steady state)")
-    ref = references.cached(path, params=plan.params,
-                            variant=references.variant_for_color(plan.color))
-    if ref is not None:
-        err = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
-        print(f"  error: achieved {err:.4g} against the cached reference ({ref.spp} spp); "
+    achieved = _reference_error(path, plan, result.image)
+    if achieved is not None:
+        err, ref_spp = achieved
+        print(f"  error: achieved {err:.4g} against the cached reference ({ref_spp} spp); "
               f"estimated {math.hypot(result.estimated_error, plan.predicted_bias):.4g}, "
               f"target {plan.target_error:g}")
     else:
@@ -152,6 +150,18 @@ def _render_plan_wavefront(args, path: Path, out: Path, plan, meta: dict) -> int
     _print_files(out, result)
     print(f"  spp map: {', '.join(str(p) for p in adaptive.spp_paths(out))}")
     return 0
+
+
+def _reference_error(path: Path, plan, image) -> tuple[float, int] | None:
+    """(relative RMSE of ``image`` against the cached reference of the planned scene, that
+    reference's spp), or None when no reference is cached."""
+    from .. import metrics, references
+
+    ref = references.cached(path, params=plan.params,
+                            variant=references.variant_for_color(plan.color))
+    if ref is None:
+        return None
+    return metrics.relative_rmse(image, ref.image, ref_stderr=ref.stderr), ref.spp
 
 
 def run_adaptive(args, path: Path, out: Path) -> int:
