@@ -31,7 +31,8 @@ RMSE of E, and at what cost?" in four steps, each with a reason the user can rea
    (r² + ε)²)/(r² + ε), and w = 1/(r̂² + ε) divided by that factor (kept >= 1/2) removes the
    second-order bias of the plug-in weight (:func:`phonglab.planner.pilot._weights`).  The
    plan takes the smallest d with ``b(d) <= BIAS_FRACTION · E`` (candidates 1, 2, 3, 4, 6, 8,
-   12, ... then bisection, b being non-increasing in d).  Delta chains (glass, mirrors) need
+   12, ... then bisection, b being non-increasing in d, when the bisection's render can pay
+   for itself: :meth:`.pilot.Pilot.gap_value`).  Delta chains (glass, mirrors) need
    no special rule: the energy they carry shows in D_k, so the search follows them as deep as
    they carry energy; the scene's delta BSDFs are listed in the reasons.
 

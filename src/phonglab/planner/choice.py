@@ -32,9 +32,10 @@ image at depth d — and keeps the fastest, with the reason:
   stratifies each 2D projection of a pixel's samples — the pixel position, the first light
   sample, the first BSDF sample — and stays unbiased.  The pilot measures its gain g (the
   ratio of relative variances at equal samples, :func:`.pilot.stratification_gain`, from
-  the weights render, drawn with it) and the uniform option with it needs ⌈N/g⌉ samples in
-  :func:`stratified_passes` passes, at :data:`STRATIFIED_COST` times the time per sample.  It is chosen when it is
-  the fastest; adaptive sampling keeps ``independent`` (its passes give pixels unequal
+  the weights render, drawn with it) and the uniform option with it needs ⌈N/g⌉ samples,
+  laid out by :func:`stratified_layout` in passes of a count whose stratification grid has
+  power-of-two sides (:data:`CHEAP_PASS_SPP`), at :data:`STRATIFIED_COST` times the time per
+  sample.  It is chosen when it is the fastest; adaptive sampling keeps ``independent`` (its passes give pixels unequal
   counts, which a per-pixel stratification would need to know ahead).
 
 The predictions are steady-state times (JIT compilation excluded), as in step 4.
@@ -84,21 +85,43 @@ class Option:
 
 #: The stratified sampler priced against ``independent`` (Mitsuba's ``multijitter``).
 STRATIFIED = "multijitter"
-#: Time per sample of :data:`STRATIFIED` over ``independent`` (its permutations per
-#: dimension; every count it is asked for is a kernel of its own, so it is not timed apart):
-#: measured 1.06-1.11x on gray_direct, gray_room, cornell_phong and glass_slab, 1.24x on
-#: nb_sphere_row (128², max_depth 8, 256-1024 spp, medians of 3).
+#: Time per sample of :data:`STRATIFIED` over ``independent`` at the pass counts
+#: :func:`stratified_layout` uses (:data:`CHEAP_PASS_SPP`; every count it is asked for is a
+#: kernel of its own, so it is not timed apart): measured 1.06-1.11x on gray_direct,
+#: gray_room, cornell_phong and glass_slab, 1.24x on nb_sphere_row (128², 8-1024 spp).
 STRATIFIED_COST = 1.15
-#: A planned stratified render's passes hold at least this many samples each when it has
-#: enough (stratification gains with the samples a pass holds; 2 passes at least, for a
-#: standard error).  The pilot's own passes: :data:`.pilot.STRATIFIED_PASS_SPP`.
-RENDER_PASS_SPP = 32
+#: Pass sizes at which ``multijitter`` costs no more than :data:`STRATIFIED_COST`.  Its grid is
+#: ⌊√n⌋ rows by ⌈n/⌊√n⌋⌉ columns (``src/samplers/multijitter.cpp``, ``set_sample_count``)
+#: and each 2D sample permutes the sample index, row and column with ``permute_kensler``
+#: (``include/mitsuba/core/random.h``), a cycle-walking loop that redraws until the value
+#: falls below the count: one round when the count is a power of two, several for the
+#: slowest lane of a SIMD packet otherwise.  So n, its rows and its columns must all be
+#: powers of two: 8 (2×4), 16, 64, 256, ... (4^k from 16 on; 32 becomes 5×7 = 35).
+#: Measured per sample against ``independent`` (128², medians of 5): gray_direct (mono,
+#: depth 2) 1.07x at 8, 1.06x at 16, 1.08x at 64 but 1.35x at 35 and 1.52x at 132;
+#: cornell_phong (rgb, depth 10) 1.05x at 8, 1.06x at 16, 1.07x at 64, 1.32x at 35, 1.45x at 132.
+CHEAP_PASS_SPP = (8, 16, 64, 256, 1024, 4096, 16384, 65536)
+#: Passes of a planned stratified render: at least 2 (a standard error), at most 8.
+MIN_STRATIFIED_PASSES, MAX_STRATIFIED_PASSES = 2, 8
 
 
-def stratified_passes(spp: int) -> int:
-    """Passes of a stratified uniform render of ``spp`` samples: 2 to 8, of >= 32 each
-    (of ``spp``/2 when that is fewer)."""
-    return max(2, min(8, int(spp) // RENDER_PASS_SPP))
+def stratified_layout(n: int, min_pass: int, a: float, b: float) -> tuple[int, int]:
+    """(passes, samples per pass) of a :data:`STRATIFIED` render of at least ``n`` samples
+    per pixel: 2 to 8 passes of a :data:`CHEAP_PASS_SPP` count >= ``min_pass`` (the pilot's
+    pass size, at which the gain was measured), the layout of least predicted time
+    ``passes·a + b·samples`` (ties: the larger passes, which stratify more).  Beyond 8 passes
+    of the largest count: 8 equal passes (the sampler rounds each up)."""
+    best = None
+    for s in (c for c in CHEAP_PASS_SPP if c >= min_pass):
+        p = max(MIN_STRATIFIED_PASSES, -(-int(n) // s))
+        if p > MAX_STRATIFIED_PASSES:
+            continue
+        key = (p * a + b * p * s, -s)
+        if best is None or key < best[0]:
+            best = (key, (p, s))
+    if best is None:
+        return MAX_STRATIFIED_PASSES, -(-int(n) // MAX_STRATIFIED_PASSES)
+    return best[1]
 
 
 def delta_lights_only(scene) -> bool:
@@ -149,14 +172,17 @@ def price_stratified(pilot: Pilot, depth: int, noise1: float, budget2: float,
     # passes of at least the pilot's pass size: the gain was measured there, and smaller
     # passes stratify less (gray_direct at 32²: 2 spp where 4 independent ones were needed
     # missed E by 1.3x)
-    n = max(2 * pilot.stratified_pass_spp, math.ceil(noise1 ** 2 / max(gain, 1e-9) / budget2))
-    passes = stratified_passes(n)
+    needed = math.ceil(noise1 ** 2 / max(gain, 1e-9) / budget2)
     a, b = pilot.time_model(depth)
     b *= STRATIFIED_COST
+    passes, per_pass = stratified_layout(max(2 * pilot.stratified_pass_spp, needed),
+                                         pilot.stratified_pass_spp, a, b)
+    n = passes * per_pass
     reasons.append(f"sampler: {STRATIFIED} (stratified) measured {gain:.2f}x lower variance "
                    f"than independent at equal samples ({pilot.stratified_pass_spp} spp "
-                   f"passes, full depth), so uniform needs {n} spp instead of "
-                   f"{math.ceil(noise1 ** 2 / budget2)}")
+                   f"passes, full depth), so uniform needs {needed} spp instead of "
+                   f"{math.ceil(noise1 ** 2 / budget2)}: {passes} passes of {per_pass} "
+                   f"(a count {STRATIFIED} permutes without redraws)")
     return Option("path", "uniform", n, passes * a + b * n, noise1 / math.sqrt(max(gain, 1e-9)),
                   sampler=STRATIFIED, passes=passes)
 

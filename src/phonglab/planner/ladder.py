@@ -14,6 +14,11 @@ keep.  One render (one JIT kernel, one set of samples) thus replaces one render 
 planner's depth search (:mod:`.pilot`), and the difference D = full − depth-d is formed sample by
 sample, exactly as two renders with the same seeds would give it.
 
+The ladder also counts, over every sample it traces, the vertices its full-depth path found
+(:attr:`DepthLadder.lengths`, one ``dr.scatter_reduce`` per sample into a small histogram):
+:func:`work` turns them into the mean rays a ``path`` render casts per sample at any depth,
+which the pilot uses to decide whether a shallower depth can save more than its search costs.
+
 Each term is path.cpp's: emission at a hit weighted by the power-heuristic MIS weight against
 emitter sampling from the previous vertex (weight 1 after a delta BSDF or at the camera), and the
 emitter sample at a smooth vertex weighted against BSDF sampling (1 for a delta light).  The
@@ -30,6 +35,7 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 
 def _mis(pdf_a, pdf_b):
@@ -38,6 +44,9 @@ def _mis(pdf_a, pdf_b):
     w = a2 / (a2 + b2)
     return dr.select(dr.isfinite(w), w, 0.0)
 
+
+#: Bins of :attr:`DepthLadder.lengths` (vertices 0 .. LENGTH_BINS - 2, then "more").
+LENGTH_BINS = 66
 
 #: variant -> the DepthLadder class of that variant (mi.SamplingIntegrator is per variant)
 _CLASSES: dict[str, type] = {}
@@ -63,6 +72,9 @@ def _define() -> type:
             self.depths = [int(s) for s in str(props.get("depths", "1")).split(",")]
             self.rr_depth = int(props.get("rr_depth", 5))
             self.channels = ["Y"] if mi.is_monochromatic else ["R", "G", "B"]
+            #: lengths[k]: samples whose path found k surface vertices (the last bin: k or
+            #: more), summed over every render with this integrator (:func:`work`)
+            self.lengths = dr.zeros(mi.UInt32, LENGTH_BINS)
 
         def aov_names(self):
             return [f"d{d}.{c}" for d in self.depths for c in self.channels]
@@ -121,6 +133,8 @@ def _define() -> type:
                 beta[rr_active] *= dr.rcp(rr_prob)
                 rr_go = sampler.next_1d() < rr_prob
                 active = go & (~rr_active | rr_go) & (beta_max != 0.0) & (bs.pdf > 0)
+            dr.scatter_reduce(dr.ReduceOp.Add, self.lengths, 1,
+                              dr.minimum(depth, LENGTH_BINS - 1))
             aovs = []
             for c in cum:
                 aovs += [c[0]] if mi.is_monochromatic else [c[0], c[1], c[2]]
@@ -144,6 +158,18 @@ def ladder(depths, info):
     if "rr_depth" in info.integrator_props:
         props["rr_depth"] = int(info.integrator_props["rr_depth"])
     return ladder_class()(props)
+
+
+def work(lengths, depth: int) -> float:
+    """Mean ray casts per sample of a ``path`` render at max_depth ``depth`` (-1: unbounded),
+    from a :attr:`DepthLadder.lengths` histogram of full-depth paths: a path that found k
+    vertices casts k + 1 rays (the last one escapes or is not cast when roulette ends it:
+    counting it errs high), at most ``depth`` of them."""
+    lengths = np.asarray(lengths, dtype=np.float64)
+    casts = np.arange(1, len(lengths) + 1, dtype=np.float64)
+    if depth > 0:
+        casts = np.minimum(casts, depth)
+    return float((lengths * casts).sum() / max(lengths.sum(), 1.0))
 
 
 def split(passes_img, depths) -> tuple:

@@ -166,6 +166,10 @@ class Pilot:
         self.one_kernel = ladder.applies(info)
         self.renders = 0  #: pilot renders made (each spp samples per pixel)
         self.ladder_images: dict[int, np.ndarray] = {}
+        #: histogram of the vertices the ladder's full-depth paths found (:func:`.ladder.work`)
+        self.lengths = np.zeros(ladder.LENGTH_BINS)
+        #: (failing, passing, value) when :meth:`search_depth` left a gap unsearched
+        self.gap_skipped: tuple[int, int, float] | None = None
         self.stratified = stratified
         if self.one_kernel:
             self.full = self._render_ladder(LADDER_STAGES[0])
@@ -225,8 +229,9 @@ class Pilot:
         (every such render traces the same samples, so ``full − depth`` is what two renders
         with the same seeds would give); with another seed it is an independent full-depth
         render."""
-        imgs = self._pilot_render(ladder.ladder(depths, self.info),
-                                  self.seed if seed is None else seed, **size)
+        integrator = ladder.ladder(depths, self.info)
+        imgs = self._pilot_render(integrator, self.seed if seed is None else seed, **size)
+        self.lengths += np.array(integrator.lengths, dtype=np.float64)
         full, by_depth = ladder.split(imgs, depths)
         if seed is None:
             self.ladder_images.update(by_depth)
@@ -283,13 +288,37 @@ class Pilot:
                                               math.sqrt(float(np.mean(self.variance_maps[d]))))
         return self.samples[d]
 
-    def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1]) -> tuple[int, int]:
+    def gap_value(self, failing: int, passing: int, target_error: float) -> float:
+        """At most how many times its own cost a ladder render of the depths between
+        ``failing`` and ``passing`` can save on the planned render (one-kernel pilots).
+
+        With W(d) the mean ray casts per sample at depth d (:func:`.ladder.work`, from the
+        lengths of the pilot's full-depth paths) and N = n(1)²/(E² − b²) the uniform spp at
+        ``passing``, a depth in the gap saves at most N·(W(passing) − W(failing + 1)) casts
+        per pixel, and the gap's render costs spp·W(−1) (the pilot's spp, full depth).  Both
+        err towards searching: the ladder costs more per cast than ``path`` (its AOVs), and
+        a stratified or adaptive render takes fewer than N samples.
+        """
+        s = self.measure(passing)
+        budget2 = target_error ** 2 - s.bias ** 2
+        if budget2 <= 0 or not self.lengths.any():
+            return math.inf
+        n = s.noise_per_sample ** 2 / budget2
+        saved = ladder.work(self.lengths, passing) - ladder.work(self.lengths, failing + 1)
+        return saved * n / (ladder.work(self.lengths, -1) * self.spp)
+
+    def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1],
+                     target_error: float | None = None) -> tuple[int, int]:
         """(depth, failing): the smallest depth with b(d) <= ``allowed``, and the deepest one
         measured that fails (0 when depth 1 passes).
 
         The ladder :data:`DEPTH_LADDER` (depths <= ``cap``) is climbed until a depth passes,
         then the gap to the last failing one is bisected (b is non-increasing in d).  When no
-        depth up to ``cap`` passes, ``depth`` is -1 (unbounded).
+        depth up to ``cap`` passes, ``depth`` is -1 (unbounded).  Given ``target_error``, a
+        gap that needs a render of its own is searched only when that render can pay for
+        itself (:meth:`gap_value` >= 1); otherwise ``depth`` is the passing ladder depth and
+        :attr:`gap_skipped` says why (Russian roulette leaves few paths that deep: glass_slab
+        and cornell_phong cost the same at depth 9 to 16, measured).
         """
         failing, passing = 0, None
         for d in (d for d in DEPTH_LADDER if d <= cap):
@@ -300,6 +329,13 @@ class Pilot:
         if passing is None:
             self.measure(-1)
             return -1, failing
+        gap = [d for d in range(failing + 1, passing)
+               if d not in self.samples and d not in self.ladder_images]
+        if gap and self.one_kernel and target_error is not None:
+            value = self.gap_value(failing, passing, target_error)
+            if value < 1.0:
+                self.gap_skipped = (failing, passing, value)
+                return passing, failing
         self.prefetch(range(failing + 1, passing))
         while passing - failing > 1:
             mid = (passing + failing) // 2

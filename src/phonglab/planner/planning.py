@@ -18,7 +18,7 @@ from ..errors import PlanError, SceneError
 from ..render import MAX_SPP, check_spp
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
-from . import choice
+from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
                     DepthSample, Pilot, pilot_size)
 
@@ -312,7 +312,7 @@ def _choose_depth(pilot: Pilot, target_error: float, bias_fraction: float,
                        + (f" (more than the {allowed:.3g} the planner would allow)"
                           if bias > allowed else ""))
         return max_depth
-    depth, failing = pilot.search_depth(allowed, cap)
+    depth, failing = pilot.search_depth(allowed, cap, target_error)
     if depth == -1:
         reasons.append(f"max_depth -1 (unbounded, Russian roulette): even depth {failing} "
                        f"omits a relative RMS {pilot.measure(failing).bias:.3g} > "
@@ -326,6 +326,13 @@ def _choose_depth(pilot: Pilot, target_error: float, bias_fraction: float,
             f = pilot.measure(failing)
             why += (f"; depth {failing} omits {100 * f.energy_omitted:.3g} % "
                     f"(relative RMS {f.bias:.3g})")
+        if pilot.gap_skipped is not None:
+            f_, p_, value = pilot.gap_skipped
+            why += (f"; depths {f_ + 1} to {p_ - 1} were not searched: the pilot's paths cast "
+                    f"{ladder.work(pilot.lengths, p_):.3g} rays per sample at depth {p_} and "
+                    f"{ladder.work(pilot.lengths, f_ + 1):.3g} at {f_ + 1}, so a shallower depth "
+                    f"could save the render at most {value:.2g}x what rendering the gap "
+                    f"would cost")
         reasons.append(why)
     if pilot.info.delta_bsdfs:
         names = sorted(set(pilot.info.delta_bsdfs))
