@@ -67,6 +67,16 @@ def test_spp_map_png_colours_each_pixel_by_its_count(tmp_path):
     assert len(square(0, 0)) == 1 and not np.array_equal(square(0, 0), lut[:1])
 
 
+def test_viridis_table_is_matplotlibs():
+    """The spp map's stored colour table is matplotlib's viridis, rounded to 8 bits."""
+    from matplotlib import colormaps
+
+    from phonglab.tonemap import VIRIDIS
+
+    want = np.round(colormaps["viridis"](np.linspace(0.0, 1.0, 256))[:, :3] * 255)
+    np.testing.assert_array_equal(VIRIDIS, want.astype(np.uint8))
+
+
 def test_unbiased_image_mean_against_uniform_render(variant_llvm_rgb):
     """E[mean over pixels] is the same for adaptive and uniform sampling (the density-
     normalised filter and the data-dependent sample counts add no bias a test can see).
