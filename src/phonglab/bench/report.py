@@ -430,9 +430,10 @@ def planner_section(d: RunData) -> list[str]:
             "the default configuration (`phonglab render SCENE --spp N --max-depth 8 --variant "
             "llvm_ad_rgb -D res=R`, its N raised until it reaches E against a converged reference) "
             "and `phonglab render SCENE --target-error E -D res=R` (plan, then the render it "
-            "chose), each timed as the whole command in a fresh process (start-up, JIT, pilot and "
-            "planning, the files it writes and the error it prints included), alternately over "
-            "seeds; medians. How the planner decides: "
+            "chose), each timed as the whole command in a fresh process (start-up, JIT kernels, "
+            "pilot and planning, the files it writes and the error it prints included), after "
+            "one untimed run of each (both then load their kernels from Dr.Jit's disk cache), "
+            "alternately over seeds; medians. How the planner decides: "
             "[docs/planner.md](docs/planner.md).\n",
             benchmark_table(rows), ""]
 
