@@ -99,6 +99,19 @@ def chart_error_time(out: Path, figdir: Path) -> list[Path]:
     return written
 
 
+def _stability_grid_axes(ax, title: str, bottom: bool, left: bool) -> None:
+    """Ticks, title and (on the bottom row, the left column) labels of one panel of the
+    stability grid (θ_i rows, exponent columns), as the stability and MIS charts draw it."""
+    ax.set_xticks(range(len(STABILITY_EXPONENTS)),
+                  [f"{p:g}" for p in STABILITY_EXPONENTS], fontsize=6, rotation=45)
+    ax.set_yticks(range(len(STABILITY_ANGLES)), [f"{t:g}" for t in STABILITY_ANGLES], fontsize=6)
+    ax.set_title(title, fontsize=8)
+    if bottom:
+        ax.set_xlabel("exponent p", fontsize=7)
+    if left:
+        ax.set_ylabel("θ_i [deg]", fontsize=7)
+
+
 def chart_stability(out: Path, figdir: Path) -> Path | None:
     """Heatmap per estimator (columns) and light (rows): log10 relative RMSE, ✗ = breaks down."""
     plt = _plt()
@@ -129,15 +142,7 @@ def chart_stability(out: Path, figdir: Path) -> Path | None:
                     if bad[a, p]:
                         ax.text(p, a, "✗", ha="center", va="center", color="red", fontsize=10,
                                 fontweight="bold")
-            ax.set_xticks(range(len(STABILITY_EXPONENTS)),
-                          [f"{p:g}" for p in STABILITY_EXPONENTS], fontsize=6, rotation=45)
-            ax.set_yticks(range(len(STABILITY_ANGLES)), [f"{t:g}" for t in STABILITY_ANGLES],
-                          fontsize=6)
-            ax.set_title(f"{method} — {light}", fontsize=8)
-            if i == len(lights) - 1:
-                ax.set_xlabel("exponent p", fontsize=7)
-            if j == 0:
-                ax.set_ylabel("θ_i [deg]", fontsize=7)
+            _stability_grid_axes(ax, f"{method} — {light}", i == len(lights) - 1, j == 0)
     fig.subplots_adjust(hspace=0.45, wspace=0.3)
     fig.colorbar(im, ax=axes, shrink=0.8, label="log10 relative RMSE (N = 2^14)")
     fig.suptitle(f"Stability map: pure-specular phong, N = {STABILITY_N} samples; "
@@ -177,15 +182,7 @@ def chart_mis(out: Path, figdir: Path) -> Path | None:
                         fontweight="bold" if c["near_zero"] else "normal")
             im = ax.imshow(np.log2(np.clip(grid, 0.25, 4.0)), origin="lower", cmap="coolwarm",
                            vmin=-2, vmax=2, aspect="auto")
-            ax.set_xticks(range(len(STABILITY_EXPONENTS)),
-                          [f"{p:g}" for p in STABILITY_EXPONENTS], fontsize=6, rotation=45)
-            ax.set_yticks(range(len(STABILITY_ANGLES)), [f"{t:g}" for t in STABILITY_ANGLES],
-                          fontsize=6)
-            ax.set_title(f"{title} — {light}", fontsize=8)
-            if i == len(lights) - 1:
-                ax.set_xlabel("exponent p", fontsize=7)
-            if j == 0:
-                ax.set_ylabel("θ_i [deg]", fontsize=7)
+            _stability_grid_axes(ax, f"{title} — {light}", i == len(lights) - 1, j == 0)
     fig.subplots_adjust(hspace=0.45, wspace=0.3)
     fig.colorbar(im, ax=axes, shrink=0.8, label="log2 (MIS error / better single strategy's)")
     fig.suptitle("MIS against the better of BSDF and light sampling (target ≤ 1.2); bold: the "

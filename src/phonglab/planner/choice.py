@@ -35,8 +35,8 @@ image at depth d — and keeps the fastest, with the reason:
   the weights render, drawn with it) and the uniform option with it needs ⌈N/g⌉ samples,
   laid out by :func:`stratified_layout` in passes of a count whose stratification grid has
   power-of-two sides (:data:`CHEAP_PASS_SPP`), at :data:`STRATIFIED_COST` times the time per
-  sample.  It is chosen when it is the fastest; adaptive sampling keeps ``independent`` (its passes give pixels unequal
-  counts, which a per-pixel stratification would need to know ahead).
+  sample.  It is chosen when it is the fastest; adaptive sampling keeps ``independent`` (its
+  passes give pixels unequal counts, which a per-pixel stratification would need to know ahead).
 
 The predictions are steady-state times (JIT compilation excluded), as in step 4.
 """
@@ -88,7 +88,8 @@ STRATIFIED = "multijitter"
 #: Time per sample of :data:`STRATIFIED` over ``independent`` at the pass counts
 #: :func:`stratified_layout` uses (:data:`CHEAP_PASS_SPP`; every count it is asked for is a
 #: kernel of its own, so it is not timed apart): measured 1.06-1.11x on gray_direct,
-#: gray_room, cornell_phong and glass_slab, 1.24x on nb_sphere_row (128², 8-1024 spp).
+#: gray_room, cornell_phong and glass_slab, 1.24x on nb_sphere_row (128², max_depth 8,
+#: 256-1024 spp, medians of 3); 1.05-1.08x at 8, 16 and 64 spp (:data:`CHEAP_PASS_SPP`).
 STRATIFIED_COST = 1.15
 #: Pass sizes at which ``multijitter`` costs no more than :data:`STRATIFIED_COST`.  Its grid is
 #: ⌊√n⌋ rows by ⌈n/⌊√n⌋⌉ columns (``src/samplers/multijitter.cpp``, ``set_sample_count``)

@@ -237,10 +237,14 @@ class Pilot:
             self.ladder_images.update(by_depth)
         return full
 
+    def unrendered(self, depths) -> list[int]:
+        """The finite depths of ``depths`` neither measured nor held by a ladder render."""
+        return [d for d in depths if d > 0 and d not in self.samples
+                and d not in self.ladder_images]
+
     def prefetch(self, depths) -> None:
         """Render the depths not yet measured in one ladder render (one-kernel pilots only)."""
-        missing = [d for d in depths if d > 0 and d not in self.samples
-                   and d not in self.ladder_images]
+        missing = self.unrendered(depths)
         if self.one_kernel and missing:
             self._render_ladder(missing)
 
@@ -329,9 +333,8 @@ class Pilot:
         if passing is None:
             self.measure(-1)
             return -1, failing
-        gap = [d for d in range(failing + 1, passing)
-               if d not in self.samples and d not in self.ladder_images]
-        if gap and self.one_kernel and target_error is not None:
+        if (self.one_kernel and target_error is not None
+                and self.unrendered(range(failing + 1, passing))):
             value = self.gap_value(failing, passing, target_error)
             if value < 1.0:
                 self.gap_skipped = (failing, passing, value)
