@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from phonglab import exr, metrics, planner, references, render, runtime, scenes, stats
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
+from phonglab.planner import benchmark
 
 RES = {"res": 32}
 TARGET = 0.05
@@ -486,9 +487,38 @@ def test_benchmark_table_names_the_film_of_each_row():
                                                          sampler="multijitter"))
     table = planner.benchmark_table([row, wide, strat])
     assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
-    assert "1.50x (1.20-1.80)" in table
+    assert "1.50x (1.20-1.80) | 1.50x |" in table
     assert "path uniform (multijitter), llvm_ad_mono" in table
-    assert "at least 1.5x faster (median) on 2 of 3 rows" in table
+    assert "at equal error" in table and "on 2 of 3 rows" in table
+
+
+def test_equal_error_speedup_only_ever_lowers_the_raw_ratio():
+    """A planned error above E costs (E/e)²; a default below E costs (e/E)²; never a bonus."""
+    row = {"target_error": 0.05, "speedup": 2.0, "default": {"error": 0.05},
+           "planned": {"error": 0.05}}
+    assert benchmark.equal_error_speedup(row) == pytest.approx(2.0)
+    over = dict(row, planned={"error": 0.055})
+    assert benchmark.equal_error_speedup(over) == pytest.approx(2.0 * (0.05 / 0.055) ** 2)
+    under = dict(row, default={"error": 0.045})
+    assert benchmark.equal_error_speedup(under) == pytest.approx(2.0 * (0.045 / 0.05) ** 2)
+    lucky = dict(row, default={"error": 0.06}, planned={"error": 0.04})  # both in our favour
+    assert benchmark.equal_error_speedup(lucky) == pytest.approx(2.0)
+
+
+def test_error_model_recovers_bias_and_noise_and_the_spp_at_e():
+    """e(N)² = b² + c/N: exact points give (b², c) back; the spp solving e(N) = E follows,
+    and a bias at or above E leaves no spp (inf).  One point, or a slope noise made
+    negative, falls back to the noise-only model through the point of most samples."""
+    b2, c = 0.035 ** 2, 1.3
+    points = [(n, math.sqrt(b2 + c / n)) for n in (64, 800, 3200)]
+    fb2, fc = benchmark.fit_error_model(points)
+    assert fb2 == pytest.approx(b2, rel=1e-9) and fc == pytest.approx(c, rel=1e-9)
+    n = benchmark.spp_for_error(fb2, fc, 0.05)
+    assert math.sqrt(b2 + c / n) == pytest.approx(0.05)
+    assert n > 800 * (math.sqrt(b2 + c / 800) / 0.05) ** 2   # the noise-only rule stops short
+    assert benchmark.spp_for_error(0.06 ** 2, c, 0.05) == math.inf
+    assert benchmark.fit_error_model([(100, 0.1)]) == (0.0, pytest.approx(1.0))
+    assert benchmark.fit_error_model([(100, 0.1), (400, 0.11)]) == (0.0, pytest.approx(400 * 0.0121))
 
 
 # --- the stratified sampler (planner step 5, render's sampler) ----------------------------------

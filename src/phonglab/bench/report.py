@@ -428,12 +428,16 @@ def planner_section(d: RunData) -> list[str]:
     return ["\n## Planner: planned against the default configuration at equal error\n",
             "`scripts/planner_bench.py` (run by `make bench`): per scene a target relative RMSE E; "
             "the default configuration (`phonglab render SCENE --spp N --max-depth 8 --variant "
-            "llvm_ad_rgb -D res=R`, its N raised until it reaches E against a converged reference) "
+            "llvm_ad_rgb -D res=R`, its N raised until it reaches E against a converged reference: "
+            "a fit of e(N)² = b² + c/N, its depth bias and its noise, to renders at each N "
+            "tried, until the error is within 2 % of E) "
             "and `phonglab render SCENE --target-error E -D res=R` (plan, then the render it "
             "chose), each timed as the whole command in a fresh process (start-up, JIT kernels, "
             "pilot and planning, the files it writes and the error it prints included), after "
             "one untimed run of each (both then load their kernels from Dr.Jit's disk cache), "
-            "alternately over seeds; medians. How the planner decides: "
+            "alternately over seeds; medians. *At equal error* corrects the median ratio for the "
+            "errors' scatter about E, only ever downwards: (E/e)² more time for a planned error "
+            "e above E, (e/E)² less for a default error e below E. How the planner decides: "
             "[docs/planner.md](docs/planner.md).\n",
             benchmark_table(rows), ""]
 
