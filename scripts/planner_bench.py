@@ -2,11 +2,12 @@
 
 For each scene (parameters in :data:`SCENES`, a target error E each):
 
-1. a converged reference (max_depth -1, phonglab.references, cached in .bench_cache/references);
+1. a converged reference (max_depth -1, phonglab.references, cached in .bench_cache/references),
+   its relative noise at most E/3 (:func:`bench_reference`);
 2. the **default configuration** (llvm_ad_rgb, the scene's path integrator at max_depth 8,
-   uniform spp) with its spp *raised until it reaches E*: the error at the scene's spp,
-   measured, gives N = spp·(err/E)² (noise falls as 1/√spp), checked by one more render and
-   corrected once;
+   uniform spp) with its spp *raised until it reaches E*: a fit of e(N)² = b² + c/N (its
+   depth bias and its noise) to the errors measured so far gives the next N, until the error
+   is within 2 % of E (:func:`equal_error_spp`);
 3. timing, after one untimed run of each (JIT kernels then come from Dr.Jit's on-disk cache
    for both, as on a user's second run), alternating, ``--repeats`` times with different
    seeds: each configuration runs as a
@@ -119,6 +120,29 @@ def reference_spp(res: int) -> int:
     return max(1024, min(REF_SPP, REF_SPP * 128 * 128 // (res * res)))
 
 
+#: A reference's relative noise may be at most this fraction of E: its noise is subtracted from
+#: every error measured against it (known from its passes), but that estimate is itself noisy,
+#: and at 4096 spp nb_sphere_row's reference at 128² was 0.0044 noisy for E = 0.005 (0.0085 at
+#: 256²): the measured errors were mostly the reference's.
+REF_NOISE_FRACTION = 1 / 3
+#: Most spp a bench reference is given (nb_sphere_row 1024×256 needs 32768).
+MAX_REF_SPP = 65536
+
+
+def bench_reference(name: str, params: dict, target: float, spp: int):
+    """The scene's reference (phonglab.references, cached) at ``spp`` samples or more: doubled
+    until its relative noise is at most :data:`REF_NOISE_FRACTION` of ``target`` (the spp its
+    noise predicts, ∝ 1/√spp, rounded up to a power of two), at most :data:`MAX_REF_SPP`."""
+    ref = references.reference(name, spp, params=params)
+    noise = metrics.relative_noise(ref.image, ref.stderr)
+    while noise > REF_NOISE_FRACTION * target and ref.spp < MAX_REF_SPP:
+        want = ref.spp * (noise / (REF_NOISE_FRACTION * target)) ** 2
+        ref = references.reference(name, min(MAX_REF_SPP, 1 << math.ceil(math.log2(want))),
+                                   params=params)
+        noise = metrics.relative_noise(ref.image, ref.stderr)
+    return ref
+
+
 #: Most spp the default configuration is given when it cannot reach E (a depth-8 bias floor).
 MAX_DEFAULT_SPP = 8192
 #: The calibration stops once the default's measured error is within this fraction of E.
@@ -158,7 +182,7 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
     target, make_params = SCENES.get(name, (0.02, lambda r: {"res": r}))
     params = make_params(res)
     t0 = time.perf_counter()
-    ref = references.reference(name, ref_spp, params=params)
+    ref = bench_reference(name, params, target, ref_spp)
     ref_seconds = time.perf_counter() - t0
     spp_def, err_cal, calibration = equal_error_spp(name, params, target, ref)
 
