@@ -173,8 +173,7 @@ def equal_error_spp(scene: str, params: dict, target: float, ref) -> tuple[int, 
         if nxt == spp:
             break
         spp = nxt
-    else:
-        spp, err = points[-1]
+    spp, err = points[-1]   # every way out: the last render made (the next N is not rendered)
     return spp, err, points
 
 

@@ -518,7 +518,8 @@ def test_error_model_recovers_bias_and_noise_and_the_spp_at_e():
     assert n > 800 * (math.sqrt(b2 + c / 800) / 0.05) ** 2   # the noise-only rule stops short
     assert benchmark.spp_for_error(0.06 ** 2, c, 0.05) == math.inf
     assert benchmark.fit_error_model([(100, 0.1)]) == (0.0, pytest.approx(1.0))
-    assert benchmark.fit_error_model([(100, 0.1), (400, 0.11)]) == (0.0, pytest.approx(400 * 0.0121))
+    assert benchmark.fit_error_model([(100, 0.1), (400, 0.11)]) == (
+        0.0, pytest.approx(400 * 0.0121))
 
 
 # --- the stratified sampler (planner step 5, render's sampler) ----------------------------------
