@@ -29,7 +29,11 @@ RMSE of E, and at what cost?" in four steps, each with a reason the user can rea
    full-depth pilot with other seeds, independent of D_k: with r̂ its pass mean and se² the
    squared standard error of r̂, the delta method gives E[1/(r̂² + ε)] ≈ (1 + (3r² − ε)·se²/
    (r² + ε)²)/(r² + ε), and w = 1/(r̂² + ε) divided by that factor (kept >= 1/2) removes the
-   second-order bias of the plug-in weight (:func:`phonglab.planner.pilot._weights`).  The
+   second-order bias of the plug-in weight (:func:`phonglab.planner.pilot._weights`).  At
+   depths 1 to 4 the second pilot's own depth images (the same one-render ladder) give a
+   second estimate, weighted by the first pilot's w, pooled with the first by samples: where
+   deeper bounces are rare a pixel's term needs two passes that found them, and a small pilot
+   alone can miss them (:mod:`phonglab.planner.pilot`, nb_sphere_row).  The
    plan takes the smallest d with ``b(d) <= BIAS_FRACTION · E`` (candidates 1, 2, 3, 4, 6, 8,
    12, ... then bisection, b being non-increasing in d, when the bisection's render can pay
    for itself: :meth:`.pilot.Pilot.gap_value`).  Delta chains (glass, mirrors) need

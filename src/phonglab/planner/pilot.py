@@ -6,7 +6,15 @@ up to the shallower depth), ``full_k`` the pass images at full depth and ``depth
 depth d, ``D_k = full_k − depth_k`` and per pixel and channel:
 
 * weights      w ≈ 1/(r² + ε), from a second full-depth pilot with other seeds (:func:`_weights`);
-* depth bias   b(d)² = mean[((mean_k D_k)² − var_k(D_k)/P) · w]  (:meth:`Pilot.measure`);
+* depth bias   b(d)² = mean[((mean_k D_k)² − var_k(D_k)/P) · w]  (:func:`depth_bias2`); at the
+  depths of the first ladder stage the second pilot measures it again (its own D_k, the first
+  pilot's weights) and :meth:`Pilot.measure` pools the two by samples.  A pixel's term is 0
+  unless two of its passes found the omitted bounces (with one, (mean_k D)² and var_k(D)/P
+  cancel), so where they are rare the estimate of a small pilot is mostly 0 with a rare large
+  value: nb_sphere_row at 512×128 has b(4) = 0.0021 (pilots of 64 spp, two seeds), and its
+  default pilot (4 passes of 1 spp) measured 3e-6 to 0.003 over ten seeds, six under the
+  budget 0.00125 (the plan chose depth 4 and missed E by 6 %); pooled with the second pilot
+  (16 spp, stratified) seeds 1-6 gave 0.0015 to 0.0029, every one over it;
 * noise        σ² = s · var_k(pass_k), the variance of one sample; a render of N samples per
   pixel has the relative noise n(N)² = mean[σ² · w]/N (:attr:`DepthSample.noise_per_sample`
   is n(1));
@@ -86,6 +94,14 @@ class DepthSample:
     bias: float            #: b(d): relative RMS of the omitted (deeper) contribution
     energy_omitted: float  #: Σ(full − depth) / Σ full over the image: energy of deeper bounces
     noise_per_sample: float  #: √mean(σ²/(r² + ε)): relative noise of a 1-spp image
+
+
+def depth_bias2(diff: np.ndarray, weight: np.ndarray) -> float:
+    """b² = mean[((mean_k D_k)² − var_k(D_k)/P) · w] from the (P, H, W, C) pass differences
+    D_k = full_k − depth_k of P >= 2 independent passes (unbiased for mean[(E D)² · w])."""
+    mean = diff.mean(axis=0)
+    se2 = diff.var(axis=0, ddof=1) / diff.shape[0]
+    return float(np.mean((mean * mean - se2) * weight))
 
 
 def _weights(passes_img: np.ndarray) -> np.ndarray:
@@ -172,7 +188,7 @@ class Pilot:
         self.gap_skipped: tuple[int, int, float] | None = None
         self.stratified = stratified
         if self.one_kernel:
-            self.full = self._render_ladder(LADDER_STAGES[0])
+            self.full, self.ladder_images = self._render_ladder(LADDER_STAGES[0])
         else:
             self.full = self._render(-1, seed)
         # The weights come from an independent full-depth pilot (other seeds): taken from
@@ -186,9 +202,14 @@ class Pilot:
         if stratified is not None:
             spp = max(self.spp, 2 * STRATIFIED_PASS_SPP)
             size = {"spp": spp, "passes": spp // STRATIFIED_PASS_SPP, "sensor": stratified}
-        second = (self._render_ladder(LADDER_STAGES[0], seed + 1, **size) if self.one_kernel
-                  else self._render(-1, seed + 1, **size))
+        second, second_depths = (self._render_ladder(LADDER_STAGES[0], seed + 1, **size)
+                                 if self.one_kernel else (self._render(-1, seed + 1, **size), {}))
         self.weight = _weights(second)
+        # Its depth images (the ladder's first stage) estimate the depth bias again, with
+        # other samples, weighted by the first pilot's weights (:meth:`measure`).
+        self.second, self.second_depths = second, second_depths
+        self.second_spp = size.get("spp", self.spp)
+        self.second_weight = _weights(self.full)
         #: n(1)² of the scene's sampler over that of the stratified one at its pass size
         #: (1 without a stratified sensor): the factor fewer samples it needs (full depth)
         self.gain = 1.0
@@ -198,7 +219,7 @@ class Pilot:
                                                         stratified)[0]
             self.gain = stratification_gain(self.full, self.spp_per_pass, self.weight,
                                             second, self.stratified_pass_spp,
-                                            _weights(self.full))
+                                            self.second_weight)
         self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
@@ -223,19 +244,15 @@ class Pilot:
         """The pass images of a ``path`` render at ``depth`` (``size``: :meth:`_pilot_render`)."""
         return self._pilot_render(path_integrator(depth, self.info), seed, **size)
 
-    def _render_ladder(self, depths, seed: int | None = None, **size) -> np.ndarray:
-        """One :class:`.ladder.DepthLadder` render; returns its full-depth pass images.  With
-        the pilot's seed (default) it keeps the pass images of every depth in ``depths``
-        (every such render traces the same samples, so ``full − depth`` is what two renders
-        with the same seeds would give); with another seed it is an independent full-depth
-        render."""
+    def _render_ladder(self, depths, seed: int | None = None,
+                       **size) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+        """One :class:`.ladder.DepthLadder` render (the pilot's seed unless given): its
+        full-depth pass images and those of every depth in ``depths`` (the same samples, so
+        ``full − depth`` is what two renders with the same seeds would give)."""
         integrator = ladder.ladder(depths, self.info)
         imgs = self._pilot_render(integrator, self.seed if seed is None else seed, **size)
         self.lengths += np.array(integrator.lengths, dtype=np.float64)
-        full, by_depth = ladder.split(imgs, depths)
-        if seed is None:
-            self.ladder_images.update(by_depth)
-        return full
+        return ladder.split(imgs, depths)
 
     def unrendered(self, depths) -> list[int]:
         """The finite depths of ``depths`` neither measured nor held by a ladder render."""
@@ -246,7 +263,7 @@ class Pilot:
         """Render the depths not yet measured in one ladder render (one-kernel pilots only)."""
         missing = self.unrendered(depths)
         if self.one_kernel and missing:
-            self._render_ladder(missing)
+            self.ladder_images.update(self._render_ladder(missing)[1])
 
     def variance_map(self, passes_img: np.ndarray) -> np.ndarray:
         """(H, W) mean over channels of σ² · w, σ² = s · var_k(pass_k) the variance of one
@@ -282,10 +299,13 @@ class Pilot:
                     imgs = self._render(d, self.seed)
                     self.compiled.add(d)
                 diff = self.full - imgs
-                mean = diff.mean(axis=0)
-                se2 = diff.var(axis=0, ddof=1) / self.passes
-                bias2 = float(np.mean((mean * mean - se2) * self.weight))
-                energy = float(mean.sum()) / self.total_energy
+                bias2 = depth_bias2(diff, self.weight)
+                if d in self.second_depths:  # the second pilot's estimate, pooled by samples
+                    bias2_second = depth_bias2(self.second - self.second_depths.pop(d),
+                                               self.second_weight)
+                    bias2 = ((self.spp * bias2 + self.second_spp * bias2_second)
+                             / (self.spp + self.second_spp))
+                energy = float(diff.mean(axis=0).sum()) / self.total_energy
                 self.variance_maps[d] = self.variance_map(imgs)
                 self.samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
                                               energy if abs(energy) > 1e-9 else 0.0,
