@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import signal
 import socket
@@ -32,7 +33,7 @@ from phonglab.bench.jobs import put_in_order
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
 from phonglab import parallel
-from phonglab.parallel import Runner, check_address
+from phonglab.parallel import Job, Runner, check_address
 
 #: Columns that are measured times or compile statistics (machine state, not results).
 TIMING = {"wall_time_s", "first_call_s", "seconds", "t_a", "t_b", "ratio", "steady_s",
@@ -317,3 +318,23 @@ def test_kernel_cache_slots_are_exclusive_and_cleaned(tmp_path):
     # A second claimant (another open file description, as another process would have) is
     # refused the held slot and gets the next one.
     assert claim_slot(tmp_path) == tmp_path / "worker-1"
+
+
+def scene_pixels(scene) -> int:
+    """A job function taking a loaded mi.Scene (which cannot be pickled)."""
+    return int(scene.sensors()[0].film().size()[0])
+
+
+def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
+    """A Job whose argument is a loaded Scene ran serially but raised Dask's pickling
+    traceback on a cluster; now it is one sentence before any job is sent."""
+    import mitsuba as mi
+
+    scene = mi.load_dict(mi.cornell_box())
+    with Runner(progress=False) as serial:
+        assert serial.run([Job(scene_pixels, (scene,), key="s")]) == [256]
+    with Runner(workers=2, progress=False) as runner:
+        with pytest.raises(PhonglabError, match=r"job 's' cannot be sent to a worker "
+                                                r"\(TypeError: cannot pickle 'Scene' object\)"):
+            runner.run([Job(math.factorial, (3,), key="ok"), Job(scene_pixels, (scene,), key="s")])
+        assert runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
