@@ -338,3 +338,31 @@ def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
                                                 r"\(TypeError: cannot pickle 'Scene' object\)"):
             runner.run([Job(math.factorial, (3,), key="ok"), Job(scene_pixels, (scene,), key="s")])
         assert runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
+
+
+@pytest.mark.slow
+def test_ctrl_c_of_a_workers_run_is_one_line_and_leaves_no_worker(tmp_path):
+    """Ctrl-C reaches the whole process group: each LocalCluster worker used to print its own
+    KeyboardInterrupt traceback (88 lines for `validate --all-builtins --workers 2`)."""
+    proc = subprocess.Popen([str(BIN / "phonglab"), "validate", "--all-builtins", "--quick",
+                             "--workers", "2", "--json", str(tmp_path / "all.json")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, start_new_session=True)
+    err, deadline = "", time.monotonic() + 240
+    while "2/54" not in err and time.monotonic() < deadline:     # two cases done: jobs run
+        chunk = proc.stderr.read(1)
+        if not chunk:
+            break
+        err += chunk
+    assert "2/54" in err, err
+    workers = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+    assert workers, "no worker processes"
+    os.killpg(proc.pid, signal.SIGINT)
+    err += proc.stderr.read()
+    assert proc.wait(timeout=60) == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-3000:]
+    lines = [ln.strip() for ln in err.replace("\r", "\n").splitlines() if ln.strip()]
+    assert lines[-1] == "phonglab: interrupted; files already written are complete.", lines[-5:]
+    time.sleep(1)
+    assert not [p for p in workers if psutil.pid_exists(p)
+                and psutil.Process(p).status() != psutil.STATUS_ZOMBIE], "workers left running"

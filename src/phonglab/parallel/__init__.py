@@ -33,6 +33,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import signal
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Hashable, Iterator, Sequence
@@ -209,8 +210,15 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.CRITICAL)
+        # Ctrl-C reaches every process of the terminal's group: the embedded workers ignore it
+        # (inherited here, and set again by the plugin in a worker a nanny restarts), so only
+        # this process handles it and shuts the cluster down, without a traceback per worker.
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+        finally:
+            signal.signal(signal.SIGINT, previous)
         threads = max(1, (os.cpu_count() or 1) // int(workers))
         client = Client(cluster)
     else:
@@ -225,7 +233,8 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
     try:
         if scheduler is not None:
             _wait_for_a_worker(client, scheduler)
-        client.register_plugin(PhonglabWorker(variant, threads=threads))
+        client.register_plugin(PhonglabWorker(variant, threads=threads,
+                                              ignore_sigint=scheduler is None))
     except BaseException:
         client.close()
         if cluster is not None:
