@@ -153,7 +153,7 @@ def test_good_update_after_a_refused_one_takes_effect(plugin, name, key, bad, go
     np.testing.assert_allclose(changed, render(fresh), rtol=1e-5, atol=1e-6)
 
 
-def test_refused_bitmap_update_restores_the_texels():
+def test_refused_bitmap_update_restores_the_texels(one_thread):
     data = np.full((6, 5, 3), 0.3, np.float32)
     scene = mi.load_dict(tiny_scene({"type": "lambert", "reflectance": bitmap(data)}))
     params = mi.traverse(scene)
@@ -316,3 +316,26 @@ def test_8bit_png_energy_is_checked_on_the_decoded_texels(tmp_path):
     data[1, 2, 0] = 203
     kd = {"type": "bitmap", "filename": png8(tmp_path, data, "ok.png")}
     mi.load_dict({"type": "phong", "diffuse_reflectance": kd, "specular_reflectance": 0.35})
+
+
+# ----------------------------------------------------------------------------- across objects
+
+@pytest.mark.parametrize("bad_key, bad", [("exponent", -5.0), ("exponent", NAN),
+                                          ("diffuse_reflectance.value", 1.5)])
+def test_a_refused_update_restores_every_object_it_touched(one_thread, bad_key, bad):
+    """One update that scaled the light by 10 and set an invalid phong parameter was refused,
+    yet the light's new intensity stayed (the next render 10x brighter)."""
+    scene = mi.load_dict(tiny_scene({"type": "phong"}))
+    params = mi.traverse(scene)
+    light, key = _full_key(params, "intensity.value"), _full_key(params, bad_key)
+    before_values = {k: np.array(params[k]).copy() for k in params.keys()}
+    before = render(scene)
+    params[light] = params[light] * 10.0
+    params[key] = bad
+    with pytest.raises(MaterialError):
+        params.update()
+    for k, v in before_values.items():
+        np.testing.assert_array_equal(np.array(params[k]), v, err_msg=k)
+    assert np.array_equal(render(scene), before), "the refused update changed the light"
+    params.update({light: params[light] * 10.0})     # a good update afterwards works
+    np.testing.assert_allclose(render(scene), 10.0 * before, rtol=1e-4, atol=1e-6)
