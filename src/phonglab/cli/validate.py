@@ -12,7 +12,8 @@ import json
 from pathlib import Path
 
 from ..parallel import add_arguments, runner_from_args
-from ..validate.inputs import ValidateError, check_topics, parse_sets
+from ..settings import parse_sets
+from ..validate.inputs import ValidateError, check_topics
 from ..validate.report import TOPICS, Report
 
 EPILOG = """examples:

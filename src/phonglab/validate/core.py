@@ -16,6 +16,7 @@ from pathlib import Path
 import mitsuba as mi
 
 from .. import registration
+from ..settings import PluginError, load_plugin
 from . import lanes
 from .config import options as make_options
 from .cost import cost
@@ -44,38 +45,12 @@ def load_plugins(paths) -> None:
 
 def _load(spec, params):
     """(bsdf, label, description for meta)."""
-    if isinstance(spec, mi.BSDF):
-        if params:
-            raise ValidateError("parameters cannot be set on an already loaded BSDF; pass its "
-                                "type name or dict instead")
-        return spec, spec.class_().name() if hasattr(spec, "class_") else type(spec).__name__, None
-    if isinstance(spec, (str, Path)) and str(spec).endswith(".xml"):
-        path = Path(spec)
-        if not path.is_file():
-            raise ValidateError(f"XML file {str(spec)!r} does not exist")
-        if params:
-            raise ValidateError("--set cannot change an XML file's BSDF; edit the file instead")
-        try:
-            return mi.load_string(path.read_text()), path.name, {"file": str(path)}
-        except Exception as exc:
-            raise ValidateError(f"{path.name} does not load as one <bsdf>: "
-                                f"{_first_line(exc)}") from exc
-    if isinstance(spec, str):
-        spec = {"type": spec}
-    if not isinstance(spec, dict) or "type" not in spec:
-        raise ValidateError("give a BSDF plugin type name, a dict with 'type', an XML file or "
-                            "an mi.BSDF")
-    d = {**spec, **(params or {})}
     try:
-        bsdf = mi.load_dict(d)
-    except Exception as exc:
-        raise ValidateError(f"cannot load BSDF {spec['type']!r} ({_first_line(exc)}); check the "
-                            f"type name and --set values, or register it with --plugin FILE.py"
-                            ) from exc
-    if not isinstance(bsdf, mi.BSDF):
-        raise ValidateError(f"{spec['type']!r} is not a BSDF plugin")
-    return bsdf, spec["type"], {k: (v if isinstance(v, (int, float, str, bool)) else repr(v))
-                                for k, v in d.items()}
+        return load_plugin(spec, params, kind=mi.BSDF, word="BSDF",
+                           hint="check the type name and --set values, or register it with "
+                                "--plugin FILE.py")
+    except PluginError as exc:
+        raise ValidateError(str(exc)) from exc
 
 
 def _first_line(exc) -> str:
