@@ -39,9 +39,11 @@ of freedom instead of passes − 1.  The relative error of pixel p is
 relative MSE).
 
 **Target and allocation.**  The target E is the image's relative RMSE against a converged
-reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.metrics.relative_rmse`); its square
-is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative variance of one sample),
-minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
+reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.metrics.relative_rmse`), as far as
+noise makes it: the renderer has no depth-bias estimate, so E is the total error only for an
+unbiased render (:mod:`phonglab.metrics`, the one definition of E; the planner passes
+√(E² − b²)).  Its square is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative
+variance of one sample), minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
 ``N_p* = √v_p · mean_q √v_q / E²`` — each pixel's budget is ``e_p*² = v_p/N_p* =
 E² √v_p / mean √v``: noisy pixels are allowed more error, quiet ones less, and the mean meets
 E².  A pass adds ``min(N_p* − N_p, (GROWTH − 1)·N_p)`` samples to each pixel below N_p*

@@ -231,6 +231,17 @@ class SceneFile:
     integrator: Any = None            #: replaces the scene's own (None: the scene's)
     max_depth: int | None = None      #: the max_depth asked for (None: the scene's)
     info: SceneInfo | None = None     #: the inspected file, when already at hand
+    sensors: dict[str | None, Any] = field(default_factory=dict, repr=False)
+
+    def sensor(self, sampler: str | None = None):
+        """The render's sensor, checked by :func:`preflight`: the scene's first, or that
+        sensor rebuilt with ``sampler`` when it names another sampler than the scene's
+        (:func:`phonglab.scenes.sensor_with_sampler`); built once per sampler."""
+        key = None if sampler is None or sampler == self.inspect().sampler else sampler
+        if key not in self.sensors:
+            self.sensors[key] = preflight(self.scene, self.path, 0 if key is None
+                                          else sensor_with_sampler(self.inspect(), key))
+        return self.sensors[key]
 
     def inspect(self) -> SceneInfo:
         """The scene file read by :func:`phonglab.scenes.inspect_scene` with :attr:`params`
@@ -316,10 +327,8 @@ class UniformPasses:
 
     def render(self, sf: SceneFile, seed: int) -> tuple[RenderResult, dict[str, Any]]:
         """The render and its header fields (spp, passes, seed, sampler, integrator, depth)."""
-        sensor = preflight(sf.scene, sf.path)
-        spp = int(self.spp or sensor.sampler().sample_count())
-        if self.sampler is not None and self.sampler != sf.inspect().sampler:
-            sensor = preflight(sf.scene, sf.path, sensor_with_sampler(sf.inspect(), self.sampler))
+        spp = int(self.spp or sf.sensor().sampler().sample_count())
+        sensor = sf.sensor(self.sampler)
         passes = self.passes or (min(spp, 8) if spp >= 16 else 1)
         result = render_scene(sf.scene, spp, seed=seed, passes=passes, progress=self.progress,
                               integrator=sf.integrator, sensor=sensor)
