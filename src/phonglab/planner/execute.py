@@ -37,7 +37,9 @@ from typing import Any
 from .. import metrics, references
 from ..adaptive import MIN_SPP, AdaptiveResult, AdaptiveSampling
 from ..registration import register
-from ..render import RenderResult, UniformPasses, open_scene_file, render_scene_file
+from ..references import Reference
+from ..render import (RenderResult, SceneFile, UniformPasses, open_scene_file,
+                      render_scene_file)
 from ..runtime import quiet_mitsuba
 from . import choice
 from .planning import Plan
@@ -115,7 +117,7 @@ class PreparedPlan:
 
     plan: Plan
     how: UniformPasses | AdaptiveSampling
-    scene_file: Any
+    scene_file: SceneFile
 
     def render(self, seed: int = 0) -> RenderResult | AdaptiveResult:
         _activate(self.plan)
@@ -137,7 +139,7 @@ def prepare(plan: Plan) -> PreparedPlan:
 
 
 def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
-                 reference=None) -> ErrorReport:
+                 reference: Reference | None = None) -> ErrorReport:
     """The render's error (module docstring): against ``reference`` (a
     :class:`phonglab.references.Reference`), else the cached reference, when there is one."""
     if isinstance(result, AdaptiveResult):
@@ -157,7 +159,7 @@ def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
 
 
 def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
-                reference=None, progress: bool = False) -> PlannedRender:
+                reference: Reference | None = None, progress: bool = False) -> PlannedRender:
     """Render ``plan`` (module docstring) and report its error.
 
     With ``out`` the render writes its files as ``phonglab render`` does
