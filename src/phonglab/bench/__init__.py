@@ -52,7 +52,7 @@ _EXPORTS = {
     "config": ("BIAS_FLOOR", "BREAKDOWN_REL_RMSE", "Config", "DEFAULT_OUT", "ESTIMATOR_SCENES",
                "NEAR_ZERO_REL_SD", "PARTS", "RATIO_COMPARISONS", "STABILITY_ANGLES",
                "STABILITY_EXPONENTS", "STABILITY_LIGHTS", "STABILITY_N"),
-    "cornell": ("BOX_TYPES", "CornellSpec", "beckmann_alpha", "cornell_xml", "render_setups"),
+    "cornell": ("BOX_TYPES", "CornellSpec", "cornell_xml", "render_setups"),
     "csvlog": ("CsvLog",),
     "report": ("stability_explanations", "write_markdown"),
     "run": ("machine_info", "run_bench"),

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..physics.estimators import METHODS
+from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table
 from .adaptive_sweeps import report_section as adaptive_report_section
 from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
@@ -28,7 +29,6 @@ from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_rati
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
                      WHITTED_TARGET)
-from .cornell import beckmann_alpha
 from .csvlog import number, open_log
 
 

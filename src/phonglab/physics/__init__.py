@@ -7,5 +7,6 @@
   (deterministic albedo, used by the checks);
 * :mod:`.estimators`  Monte Carlo estimators of the reflection equation (uniform, cosine, BSDF,
   light, MIS) in Dr.Jit, with exact values by quadrature;
+* :mod:`.roughness`   Beckmann α ↔ Phong exponent p ↔ Blinn–Phong p_h (the folk rules);
 * :mod:`.opengl`      the OpenGL fixed-function local model and its mapping to phonglab's.
 """
