@@ -209,8 +209,8 @@ def test_timing_record_and_bench_section(tmp_path):
     from types import SimpleNamespace
 
     from phonglab.bench.report import fitting_section
-    from phonglab.fit import timing
-    assert timing.main(["--repeats", "1", "--out", str(tmp_path / "fit.json")]) == 0
+    from phonglab.bench import fit_timing
+    assert fit_timing.main(["--repeats", "1", "--out", str(tmp_path / "fit.json")]) == 0
     record = json.loads((tmp_path / "fit.json").read_text())
     assert record["repeats"] == 1 and record["wall_min_s"] == record["wall_median_s"] > 0
     assert record["met"] == (record["wall_median_s"] < 60)

@@ -39,6 +39,10 @@ matplotlib, Agg): error against time on log-log axes, one curve per method, the 
 front marked; the stability heatmaps.  :func:`write_markdown` (:mod:`.report`) turns the
 CSVs into BENCHMARKS.md; :func:`run_bench` (:mod:`.run`) runs it all.  Sizes and
 constants: :mod:`.config`.
+
+Whole commands (``phonglab fit``, ``validate``, ``render``; ``make bench``'s fit, validate,
+planner and cluster records) are timed as fresh processes by the one driver :mod:`.timing`;
+:mod:`.fit_timing` is the ``phonglab fit`` record.
 """
 
 from ..lazy import lazy_exports

@@ -453,9 +453,10 @@ def fitting_section(d: RunData) -> list[str]:
     if r is None:
         return []
     return ["\n## Fitting: `phonglab fit`\n",
-            f"`python -m phonglab.fit.timing` (run by `make bench`): `{r['command']}` as a fresh "
-            f"process (import, JIT compilation and fit), {r['repeats']} runs on {r['cores']} cores, "
-            f"load average {r['load_before']} before and {r['load_after']} after.\n",
+            f"`python -m phonglab.bench.fit_timing` (run by `make bench`): `{r['command']}` as a "
+            f"fresh process (import, JIT compilation and fit), {r['repeats']} runs on "
+            f"{r['cores']} cores, load average {r['load_before']} before and {r['load_after']} "
+            f"after.\n",
             "| median wall [s] | min | max | median CPU [s] | target | |",
             "|---|---|---|---|---|---|",
             f"| {r['wall_median_s']:.2f} | {r['wall_min_s']:.2f} | {r['wall_max_s']:.2f} "
