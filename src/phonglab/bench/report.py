@@ -399,8 +399,9 @@ def mis_section(d: RunData) -> list[str]:
                      if k.split("/")[1] in ("bsdf", "light", "mis", "mis_optimal"))
     L = ["## Optimal MIS against the better single strategy\n",
          f"![MIS ratios]({d.rel}/mis.png)\n",
-         "`mis_optimal` ([physics/estimators.py](src/phonglab/physics/estimators.py)): a pilot of "
-         "N/32 samples (at most 2048; half BSDF, half light sampling, then discarded) chooses the "
+         "`mis_optimal` ([physics/estimators/optimal_mis.py]"
+         "(src/phonglab/physics/estimators/optimal_mis.py)): a pilot of N/32 samples (at most "
+         "2048; half BSDF, half light sampling, then discarded) chooses the "
          "BSDF share c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a "
          "2×2 solve per candidate); the other samples give the estimate. Ratios are errors at "
          "equal time (√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the "
