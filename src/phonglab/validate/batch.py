@@ -16,7 +16,7 @@ import traceback
 
 from ..parallel import Job, Runner
 from . import builtins
-from .core import validate_bsdf
+from .bsdf.kind import validate_bsdf
 from .report import TOPICS, Report, Row
 
 

@@ -14,9 +14,9 @@ import time
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
+from ..report import Row
 from . import lanes
-from .report import Row
 
 
 def _median_times(fa, fb, repeats: int) -> tuple[float, float]:

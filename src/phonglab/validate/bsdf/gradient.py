@@ -35,10 +35,10 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
+from ..report import Row
 from . import lanes
 from .config import EPS32
-from .report import Row
 
 #: Round-off multiplier of a float32 eval lane (see the module docstring).
 ROUND_OFF = 64 * EPS32
