@@ -183,6 +183,7 @@ def test_cli_fit_set_grammar(tmp_path, capsys, variant_llvm_rgb):
     (["fit", "roughconductor", "--set", "alpha"], "--set expects NAME=VALUE"),
     (["fit", "roughconductor", "--set", "foo=1"], "unreferenced property"),
     (["fit", "roughconductor", "--set", "alpha=-0.5"], "outside (0, 1]"),
+    (["fit", "roughconductor", "--set", "alpha=0"], "outside (0, 1]"),   # ZeroDivisionError
     (["fit", "roughconductor", "--set", "alpha=1,2"], "give one number or three"),
     (["fit", "conductor"], "reflects nothing that eval can see"),
     (["fit", "roughconductor", "--variant", "scalar_rgb"], "*_ad_rgb"),

@@ -168,11 +168,11 @@ def fit(target: str, params: dict | None = None, model: str = "phong", maxiter: 
     m = MODELS[model]
     bsdf = load_target(target, params)
     alpha = target_alpha(bsdf)
-    width = lobe_width(phong_exponent(alpha) if alpha is not None else 30.0)
-    dirs = fit_directions(width)
-    if alpha is not None and not 0.0 < alpha <= 1.0:
+    if alpha is not None and not 0.0 < alpha <= 1.0:     # before the folk rule divides by it
         raise PhonglabError(f"the target's roughness alpha = {alpha:g} is outside (0, 1]; "
                             f"give e.g. --set alpha=0.2")
+    width = lobe_width(phong_exponent(alpha) if alpha is not None else 30.0)
+    dirs = fit_directions(width)
     g_t = luminance_eval(bsdf, dirs)
     if not np.all(np.isfinite(g_t)) or np.min(g_t) < 0:
         raise PhonglabError(f"{target} returns negative or non-finite values of f cos θ at some "
