@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .. import runtime
 from ..errors import PhonglabError
-from .options import add_scene_params
+from .options import add_scene_params, add_seed
 
 
 def add_parser(sub) -> None:
@@ -30,7 +30,7 @@ def add_parser(sub) -> None:
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
     p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--max-depth", type=int, default=None, help="path length limit (default: the scene's)")
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",
                    help="with --target-error: refuse a plan predicted to take longer (default: "
