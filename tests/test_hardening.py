@@ -408,3 +408,104 @@ def test_distinct_seeds_give_distinct_first_pass_seeds():
     seeds = np.unique(np.concatenate([seeds, [0, 1, (1 << 32) - 1]]))
     mapped = {pass_seed(int(s), 0) for s in seeds}
     assert len(mapped) == len(seeds) and all(0 <= m < 1 << 32 for m in mapped)
+
+
+# --- what real scenes carry: film formats, AOV and particle-tracing integrators ----------------
+
+CONTENT = """<scene version="3.0.0">
+  {integrator}
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0"
+    up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="12"/>
+    <integer name="height" value="10"/><string name="pixel_format" value="{fmt}"/></film></sensor>
+  <shape type="sphere"><bsdf type="diffuse"/></shape>
+  <emitter type="point"><point name="position" value="0, 2, 3"/><rgb name="intensity" value="5"/>
+  </emitter>
+</scene>"""
+PATH = '<integrator type="path"/>'
+AOV = '<integrator type="aov"><string name="aovs" value="nn:sh_normal"/></integrator>'
+AOV_NESTED = ('<integrator type="aov"><string name="aovs" value="dd:depth"/>'
+              '<integrator type="path" name="p"/></integrator>')
+PTRACER = '<integrator type="ptracer"/>'
+
+
+def _content(tmp_path, integrator=PATH, fmt="rgb", name="s.xml") -> Path:
+    return _write(tmp_path, name, CONTENT.format(integrator=integrator, fmt=fmt))
+
+
+@pytest.mark.parametrize("fmt, names", [("xyz", ["X", "Y", "Z"]), ("luminance_alpha", ["Y", "A"]),
+                                        ("xyza", ["X", "Y", "Z", "A"])])
+def test_a_film_of_another_pixel_format_keeps_its_channel_names(variant_llvm_rgb, tmp_path, capsys,
+                                                                fmt, names):
+    """An xyz or luminance_alpha film was written as if it were RGB (channels R, G, B)."""
+    import OpenEXR
+
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", str(_content(tmp_path, fmt=fmt)), "--spp", "16", "-o",
+                     str(out)]) == 0
+    for path in (out, exr.stderr_path(out)):
+        with OpenEXR.File(str(path)) as f:
+            assert sorted(f.channels()) == sorted(names), path
+        image, meta = exr.read(path)
+        assert meta["channels"] == names and image.shape == (10, 12, len(names))
+    rgb = tmp_path / "rgb.exr"
+    assert cli.main(["render", str(_content(tmp_path, name="r.xml")), "--spp", "4", "-o",
+                     str(rgb)]) == 0
+    if len(names) == 3:                    # same shape, other quantities: not comparable
+        capsys.readouterr()
+        _fails_in_one_sentence(capsys, ["compare", str(out), str(rgb)], "holds channels X, Y, Z")
+
+
+@pytest.mark.parametrize("fmt", ["rgb", "rgba", "luminance"])
+def test_the_usual_films_are_written_as_before(variant_llvm_rgb, tmp_path, fmt):
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", str(_content(tmp_path, fmt=fmt)), "--spp", "4", "-o",
+                     str(out)]) == 0
+    image, meta = exr.read(out)
+    assert "channels" not in meta and image.shape == {"rgb": (10, 12, 3), "rgba": (10, 12, 4),
+                                                      "luminance": (10, 12)}[fmt]
+
+
+ADAPTIVE = ["--adaptive", "--target-error", "0.1"]
+
+
+@pytest.mark.parametrize("integrator, route, needle", [
+    (AOV, [], "arbitrary output variables (nn.X, nn.Y, nn.Z)"),
+    (AOV_NESTED, [], "arbitrary output variables (p.R, p.G, p.B, p.A, ...)"),
+    (AOV, ADAPTIVE, "arbitrary output variables"),
+    (PTRACER, ADAPTIVE, "not sampled per pixel"),
+], ids=["aov", "aov-nested", "aov-adaptive", "ptracer-adaptive"])
+def test_integrators_phonglab_cannot_sample_are_one_sentence(tmp_path, capsys, integrator,
+                                                             route, needle):
+    """An aov integrator was written as RGBA (its 4 AOV channels), and --adaptive reported
+    'error 0, meets the target' on it; --adaptive on ptracer raised a nanobind TypeError."""
+    out = tmp_path / "x.exr"
+    _fails_in_one_sentence(capsys, ["render", str(_content(tmp_path, integrator)), "-o", str(out),
+                                    *(route or ["--spp", "4"])], needle)
+    assert not out.exists()
+
+
+def test_a_particle_tracer_renders_uniformly(variant_llvm_rgb, tmp_path):
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", str(_content(tmp_path, PTRACER)), "--spp", "16", "-o",
+                     str(out)]) == 0
+    assert exr.read(out)[0].shape == (10, 12, 3)
+
+
+@pytest.mark.parametrize("fmt", ["xyz", "luminance", "rgba"])
+def test_adaptive_refuses_a_film_it_would_write_as_rgb(variant_llvm_rgb, tmp_path, capsys, fmt):
+    """A luminance film rendered adaptively came out as three channels named R, G, B."""
+    _fails_in_one_sentence(capsys, ["render", str(_content(tmp_path, fmt=fmt)), *ADAPTIVE,
+                                    "-o", str(tmp_path / "x.exr")],
+                           "adaptive sampling writes R, G, B", "pixel_format")
+
+
+def test_a_wide_film_has_a_bounded_spp_preview(tmp_path):
+    """A 4096 x 4 film made a 262144-pixel-wide spp map preview (the preview adds a title,
+    a colour bar and labels below the map: 70 pixels, and at least 320 wide)."""
+    from PIL import Image
+
+    from phonglab.adaptive import SPP_PNG_MAX_SIDE, write_spp_map_png
+
+    for shape in [(4, 4096), (4096, 4), (3, 9000), (16, 16)]:
+        path = write_spp_map_png(tmp_path / "m.png", np.full(shape, 4))
+        assert max(Image.open(path).size) <= SPP_PNG_MAX_SIDE + 70, shape

@@ -81,7 +81,8 @@ import numpy as np
 from . import exr
 from .errors import PhonglabError
 from .metrics import REL_EPS
-from .render import MAX_SPP, available_memory, pass_seed, preflight, render_scene_file
+from .render import (MAX_SPP, available_memory, film_channels, pass_seed, preflight,
+                     render_scene_file)
 from .runtime import default_variant
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
@@ -174,6 +175,18 @@ class Wavefront:
         self.scene = scene
         self.sensor = preflight(scene, path, sensor)
         self.integrator = integrator or scene.integrator()
+        if not isinstance(self.integrator, mi.SamplingIntegrator):
+            raise PhonglabError(f"{path}: its {self.integrator.class_name()} integrator is not "
+                                f"sampled per pixel (a particle tracer splats light paths onto "
+                                f"the film), so adaptive sampling cannot steer it; render it "
+                                f"with a fixed --spp instead")
+        names = film_channels(self.sensor, self.integrator, path)
+        expected = ["Y"] if mi.is_monochromatic else ["R", "G", "B"]
+        if names != expected:
+            raise PhonglabError(f"{path}: adaptive sampling writes {', '.join(expected)} but the "
+                                f"film's pixel_format gives {', '.join(names)}; set the film's "
+                                f"pixel_format to {'luminance' if mi.is_monochromatic else 'rgb'}"
+                                f" or render with a fixed --spp")
         film = self.sensor.film()
         self.width, self.height = (int(v) for v in film.crop_size())
         self.rfilter = film.rfilter()
@@ -433,6 +446,9 @@ def write_spp_png(path: str | Path, spp: np.ndarray, image: np.ndarray | None = 
 #: The spp map preview is scaled up by a whole factor until its shorter side has this many
 #: pixels (nearest neighbour: each film pixel stays a uniform square).
 SPP_PNG_MIN_SIDE = 256
+#: ... but its longer side never beyond this many: a 4096 x 4 film made a 262144-pixel-wide
+#: preview; a film larger than this is shown at every k-th pixel (k = ⌈side / this⌉).
+SPP_PNG_MAX_SIDE = 2048
 
 
 def write_spp_map_png(path: str | Path, spp: np.ndarray) -> Path:
@@ -454,7 +470,10 @@ def write_spp_map_png(path: str | Path, spp: np.ndarray) -> Path:
     span = max(hi - lo, 1e-9)
     lut = VIRIDIS
     level = np.round((np.log2(np.maximum(spp, 1)) - lo) / span * 255).astype(np.int64)
-    scale = max(1, -(-SPP_PNG_MIN_SIDE // min(h, w)))
+    step = -(-max(h, w) // SPP_PNG_MAX_SIDE)        # a film wider than the preview: every step-th
+    level = level[::step, ::step]
+    scale = max(1, min(-(-SPP_PNG_MIN_SIDE // min(level.shape)),
+                       SPP_PNG_MAX_SIDE // max(level.shape)))
     body = np.repeat(np.repeat(lut[np.clip(level, 0, 255)], scale, axis=0), scale, axis=1)
     font = ImageFont.load_default()
     width = max(body.shape[1], 320)

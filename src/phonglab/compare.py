@@ -176,6 +176,11 @@ def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path |
     """
     img_a, meta_a = exr.read(path_a)
     img_b, meta_b = exr.read(path_b)
+    names_a, names_b = meta_a.get("channels"), meta_b.get("channels")
+    if names_a != names_b and img_a.shape == img_b.shape:
+        shown = [", ".join(n) if n else "by its shape (R, G, B / Y)" for n in (names_a, names_b)]
+        raise CompareError(f"{path_a} holds channels {shown[0]} but {path_b} holds {shown[1]}; "
+                           f"compare renders of films with the same pixel_format")
     if stderr_a is None and stderr_b is None and auto_stderr:
         cand_a, cand_b = stderr_path(path_a), stderr_path(path_b)
         if cand_a.is_file() and cand_b.is_file():

@@ -1,7 +1,9 @@
 """OpenEXR images that carry their provenance, written atomically.
 
 Images are float32, linear, ``(H, W)`` (channel ``Y``), ``(H, W, 3)`` (``RGB``) or
-``(H, W, 4)`` (``RGBA``).  Metadata goes into the header as string attributes
+``(H, W, 4)`` (``RGBA``); an image whose metadata names its channels (``"channels": ["X",
+"Y", "Z"]``, a film's other ``pixel_format``) is written one channel per name, and
+:func:`read` returns them in that order.  Metadata goes into the header as string attributes
 prefixed ``phonglab:`` (scene file and its hash, variant, spp, seed, integrator,
 max depth, render time, versions), each value JSON-encoded; :func:`read`
 returns it as a dict of Python values.
@@ -39,8 +41,21 @@ PREFIX = "phonglab:"
 MAGIC = b"\x76\x2f\x31\x01"
 
 
-def _channels(image: np.ndarray) -> dict[str, np.ndarray]:
+#: Channel sets written as one OpenEXR channel group named by the image's shape alone.
+SHAPE_NAMED = (["Y"], ["R", "G", "B"], ["R", "G", "B", "A"])
+
+
+def _channels(image: np.ndarray, names: list[str] | None = None) -> dict[str, np.ndarray]:
+    """The OpenEXR channels of ``image``: by its shape (Y, RGB, RGBA), or one channel per
+    entry of ``names`` (a film's own layout: X, Y, Z; Y, A; ...)."""
     image = np.ascontiguousarray(np.asarray(image, dtype=np.float32))
+    if names is not None and list(names) not in SHAPE_NAMED:
+        planes = image[..., None] if image.ndim == 2 else image
+        if planes.ndim != 3 or planes.shape[2] != len(names) or len(set(names)) != len(names):
+            raise ExrError(f"cannot name the {planes.shape[-1]} channels of an image of shape "
+                           f"{image.shape} {', '.join(map(str, names))}; give one distinct "
+                           f"name per channel")
+        return {str(n): np.ascontiguousarray(planes[..., k]) for k, n in enumerate(names)}
     if image.ndim == 2:
         return {"Y": image}
     if image.ndim == 3 and image.shape[2] == 1:
@@ -139,7 +154,7 @@ def write_file(path: str | os.PathLike, image, metadata: Mapping[str, Any] | Non
                               "type": OpenEXR.scanlineimage}
     for key, value in (metadata or {}).items():
         header[PREFIX + str(key)] = json.dumps(value, default=str)
-    channels = _channels(np.asarray(image))
+    channels = _channels(np.asarray(image), (metadata or {}).get("channels"))
     try:
         OpenEXR.File(header, dict(channels)).write(str(path))   # (it wraps the dict's values)
         empty = os.path.getsize(path) == 0
@@ -205,11 +220,6 @@ def read(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
                        f"render it again") from exc
     if not channels:
         raise ExrError(f"{path} holds no image channels; render it again")
-    if len(channels) == 1:
-        image = next(iter(channels.values()))
-    else:
-        order = [c for c in ("R", "G", "B", "A") if c in channels] or sorted(channels)
-        image = np.stack([channels[c] for c in order], axis=-1)
     meta: dict[str, Any] = {}
     for key, value in header.items():
         if isinstance(key, str) and key.startswith(PREFIX):
@@ -217,6 +227,13 @@ def read(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, Any]]:
                 meta[key[len(PREFIX):]] = json.loads(value)
             except (TypeError, ValueError):
                 meta[key[len(PREFIX):]] = value
+    named = meta.get("channels")
+    if len(channels) == 1:
+        image = next(iter(channels.values()))
+    else:
+        order = (named if isinstance(named, list) and sorted(named) == sorted(channels) else
+                 [c for c in ("R", "G", "B", "A") if c in channels] or sorted(channels))
+        image = np.stack([channels[c] for c in order], axis=-1)
     return image, meta
 
 

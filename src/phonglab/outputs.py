@@ -97,7 +97,7 @@ class RenderOutputs:
                                stderr, meta)
             if self.png is not None:
                 preview_png(stack.enter_context(exr.atomic_path(self.png, ".png")), image,
-                            exposure=exposure)
+                            exposure=exposure, channels=meta.get("channels"))
         if stderr is None and self.stderr.exists():
             os.unlink(self.stderr)          # a stale standard error of an earlier render
         return render_id

@@ -32,7 +32,7 @@ import mitsuba as mi
 import numpy as np
 from tqdm import tqdm
 
-from . import __version__
+from . import __version__, exr
 from .errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs, check_file
 from .runtime import quiet_mitsuba
@@ -326,21 +326,47 @@ class UniformPasses:
         return []
 
     def render(self, sf: SceneFile, seed: int) -> tuple[RenderResult, dict[str, Any]]:
-        """The render and its header fields (spp, passes, seed, sampler, integrator, depth)."""
+        """The render and its header fields (spp, passes, seed, sampler, integrator, depth,
+        and the film's channel names where they are not R, G, B / Y / R, G, B, A)."""
         spp = int(self.spp or sf.sensor().sampler().sample_count())
         sensor = sf.sensor(self.sampler)
+        channels = film_channels(sensor, sf.integrator or sf.scene.integrator(), sf.path)
         passes = self.passes or (min(spp, 8) if spp >= 16 else 1)
         result = render_scene(sf.scene, spp, seed=seed, passes=passes, progress=self.progress,
                               integrator=sf.integrator, sensor=sensor)
         integrator = sf.integrator or sf.scene.integrator()
         name = (integrator.class_name() if hasattr(integrator, "class_name")
                 else str(type(integrator)))
+        named = {} if channels in exr.SHAPE_NAMED else {"channels": channels}
         return result, {"spp": int(sum(result.pass_spp)), "passes": passes, "seed": seed,
                         "sampler": sensor.sampler().class_name(), "integrator": name,
-                        "max_depth": _max_depth(integrator)}
+                        "max_depth": _max_depth(integrator), **named}
 
     def write_extra(self, out: Path, result) -> None:
         pass
+
+
+def film_channels(sensor, integrator, path: str | Path = "the scene") -> list[str]:
+    """The channel names of ``sensor``'s film as ``integrator`` fills it, checked first.
+
+    The film's own layout (its ``pixel_format``: R, G, B; R, G, B, A; X, Y, Z; Y; Y, A), read
+    from the film once prepared.  Refused in one sentence, before any sample: an integrator
+    with arbitrary output variables (``aov``, alone or around another), whose channels
+    ``mi.render`` does not return as the film lays them out (an ``aov`` of nn:sh_normal and
+    dd:depth gives 4 channels against the film's R, G, B, nn.X, nn.Y, nn.Z, dd.T), and which
+    are not radiance for phonglab to compare, plan or preview.
+    """
+    aovs = list(integrator.aov_names())
+    if aovs:
+        shown = ", ".join(aovs[:4]) + (", ..." if len(aovs) > 4 else "")
+        raise SceneError(f"{path}: its {integrator.class_name()} integrator writes arbitrary "
+                         f"output variables ({shown}), not radiance alone; phonglab renders "
+                         f"radiance images, so render the AOVs with Mitsuba itself (mi.render) "
+                         f"or give the scene a radiance integrator")
+    film = sensor.film()
+    film.prepare([])
+    struct = film.bitmap().struct_()
+    return [struct[i].name for i in range(len(struct)) if struct[i].name != "W"]
 
 
 def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,

@@ -62,8 +62,23 @@ def to_srgb(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     return np.where(img <= 0.0031308, 12.92 * img, 1.055 * np.power(img, 1 / 2.4) - 0.055)
 
 
-def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> Path:
-    """Write an 8-bit sRGB preview (exposure in stops, clipped) of a linear image."""
+#: CIE XYZ -> linear sRGB (IEC 61966-2-1, D65), for previews of ``pixel_format="xyz"`` films.
+XYZ_TO_SRGB = np.array([[3.2404542, -1.5371385, -0.4985314],
+                        [-0.9692660, 1.8760108, 0.0415560],
+                        [0.0556434, -0.2040259, 1.0572252]])
+
+
+def preview_png(path: str | Path, image: np.ndarray, exposure: float = 0.0,
+                channels: list[str] | None = None) -> Path:
+    """Write an 8-bit sRGB preview (exposure in stops, clipped) of a linear image.
+
+    ``channels`` names the image's channels when they are not R, G, B (a film's
+    ``pixel_format``): X, Y, Z (and A) are converted to sRGB first.
+    """
+    image = np.asarray(image)
+    if channels and list(channels[:3]) == ["X", "Y", "Z"]:
+        rgb = image[..., :3] @ XYZ_TO_SRGB.T
+        image = np.concatenate([rgb, image[..., 3:]], axis=-1)
     srgb = to_srgb(image, exposure)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
