@@ -9,7 +9,8 @@ import pytest
 
 from phonglab.scenes import REPO_ROOT
 from phonglab.validate import builtins
-from phonglab.validate.report import Report, Row
+from phonglab.validate.topics import Row
+from phonglab.verdict import Report
 
 CASES = builtins.cases()
 SOURCE_LINE = re.compile(r"^(src|include)/[\w/]+\.(cpp|h):\d+: \S")

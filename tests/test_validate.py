@@ -12,8 +12,10 @@ import pytest
 
 from phonglab.cli import main
 from phonglab.testing import assert_bsdf_valid
-from phonglab.validate import STATUSES, TOPICS, Report, Row, validate_bsdf
+from phonglab.validate import TOPICS, validate_bsdf
 from phonglab.validate.inputs import ParameterError, ValidateError, parse_sets
+from phonglab.validate.topics import Row
+from phonglab.verdict import STATUSES, Report
 
 DEFECTS = Path(__file__).parent / "defects"
 ROW_FIELDS = {"topic", "name", "measured", "expected", "stderr", "tolerance", "status", "reason",

@@ -8,12 +8,12 @@ sentence, checked before any expensive work.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..parallel import add_arguments, runner_from_args
 from ..validate.inputs import ValidateError, check_topics, parse_sets
-from ..validate.report import TOPICS, Report
+from ..validate.topics import TOPICS
+from ..verdict import Report, write_json
 
 EPILOG = """examples:
   phonglab validate diffuse
@@ -80,11 +80,6 @@ def _check_inputs(args) -> dict:
     return parse_sets(args.set)
 
 
-def _write_json(path, data) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(data, indent=1))
-
-
 def _all_builtins(args) -> int:
     from ..validate import batch
 
@@ -99,7 +94,7 @@ def _all_builtins(args) -> int:
         result = batch.run_all(options={"seed": args.seed, "quick": args.quick,
                                         "topics": args.only}, progress=progress, runner=runner)
     if args.json:
-        _write_json(args.json, result)
+        write_json(args.json, result)
     print(f"{result['meta']['cases']} cases, {len(result['meta']['failed'])} failing")
     return 1 if result["meta"]["failed"] else 0
 
@@ -120,7 +115,7 @@ def run(args) -> int:
     report.meta.update(bsdf=label, spec=desc)
     print(report.table())
     if args.json:
-        _write_json(args.json, report.to_dict())
+        report.write_json(args.json)
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)

@@ -1,16 +1,18 @@
-"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its :class:`Report`.
+"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its :class:`~phonglab.verdict.Report`.
 
 Topics (one home each): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
 (:mod:`.identities`), ``chi2`` (:mod:`.sampling`), ``energy`` (:mod:`.energy`),
 ``reciprocity`` (:mod:`.reciprocity`), ``gradient`` (:mod:`.gradient`), ``cost``
-(:mod:`.cost`).  Sizes and tolerances: :mod:`.config`; rows and reports: :mod:`.report`.
+(:mod:`.cost`).  Sizes and tolerances: :mod:`.config`; the topic list and the validator's row:
+:mod:`.topics`; reports (rows, JSON, table): :mod:`phonglab.verdict`.
 
 Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` does.
 """
 
-from .report import STATUSES, TOPICS, Report, Row, table
+from ..verdict import Report
+from .topics import TOPICS
 
-__all__ = ["Report", "Row", "STATUSES", "TOPICS", "table", "validate_bsdf"]
+__all__ = ["TOPICS", "validate_bsdf"]
 
 
 def validate_bsdf(spec, **options) -> Report:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import runtime
-from .report import TOPICS
+from .topics import TOPICS
 
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"

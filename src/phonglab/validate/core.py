@@ -1,4 +1,4 @@
-"""``validate_bsdf``: every topic on one BSDF, a :class:`~phonglab.validate.report.Report`.
+"""``validate_bsdf``: every topic on one BSDF, a :class:`~phonglab.verdict.Report`.
 
 The BSDF is given as a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
 ``<bsdf>``, or a loaded ``mi.BSDF``.  Bad input (unknown type, unreadable file, unknown topic,
@@ -16,6 +16,7 @@ from pathlib import Path
 import mitsuba as mi
 
 from .. import registration
+from ..verdict import Report
 from . import lanes
 from .config import options as make_options
 from .cost import cost
@@ -24,8 +25,8 @@ from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .inputs import ValidateError, check_topics
 from .reciprocity import reciprocity
-from .report import TOPICS, Report, Row
 from .sampling import chi2
+from .topics import TOPICS, Row
 
 
 def load_plugins(paths) -> None:
@@ -121,12 +122,20 @@ def _guarded(topic: str, runner) -> list[Row]:
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                  known=None, plugins=()) -> Report:
-    """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`."""
+                  known=None, plugins=(), family=1, chi2_samples=None) -> Report:
+    """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`.
+
+    ``family``: how many BSDFs the caller judges as one family (``phonglab check``'s sanity
+    cases); each statistical test is then at the Šidák level of family × m tests, so the whole
+    family fails by chance with probability ALPHA (``meta["statistical_tests"]`` is that
+    product).  ``chi2_samples`` replaces the χ² sample count of the (quick or default) sizes.
+    """
     bsdf, label, desc, topics = prepare(spec, variant=variant, params=params, topics=topics,
                                         plugins=plugins)
     opts = make_options(quick, seed, topics)
-    m = statistical_tests(bsdf, opts, topics)
+    if chi2_samples is not None:
+        opts.chi2_samples = int(chi2_samples)
+    m = statistical_tests(bsdf, opts, topics) * family
     runners = {
         "finite": lambda: finite(bsdf, opts),
         "eval_pdf": lambda: eval_pdf(bsdf, opts),
@@ -153,4 +162,8 @@ def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick
             "topics": list(topics), "statistical_tests": m, "alpha": 0.01,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
             "known": dict(known or {})}
+    if family != 1:
+        meta["family"] = family
+    if chi2_samples is not None:
+        meta["chi2_samples"] = opts.chi2_samples
     return Report(meta, rows)

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import probe
 from . import lanes
-from .report import Row
+from .topics import Row
 
 
 def _median_times(fa, fb, repeats: int) -> tuple[float, float]:

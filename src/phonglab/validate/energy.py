@@ -33,7 +33,7 @@ import numpy as np
 from .. import probe, stats
 from ..physics.quadrature import lobe_quadrature
 from . import lanes
-from .report import Row
+from .topics import Row
 
 #: Float32 floor of the band: an eval summed over ~10⁴ nodes is good to ~1e-5 relative.
 FLOOR = 1e-5

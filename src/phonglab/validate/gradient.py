@@ -38,7 +38,7 @@ import numpy as np
 from .. import probe
 from . import lanes
 from .config import EPS32
-from .report import Row
+from .topics import Row
 
 #: Round-off multiplier of a float32 eval lane (see the module docstring).
 ROUND_OFF = 64 * EPS32

@@ -27,7 +27,7 @@ import numpy as np
 from .. import probe
 from . import lanes
 from .config import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
-from .report import Row
+from .topics import Row
 
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
 CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "

@@ -16,7 +16,7 @@ import math
 import re
 
 from ..errors import PhonglabError
-from .report import TOPICS
+from .topics import TOPICS
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 

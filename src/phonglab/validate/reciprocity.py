@@ -26,7 +26,7 @@ from .. import probe
 from . import lanes
 from .config import excess, rel_diff, sensitivity
 from .identities import CONDITIONED, _max, _row, _worst
-from .report import Row
+from .topics import Row
 
 
 def _pairs(opts, upper_only: bool):

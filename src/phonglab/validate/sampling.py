@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import probe, stats
 from . import lanes
-from .report import Row
+from .topics import Row
 
 #: Tolerance of a delta sample's direction, per vector component (see the module docstring).
 DIRECTION_TOL = 1e-4
