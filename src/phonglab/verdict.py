@@ -45,7 +45,7 @@ RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
 
 
 def jsonable(x):
-    """``x`` with numpy scalars/arrays, paths and non-finite floats made JSON-safe (NaN/Inf -> str)."""
+    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
     if hasattr(x, "tolist"):
         x = x.tolist()
     if isinstance(x, float):

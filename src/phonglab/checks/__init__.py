@@ -34,8 +34,8 @@ quantile at the per-row level 1 − (1 − α)^(1/m): α = ALPHA = 0.01 and a Š
 over the m statistical tests of that check [Šidák 1967] (the Student t quantile for a
 standard error from few passes).  Deterministic rows compare against a float32 rounding
 budget stated where they are built; the sanity rows carry the validator's tolerances and its
-χ² levels, Šidák over the sanity check's cases (:mod:`.sanity`).  Seeds are fixed (``Config.seed``), so a run is
-reproducible.
+χ² levels, Šidák over the sanity check's cases (:mod:`.sanity`).  Seeds are fixed
+(``Config.seed``), so a run is reproducible.
 """
 
 from __future__ import annotations
