@@ -126,14 +126,43 @@ def texel_data(texture) -> np.ndarray | None:
 
     None for textures without texel data (constants, procedural ones) and in spectral
     variants, where a bitmap stores spectral up-sampling coefficients.
+
+    The values are those the texture returns, not its storage: Mitsuba keeps an 8-bit
+    bitmap's bytes as they are (``TensorXu8``) and decodes them at lookup (x/255, then the
+    sRGB transfer curve unless ``raw``), so integer texels are decoded by evaluating the
+    texture at each texel's centre, where its bilinear lookup returns that texel alone.
     """
     if mi.is_spectral or not texture.is_spatially_varying():
         return None
     params = mi.traverse(texture)
     if "data" not in params:
         return None
-    data = np.asarray(params["data"], dtype=np.float32)
-    return data.reshape(data.shape[0], data.shape[1], -1) if data.ndim >= 2 else None
+    stored = np.asarray(params["data"])
+    if stored.ndim < 2:
+        return None
+    if not np.issubdtype(stored.dtype, np.floating):
+        if not dr.is_jit_v(mi.Float) and stored.shape[0] * stored.shape[1] > _SCALAR_MAX_GRID ** 2:
+            return None      # evaluated on value_batches' capped grid instead (one lane a call)
+        return _decoded_texels(texture, params, stored.shape[0], stored.shape[1])
+    data = stored.astype(np.float32)
+    return data.reshape(data.shape[0], data.shape[1], -1)
+
+
+def _decoded_texels(texture, params, height: int, width: int) -> np.ndarray:
+    """(height, width, channels) float32: the texture evaluated at its texel centres.
+
+    The centres are given in the texture's own (u, v); the surface uv that reaches them is
+    the inverse of the texture's ``to_uv`` transform applied to them.
+    """
+    u, v = np.meshgrid((np.arange(width) + 0.5) / width, (np.arange(height) + 0.5) / height,
+                       indexing="xy")
+    uv = np.stack([u.ravel(), v.ravel(), np.ones(u.size)])
+    if "to_uv" in params:
+        uv = np.linalg.inv(np.array(params["to_uv"].matrix, dtype=np.float64)) @ uv
+    out = np.concatenate([batch[0] for batch in (
+        _evaluate([texture], uv[0, s:s + _BATCH], uv[1, s:s + _BATCH])
+        for s in range(0, uv.shape[1], _BATCH))], axis=1)
+    return out.T.reshape(height, width, -1).astype(np.float32)
 
 
 def _evaluate(textures, uu: np.ndarray, vv: np.ndarray) -> list[np.ndarray]:

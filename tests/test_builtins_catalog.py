@@ -9,7 +9,8 @@ import pytest
 
 from phonglab.scenes import REPO_ROOT
 from phonglab.validate import builtins
-from phonglab.validate.topics import Row
+from phonglab.validate.bsdf.topics import TOPICS, Row
+from phonglab.validate.builtins import findings
 from phonglab.verdict import Report
 
 CASES = builtins.cases()
@@ -39,7 +40,7 @@ def test_every_known_entry_names_a_source_line():
     assert any(c.known for c in CASES)
     for case in CASES:
         for topic, cause in case.known.items():
-            assert topic in builtins.TOPICS, (case.label, topic)
+            assert topic in TOPICS, (case.label, topic)
             assert SOURCE_LINE.match(cause), (case.label, cause)
 
 
@@ -48,7 +49,7 @@ def test_findings_name_existing_cases_and_reproducers():
     for f in builtins.FINDINGS:
         assert set(f.labels) <= labels, f.key
         assert (REPO_ROOT / f.reproducer).is_file(), f.reproducer
-        assert f.topic in builtins.TOPICS
+        assert f.topic in TOPICS
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.label for c in CASES])
@@ -79,7 +80,7 @@ def test_markdown_renders_a_given_json():
     md = builtins.render_markdown(data)
     table_row = next(line for line in md.splitlines() if line.startswith(f"| `{label}`"))
     cells = [c.strip() for c in table_row.strip("|").split("|")][2:]
-    assert dict(zip(builtins.TOPICS, cells)) == {
+    assert dict(zip(TOPICS, cells)) == {
         "finite": "pass", "eval_pdf": "", "weight": "", "pdf": "", "chi2": "KNOWN",
         "energy": "**fail**", "reciprocity": "", "component": "", "gradient": "skipped",
         "cost": ""}
@@ -117,7 +118,7 @@ def test_validator_issues_name_existing_cases():
     labels = {c.label for c in CASES}
     for v in builtins.VALIDATOR_ISSUES:
         assert set(v.labels) <= labels, v.key
-        assert v.topic in builtins.TOPICS
+        assert v.topic in TOPICS
 
 
 def test_without_plot_data_keeps_the_numbers():
@@ -143,14 +144,14 @@ def _one_row(label, topic, status):
 def test_open_validator_issue_shown_only_for_its_failing_rows(monkeypatch):
     fixed = builtins.VALIDATOR_ISSUES[0]
     issue = builtins.ValidatorIssue("open-issue", fixed.topic, fixed.labels, "why")
-    monkeypatch.setattr(builtins, "VALIDATOR_ISSUES", (issue,))
+    monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (issue,))
     label = issue.labels[0]
     md = builtins.render_markdown(_one_row(label, issue.topic, "fail"))
     assert "### open-issue" in md and "**Unexplained fail**" not in md
     assert "because of the validator" not in builtins.render_markdown(
         _one_row(label, issue.topic, "pass"))
     skipped = builtins.ValidatorIssue("open-skip", "chi2", fixed.labels, "why", ("skipped",))
-    monkeypatch.setattr(builtins, "VALIDATOR_ISSUES", (skipped,))
+    monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (skipped,))
     assert "### open-skip" in builtins.render_markdown(_one_row(label, "chi2", "skipped"))
 
 

@@ -152,6 +152,24 @@ def test_cli_fit_prints_and_writes_json(tmp_path, capsys, variant_llvm_rgb):
     assert (tmp_path / "fit.txt").read_text().strip() == text.strip()
 
 
+def test_cli_fit_set_grammar(tmp_path, capsys, variant_llvm_rgb):
+    """--set takes phonglab.settings' grammar: a number, a string, a colour, an int."""
+    out = tmp_path / "fit.json"
+    assert main(["fit", "roughplastic", "--set", "alpha=0.2", "--set", "distribution=ggx",
+                 "--set", "diffuse_reflectance=0.2, 0.3, 0.4", "--set", "nonlinear=true",
+                 "--maxiter", "20", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["target_params"] == {"alpha": 0.2, "distribution": "ggx", "nonlinear": True,
+                                     "diffuse_reflectance": {"type": "rgb",
+                                                             "value": [0.2, 0.3, 0.4]}}
+    assert data["alpha"] == pytest.approx(0.2)
+    assert main(["fit", "roughconductor", "--set", "alpha=1", "--maxiter", "5",
+                 "--json", str(out)]) == 0                    # an int where Mitsuba wants a float
+    data = json.loads(out.read_text())
+    assert data["target_params"] == {"alpha": 1} and data["alpha"] == 1.0
+    capsys.readouterr()
+
+
 @pytest.mark.parametrize("argv,needle", [
     (["fit", "nosuchbsdf"], "Plugin \"nosuchbsdf\" not found"),
     (["fit", "roughconductor", "--set", "alpha"], "--set expects NAME=VALUE"),

@@ -12,8 +12,13 @@ Each test names the defect it pins (they failed before the fix):
 
 from __future__ import annotations
 
+import json
 import os
+import signal
 import stat
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -223,3 +228,156 @@ def test_a_planned_render_checks_its_outputs_before_the_pilot(tmp_path, capsys, 
     (tmp_path / "x.png").mkdir()
     _fails_in_one_sentence(capsys, ["render", "gray_direct", "--target-error", "0.05", "-o",
                                     str(tmp_path / "x.exr")], "is a folder")
+
+
+# --- compare: no NaN, no tautology, the output rules of render ----------------------------------
+
+def test_compare_of_identical_images_says_why_the_test_is_undefined(tmp_path, capsys):
+    """Two black images (or any two equal ones) have SE = 0: z and p used to print as nan
+    and --json wrote a bare NaN (invalid JSON)."""
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    for p in (a, b):
+        exr.write(p, np.zeros((4, 6, 3), np.float32))
+    assert cli.main(["compare", str(a), str(b), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(c))
+    assert data["z"] is None and data["p_value"] is None
+    assert "zero standard error" in data["undefined"]
+    assert cli.main(["compare", str(a), str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out.lower() and "undefined: the mean difference has zero" in out, out
+
+
+def test_compare_of_a_render_with_itself_is_not_evidence(tmp_path, capsys):
+    """The same file compared with itself used to report 'same expected image, p = 1'."""
+    a = tmp_path / "a.exr"
+    assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(a)]) == 0
+    copy = tmp_path / "copy.exr"
+    copy.write_bytes(a.read_bytes())
+    copy_stderr = exr.stderr_path(copy)
+    copy_stderr.write_bytes(exr.stderr_path(a).read_bytes())
+    capsys.readouterr()
+    for other, needle in ((a, "the same file"), (copy, "one render")):
+        assert cli.main(["compare", str(a), str(other), "--json"]) == 0
+        data = json.loads(capsys.readouterr().out)
+        assert data["p_value"] is None and needle in data["undefined"], data
+
+
+def test_compare_diff_follows_the_output_rules(tmp_path, capsys):
+    """--diff wrote over a read-only PNG and into a read-only folder."""
+    a = tmp_path / "a.exr"
+    exr.write(a, np.random.default_rng(0).random((4, 6, 3)).astype(np.float32))
+    b = tmp_path / "b.exr"
+    exr.write(b, np.random.default_rng(1).random((4, 6, 3)).astype(np.float32))
+    png = tmp_path / "d.png"
+    png.write_bytes(b"keep")
+    png.chmod(0o444)
+    _fails_in_one_sentence(capsys, ["compare", str(a), str(b), "--diff", str(png)], "read-only")
+    assert png.read_bytes() == b"keep"
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        _fails_in_one_sentence(capsys, ["compare", str(a), str(b), "--diff",
+                                        str(folder / "d.png")], "read-only")
+        assert list(folder.iterdir()) == []
+    finally:
+        folder.chmod(0o755)
+
+
+# --- a full disk: one sentence, the previous files byte-identical, nothing left behind ---------
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A folder on a real 256 KiB tmpfs (root can mount one here; skipped where it cannot)."""
+    mnt = tmp_path / "disk"
+    mnt.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(mnt)],
+                          capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], check=False)
+
+
+def _fill(folder: Path) -> None:
+    """Write a filler file until the file system refuses another byte."""
+    with open(folder / "filler", "wb", buffering=0) as f:
+        for size in (65536, 4096, 512, 1):
+            try:
+                while True:
+                    f.write(b"\0" * size)
+            except OSError:
+                continue
+
+
+def test_a_render_onto_a_full_disk_fails_in_one_sentence_and_keeps_the_old_set(small_disk,
+                                                                                capsys):
+    """On a full disk OpenEXR's failed close went unnoticed: the old image was replaced by a
+    0-byte file and `render` said nothing (exit 0)."""
+    out = small_disk / "x.exr"
+    assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(out)]) == 0
+    files = sorted(small_disk.iterdir())
+    before = {p.name: p.read_bytes() for p in files}
+    assert {"x.exr", "x.stderr.exr", "x.png"} <= before.keys()
+    _fill(small_disk)
+    capsys.readouterr()
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--spp", "16", "--seed", "3",
+                                    "-o", str(out)], "cannot write", str(small_disk), "unchanged")
+    assert sorted(p.name for p in small_disk.iterdir()) == sorted([*before, "filler"])
+    assert {n: (small_disk / n).read_bytes() for n in before} == before
+
+
+@pytest.mark.parametrize("limit", [0, 200, 2000])
+def test_exr_write_beyond_the_file_size_limit_is_refused(tmp_path, limit):
+    """RLIMIT_FSIZE (a full disk where no tmpfs can be mounted): the write fails at any byte,
+    the previous file stays byte-identical and no temporary is left."""
+    path = tmp_path / "x.exr"
+    exr.write(path, np.zeros((2, 2, 3), np.float32))
+    old = path.read_bytes()
+    code = ("import resource, sys, numpy as np\nfrom phonglab import exr\n"
+            "from phonglab.errors import WriteError\n"
+            f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))\n"
+            "try:\n"
+            f"    exr.write({str(path)!r}, np.random.default_rng(0).random((64, 64, 3)))\n"
+            "except WriteError as e:\n    print(e); sys.exit(3)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 3, (done.stdout, done.stderr)
+    assert f"cannot write {path}" in done.stdout and "\n" not in done.stdout.strip()
+    assert path.read_bytes() == old and sorted(p.name for p in tmp_path.iterdir()) == ["x.exr"]
+
+
+# --- Ctrl-C anywhere: exit 130, one line, the previous files intact -----------------------------
+
+INTERRUPT_MESSAGE = "phonglab: interrupted; files already written are complete."
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [0.12, 0.16, 0.2, 0.3, 0.45, 0.6, 0.65, 0.7, 0.9, 1.5])
+def test_ctrl_c_at_any_point_of_a_render_is_one_line(tmp_path, delay):
+    """SIGINT at points from start-up to mid-render (not inside the first ~0.1 s: there the
+    interpreter is still importing the console script's `phonglab.cli`, before any phonglab
+    code can catch it, and Python prints its own traceback).  During the variant's set-up it used to
+    surface as `SystemError: <built-in function __import__> returned a result with an
+    exception set` (exit 1, ~60 lines); inside a plugin's constructor as 'could not load the
+    scene: KeyboardInterrupt' (exit 2); during the subcommand imports as a traceback, or an
+    abort when the error handler then imported Dr.Jit (exit -6)."""
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", "--spp", "4", "-o", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    exe = Path(sys.executable).with_name("phonglab")
+    proc = subprocess.Popen([str(exe), "render", "cornell_phong", "--spp", "256", "-o", str(out)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    time.sleep(delay)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    lines = [ln.strip() for ln in err.replace("\r", "\n").splitlines() if ln.strip()
+             and not ln.strip().startswith("rendering")]
+    if proc.returncode == 0:                 # it finished first: a complete new set
+        assert exr.read(out)[1]["scene"].endswith("cornell_phong.xml")
+        return
+    assert proc.returncode == 130 and lines == [INTERRUPT_MESSAGE], (proc.returncode, err[-2000:])
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import signal
 import socket
@@ -32,7 +33,7 @@ from phonglab.bench.jobs import put_in_order
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
 from phonglab import parallel
-from phonglab.parallel import Runner, check_address
+from phonglab.parallel import Job, Runner, check_address
 
 #: Columns that are measured times or compile statistics (machine state, not results).
 TIMING = {"wall_time_s", "first_call_s", "seconds", "t_a", "t_b", "ratio", "steady_s",
@@ -317,3 +318,51 @@ def test_kernel_cache_slots_are_exclusive_and_cleaned(tmp_path):
     # A second claimant (another open file description, as another process would have) is
     # refused the held slot and gets the next one.
     assert claim_slot(tmp_path) == tmp_path / "worker-1"
+
+
+def scene_pixels(scene) -> int:
+    """A job function taking a loaded mi.Scene (which cannot be pickled)."""
+    return int(scene.sensors()[0].film().size()[0])
+
+
+def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
+    """A Job whose argument is a loaded Scene ran serially but raised Dask's pickling
+    traceback on a cluster; now it is one sentence before any job is sent."""
+    import mitsuba as mi
+
+    scene = mi.load_dict(mi.cornell_box())
+    with Runner(progress=False) as serial:
+        assert serial.run([Job(scene_pixels, (scene,), key="s")]) == [256]
+    with Runner(workers=2, progress=False) as runner:
+        with pytest.raises(PhonglabError, match=r"job 's' cannot be sent to a worker "
+                                                r"\(TypeError: cannot pickle 'Scene' object\)"):
+            runner.run([Job(math.factorial, (3,), key="ok"), Job(scene_pixels, (scene,), key="s")])
+        assert runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
+
+
+@pytest.mark.slow
+def test_ctrl_c_of_a_workers_run_is_one_line_and_leaves_no_worker(tmp_path):
+    """Ctrl-C reaches the whole process group: each LocalCluster worker used to print its own
+    KeyboardInterrupt traceback (88 lines for `validate --all-builtins --workers 2`)."""
+    proc = subprocess.Popen([str(BIN / "phonglab"), "validate", "--all-builtins", "--quick",
+                             "--workers", "2", "--json", str(tmp_path / "all.json")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, start_new_session=True)
+    err, deadline = "", time.monotonic() + 240
+    while "2/54" not in err and time.monotonic() < deadline:     # two cases done: jobs run
+        chunk = proc.stderr.read(1)
+        if not chunk:
+            break
+        err += chunk
+    assert "2/54" in err, err
+    workers = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+    assert workers, "no worker processes"
+    os.killpg(proc.pid, signal.SIGINT)
+    err += proc.stderr.read()
+    assert proc.wait(timeout=60) == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-3000:]
+    lines = [ln.strip() for ln in err.replace("\r", "\n").splitlines() if ln.strip()]
+    assert lines[-1] == "phonglab: interrupted; files already written are complete.", lines[-5:]
+    time.sleep(1)
+    assert not [p for p in workers if psutil.pid_exists(p)
+                and psutil.Process(p).status() != psutil.STATUS_ZOMBIE], "workers left running"

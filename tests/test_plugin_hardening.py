@@ -153,7 +153,7 @@ def test_good_update_after_a_refused_one_takes_effect(plugin, name, key, bad, go
     np.testing.assert_allclose(changed, render(fresh), rtol=1e-5, atol=1e-6)
 
 
-def test_refused_bitmap_update_restores_the_texels():
+def test_refused_bitmap_update_restores_the_texels(one_thread):
     data = np.full((6, 5, 3), 0.3, np.float32)
     scene = mi.load_dict(tiny_scene({"type": "lambert", "reflectance": bitmap(data)}))
     params = mi.traverse(scene)
@@ -274,3 +274,68 @@ def test_bitmaps_of_different_sizes_are_summed_on_the_finer_grid():
         mi.load_dict({"type": "phong", "diffuse_reflectance": bitmap(kd),
                       "specular_reflectance": bitmap(ks)})
     assert "violates energy conservation" in (material_message(info.value) or ""), info.value
+
+
+# ----------------------------------------------------------------------------- 8-bit bitmaps
+
+def png8(tmp_path, data: np.ndarray, name: str) -> str:
+    """``data`` (bytes, HxWxC or HxW) written as an 8-bit PNG; its path."""
+    fmt = mi.Bitmap.PixelFormat.Y if data.ndim == 2 or data.shape[-1] == 1 else \
+        mi.Bitmap.PixelFormat.RGB
+    path = tmp_path / name
+    mi.Bitmap(np.ascontiguousarray(data, np.uint8), pixel_format=fmt).write(str(path))
+    return str(path)
+
+
+@pytest.mark.parametrize("raw", [False, True], ids=["srgb", "raw"])
+@pytest.mark.parametrize("channels", [3, 1], ids=["rgb", "gray"])
+def test_8bit_png_textures_load_and_render_as_mitsuba_decodes_them(tmp_path, one_thread, raw,
+                                                                   channels):
+    """An 8-bit PNG of bytes 123..232 (decoded 0.20..0.80 through sRGB, 0.48..0.91 raw) used
+    to be refused: the range check read the stored bytes (Mitsuba keeps them as uint8 and
+    decodes at lookup).  lambert with it renders what Mitsuba's diffuse renders."""
+    data = np.random.default_rng(3).integers(123, 233, (6, 5, channels)).astype(np.uint8)
+    tex = {"type": "bitmap", "filename": png8(tmp_path, data, "kd.png"), "raw": raw}
+    lam = mi.load_dict(tiny_scene({"type": "lambert", "reflectance": tex}))
+    ref = mi.load_dict(tiny_scene({"type": "diffuse", "reflectance": tex}))
+    np.testing.assert_allclose(render(lam), render(ref), rtol=2e-5, atol=1e-6)
+    mi.load_dict({"type": "phong", "diffuse_reflectance": tex, "specular_reflectance": 0.05})
+
+
+def test_8bit_png_energy_is_checked_on_the_decoded_texels(tmp_path):
+    """sRGB byte 219 decodes to 0.708 and byte 203 to 0.597: with k_s 0.35 the first
+    texel sums to 1.058 > 1 (refused) while every stored byte / 255 + 0.35 would be > 1."""
+    data = np.full((4, 4, 3), 203, np.uint8)
+    data[1, 2, 0] = 219
+    kd = {"type": "bitmap", "filename": png8(tmp_path, data, "kd.png")}
+    with pytest.raises(Exception) as info:
+        mi.load_dict({"type": "phong", "diffuse_reflectance": kd, "specular_reflectance": 0.35})
+    message = material_message(info.value)
+    assert message is not None and "violates energy conservation" in message, info.value
+    assert "1.058" in message, message
+    data[1, 2, 0] = 203
+    kd = {"type": "bitmap", "filename": png8(tmp_path, data, "ok.png")}
+    mi.load_dict({"type": "phong", "diffuse_reflectance": kd, "specular_reflectance": 0.35})
+
+
+# ----------------------------------------------------------------------------- across objects
+
+@pytest.mark.parametrize("bad_key, bad", [("exponent", -5.0), ("exponent", NAN),
+                                          ("diffuse_reflectance.value", 1.5)])
+def test_a_refused_update_restores_every_object_it_touched(one_thread, bad_key, bad):
+    """One update that scaled the light by 10 and set an invalid phong parameter was refused,
+    yet the light's new intensity stayed (the next render 10x brighter)."""
+    scene = mi.load_dict(tiny_scene({"type": "phong"}))
+    params = mi.traverse(scene)
+    light, key = _full_key(params, "intensity.value"), _full_key(params, bad_key)
+    before_values = {k: np.array(params[k]).copy() for k in params.keys()}
+    before = render(scene)
+    params[light] = params[light] * 10.0
+    params[key] = bad
+    with pytest.raises(MaterialError):
+        params.update()
+    for k, v in before_values.items():
+        np.testing.assert_array_equal(np.array(params[k]), v, err_msg=k)
+    assert np.array_equal(render(scene), before), "the refused update changed the light"
+    params.update({light: params[light] * 10.0})     # a good update afterwards works
+    np.testing.assert_allclose(render(scene), 10.0 * before, rtol=1e-4, atol=1e-6)

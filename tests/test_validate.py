@@ -11,10 +11,11 @@ from pathlib import Path
 import pytest
 
 from phonglab.cli import main
+from phonglab.settings import ParameterError, parse_sets
 from phonglab.testing import assert_bsdf_valid
 from phonglab.validate import TOPICS, validate_bsdf
-from phonglab.validate.inputs import ParameterError, ValidateError, parse_sets
-from phonglab.validate.topics import Row
+from phonglab.validate.bsdf.topics import Row
+from phonglab.validate.inputs import ValidateError
 from phonglab.verdict import STATUSES, Report
 
 DEFECTS = Path(__file__).parent / "defects"
@@ -100,6 +101,31 @@ def test_bad_input_is_one_sentence(variant_llvm_rgb, tmp_path):
     broken.write_text("raise RuntimeError('oops')\n")
     with pytest.raises(ValidateError, match="failed: RuntimeError: oops"):
         validate_bsdf("diffuse", plugins=[broken])
+
+
+def test_runner_is_kind_independent(variant_llvm_rgb):
+    """core.run takes any Kind: its topics table in order, a raising topic is one failing row,
+    KNOWN applies, m comes from the kind and the meta names the kind's plugin."""
+    from phonglab import stats
+    from phonglab.settings import Loaded
+    from phonglab.validate import core
+
+    def boom():
+        raise RuntimeError("no such lane")
+
+    def runners(plugin, opts, topics, m):
+        return {"cost": lambda: [Row("cost", "c", 1.0, 1.0, None, None, "pass", "")],
+                "finite": boom}
+    kind = core.Kind(name="toy", word="toy", class_name="Object", register="register_toy",
+                     topics=("finite", "cost"), options=lambda quick, seed, topics: None,
+                     statistical_tests=lambda plugin, opts, topics: 3, runners=runners)
+    report = core.run(kind, Loaded(object(), "toy-1", None), topics=("finite", "cost"),
+                      known={"finite": "documented"})
+    assert [r.topic for r in report.rows] == ["finite", "cost"]
+    assert report.rows[0].status == "KNOWN" and "raised RuntimeError: no such lane" in \
+        report.rows[0].reason
+    assert report.meta["toy"] == "toy-1" and report.meta["statistical_tests"] == 3
+    assert report.meta["alpha"] == stats.ALPHA == 0.01
 
 
 def test_known_turns_a_fail_into_known_with_the_same_tolerance(variant_llvm_rgb):

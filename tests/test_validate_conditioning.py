@@ -1,4 +1,4 @@
-"""The identities' conditioning estimate (phonglab.validate.config): random 8u corners, then, for
+"""The identities' conditioning estimate (phonglab.validate.bsdf.config): random 8u corners, then, for
 a lane that fails, every float32 wo within 8 ulps (config.refine).  Pure numpy functions stand
 in for a BSDF, so these tests need no Mitsuba."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from phonglab.validate import config
+from phonglab.validate.bsdf import config
 
 #: The grazing retro-reflection lane of roughconductor (beckmann, alpha 0.4, no visible
 #: sampling) at cos theta_i = 1e-4 whose pdf row failed: bs.pdf = 2348.7, pdf(bs.wo) = 0.

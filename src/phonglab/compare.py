@@ -22,6 +22,12 @@ Its standard error comes from one of two sources (:attr:`Comparison.stderr_sourc
 Both assume independent pixels; a wide reconstruction filter (Mitsuba's default
 ``gaussian``) correlates neighbours slightly and makes either estimate a little small.
 ``z = d̄ / SE`` and the two-sided p-value ``2 (1 − Φ(|z|))`` test "same expected image".
+
+The test is undefined, and z and p are None with :attr:`Comparison.undefined` saying why, when
+SE = 0 (identical or constant images: no spread to compare against), when there is one pixel
+(no spread to estimate), and when A and B are one render (the same ``render_id``, or the same
+file): a render compared with itself is not an independent sample, so p = 1 would be a
+tautology, not evidence.  No statistic is ever NaN, and the JSON form is strict JSON.
 """
 
 from __future__ import annotations
@@ -51,13 +57,14 @@ class Comparison:
     mean_diff: float                #: mean(A − B)
     mean_diff_stderr: float         #: its standard error
     stderr_source: str              #: "stderr files" or "pixel differences"
-    z: float                        #: mean_diff / mean_diff_stderr (nan when the error is 0)
-    p_value: float                  #: two-sided, for "A and B have the same expectation"
+    z: float | None                 #: mean_diff / mean_diff_stderr (None: see ``undefined``)
+    p_value: float | None           #: two-sided, for "A and B have the same expectation"
     max_abs_diff: float             #: max |A − B|
     mean_a: float                   #: mean(A)
     mean_b: float                   #: mean(B)
     channel_mean_diff: list[float] = field(default_factory=list)  #: mean(A − B) per channel
     eps: float = REL_EPS
+    undefined: str | None = None    #: why z and p are undefined (None when they are defined)
 
     def summary(self) -> str:
         """A few lines for people."""
@@ -72,7 +79,7 @@ class Comparison:
             f"mean A - B  : {self.mean_diff:+.6g} +- {self.mean_diff_stderr:.3g} (1 s.e., from "
             f"{self.stderr_source}){rel}",
             f"z, p        : {self.z:+.3f}, p = {self.p_value:.3g} (two-sided, H0: same expected "
-            f"image)",
+            f"image)" if self.undefined is None else f"z, p        : undefined: {self.undefined}",
         ]
         return "\n".join(lines)
 
@@ -87,7 +94,8 @@ def _shape_text(shape) -> str:
 
 
 def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
-                   names: tuple[str, str] = ("A", "B")) -> Comparison:
+                   names: tuple[str, str] = ("A", "B"),
+                   not_independent: str | None = None) -> Comparison:
     """Compare image ``a`` with reference ``b`` (arrays).
 
     Args:
@@ -97,6 +105,8 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
             the spread of the pixel differences otherwise.
         eps: ε of the relative MSE.
         names: how errors name the two images (file names from :func:`compare_files`).
+        not_independent: why A and B are not independent renders (None when they are): the
+            test of "same expected image" is then undefined and says so.
 
     Raises:
         CompareError: shapes differ, or a value is NaN/Inf.
@@ -131,20 +141,26 @@ def compare_arrays(a, b, stderr_a=None, stderr_b=None, eps: float = REL_EPS,
         se = float(math.sqrt(var.sum()) / n)
         source = "stderr files"
     else:
-        se = float(pixel_mean.std(ddof=1) / math.sqrt(n)) if n > 1 else float("nan")
+        se = float(pixel_mean.std(ddof=1) / math.sqrt(n)) if n > 1 else 0.0
         source = "pixel differences"
-    if se > 0:
-        z = mean_diff / se
-        p = two_sided_p(z)
-    else:
-        z, p = float("nan"), float("nan")
+    undefined = not_independent
+    if undefined is None and n < 2 and source == "pixel differences":
+        undefined = ("one pixel has no spread to estimate the standard error from; give the "
+                     "renders' .stderr.exr files")
+    elif undefined is None and not se > 0:
+        undefined = ("the mean difference has zero standard error (the images are identical or "
+                     "constant, with no noise to test against)")
+    z = p = None
+    if undefined is None:
+        z = float(mean_diff / se)
+        p = float(two_sided_p(z))
     norms = metrics.errors(a, b, eps=eps)         # both images are finite (checked above)
     return Comparison(
         shape=tuple(int(s) for s in a.shape),
         rmse=norms["rmse"], rel_mse=norms["rel_mse"],
-        mean_diff=mean_diff, mean_diff_stderr=se, stderr_source=source, z=float(z), p_value=p,
+        mean_diff=mean_diff, mean_diff_stderr=se, stderr_source=source, z=z, p_value=p,
         max_abs_diff=float(np.max(np.abs(d))), mean_a=float(a.mean()), mean_b=float(b.mean()),
-        channel_mean_diff=[float(x) for x in d.mean(axis=(0, 1))], eps=eps)
+        channel_mean_diff=[float(x) for x in d.mean(axis=(0, 1))], eps=eps, undefined=undefined)
 
 
 def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path | None = None,
@@ -172,8 +188,21 @@ def compare_files(path_a: str | Path, path_b: str | Path, stderr_a: str | Path |
     sa = _stderr_of(path_a, meta_a, stderr_a)
     sb = _stderr_of(path_b, meta_b, stderr_b)
     result = compare_arrays(img_a, img_b, sa, sb, eps=eps,
-                            names=(str(path_a), str(path_b)))
+                            names=(str(path_a), str(path_b)),
+                            not_independent=same_render(path_a, path_b, meta_a, meta_b))
     return result, img_a, img_b, meta_a, meta_b
+
+
+def same_render(path_a, path_b, meta_a: dict, meta_b: dict) -> str | None:
+    """Why A and B are one render (the same file, or the same ``render_id``), else None."""
+    if Path(path_a).resolve() == Path(path_b).resolve():
+        return (f"A and B are the same file ({path_b}); a render compared with itself is not "
+                f"an independent sample: compare it with another render")
+    rid = meta_a.get("render_id")
+    if rid is not None and rid == meta_b.get("render_id"):
+        return (f"A and B are one render (both carry render_id {rid}): they are not "
+                f"independent samples, so no test of 'same expected image' applies")
+    return None
 
 
 def _stderr_of(image_path, image_meta: dict, path) -> np.ndarray | None:

@@ -6,7 +6,9 @@ shows the traceback); a Python caller can catch :class:`PhonglabError` for all o
 * :class:`SceneError`   a scene that cannot be found, parsed or loaded;
 * :class:`ExrError`     a file that is not a readable OpenEXR image, or an image EXR cannot hold;
 * :class:`CompareError` two images (or an image and its standard-error map) that cannot be compared;
-* :class:`PlanError`    a render plan that cannot be made.
+* :class:`PlanError`    a render plan that cannot be made;
+* :class:`WriteError`   an output that could not be written to the end (full disk, file too
+  large, I/O error): the previous file at that path is left as it was.
 
 An unphysical material is reported by the plugins themselves as
 ``phonglab.plugins._common.MaterialError`` (a ``ValueError``): plugins import only Mitsuba,
@@ -46,3 +48,7 @@ def user_errors() -> tuple[type[BaseException], ...]:
     from .plugins._common import MaterialError  # lazy: importing the plugins imports Mitsuba
 
     return (PhonglabError, FileNotFoundError, ValueError, MaterialError)
+
+
+class WriteError(PhonglabError, RuntimeError):
+    """An output that could not be written completely; the previous file is unchanged."""

@@ -11,6 +11,13 @@ is flushed to disk (``fsync``), then ``os.replace`` renames it over the target,
 which POSIX makes atomic: an interrupted render never leaves a truncated EXR,
 and the previous file survives intact.  The temporary file is removed on any
 failure, including ``KeyboardInterrupt``.
+
+Every write is checked to the end.  OpenEXR does not report a failure when the file is
+closed, so on a full disk it could leave a 0-byte or truncated file and say nothing: an EXR
+is read back from the temporary and compared with what was written, bit for bit, before
+the rename; any temporary that ends up empty is refused; an ``OSError`` on the way (no
+space, file too large, I/O error), or OpenEXR's own write error, becomes one
+:class:`~phonglab.errors.WriteError` sentence.  The previous file is untouched in every case.
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ from typing import Any, Mapping
 import numpy as np
 import OpenEXR
 
-from .errors import ExrError
+from .errors import ExrError, WriteError
 
 PREFIX = "phonglab:"
 #: The four bytes every OpenEXR file starts with (OpenEXR file layout, "magic number").
@@ -60,18 +67,47 @@ def atomic_path(path: Path, suffix: str):
     (mkstemp creates 0600); on any error the temporary file is removed and a previous file
     at ``path`` stays untouched.
     """
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=suffix, dir=path.parent)
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=suffix, dir=path.parent)
+    except OSError as exc:
+        raise write_error(path, exc) from None
     os.close(fd)
     try:
         yield tmp
         with open(tmp, "rb") as f:       # the bytes reach the disk before the rename
             os.fsync(f.fileno())
+            if os.fstat(f.fileno()).st_size == 0:
+                raise write_error(path, "the file came out empty: is the disk full?")
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
+    except (OSError, WriteError) as exc:
+        _remove(tmp)
+        if isinstance(exc, WriteError) and exc.path != Path(tmp):
+            raise                # about another file of a set, already named by its target
+        raise write_error(path, exc) from None   # named by the target, not the temporary
     except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        _remove(tmp)
         raise
+
+
+def _remove(tmp: str) -> None:
+    if os.path.exists(tmp):
+        os.unlink(tmp)
+
+
+def write_error(path: Path, cause: BaseException | str) -> WriteError:
+    """The one sentence for a write of ``path`` that failed (``cause``: an exception or words);
+    its ``reason`` is kept, so a caller that wrote into a temporary names the real target."""
+    if isinstance(cause, str):
+        reason = cause
+    else:
+        reason = getattr(cause, "reason", None) or getattr(cause, "strerror", None) or \
+            str(cause).split(". ")[-1].rstrip(".") or type(cause).__name__
+    err = WriteError(f"cannot write {path} ({reason}); free space on that disk or choose "
+                     f"another folder; the previous {path.name}, if any, is unchanged")
+    err.reason, err.path = reason, Path(path)
+    return err
 
 
 def write(path: str | os.PathLike, image, metadata: Mapping[str, Any] | None = None) -> Path:
@@ -103,7 +139,24 @@ def write_file(path: str | os.PathLike, image, metadata: Mapping[str, Any] | Non
                               "type": OpenEXR.scanlineimage}
     for key, value in (metadata or {}).items():
         header[PREFIX + str(key)] = json.dumps(value, default=str)
-    OpenEXR.File(header, _channels(np.asarray(image))).write(str(path))
+    channels = _channels(np.asarray(image))
+    try:
+        OpenEXR.File(header, dict(channels)).write(str(path))   # (it wraps the dict's values)
+        empty = os.path.getsize(path) == 0
+    except (RuntimeError, OSError) as exc:
+        raise write_error(Path(path), exc) from None
+    if empty:
+        raise write_error(Path(path), "the file came out empty: is the disk full?")
+    try:
+        with OpenEXR.File(str(path)) as back:        # checked to the end (module docstring)
+            stored = back.channels()
+            complete = stored.keys() == channels.keys() and all(
+                np.array_equal(stored[k].pixels, v, equal_nan=True) for k, v in channels.items())
+    except (RuntimeError, OSError):
+        complete = False
+    if not complete:
+        raise write_error(Path(path), "it does not read back as the image written: is the "
+                                      "disk full?")
 
 
 def stderr_path(path: str | os.PathLike) -> Path:

@@ -4,7 +4,9 @@ Mitsuba keeps one plugin table per variant, and a Python plugin class derives
 from the variant's ``mi.BSDF``/``mi.SamplingIntegrator``.  :func:`register`
 therefore (re)builds each plugin module for the active variant and registers
 it; a variant callback repeats this after every later ``mi.set_variant``
-(the pattern of Mitsuba's own ``python/ad/integrators``).
+(the pattern of Mitsuba's own ``python/ad/integrators``).  It also makes every
+``params.update()`` transactional across objects (:mod:`phonglab.transactions`): a plugin
+that refuses its new values no longer leaves the update's other objects changed.
 
 Mitsuba is imported inside the functions: ``import phonglab`` imports this module, and it must
 neither load Mitsuba (about half a second for every ``phonglab`` command, ``--help`` included)
@@ -16,7 +18,7 @@ from __future__ import annotations
 import importlib
 import threading
 
-from . import runtime
+from . import runtime, transactions
 
 #: (module of phonglab.plugins, name in scene files, kind)
 PLUGINS: list[tuple[str, str, str]] = [
@@ -88,6 +90,7 @@ def register(variant: str | None = None) -> str:
         runtime.set_variant(variant)
     elif mi.variant() is None:
         runtime.set_variant(None)
+    transactions.install()
     with _lock:
         if not _callback_installed:
             mi.detail.add_variant_callback(_on_variant_change)

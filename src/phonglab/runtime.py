@@ -30,6 +30,8 @@ import contextlib
 import glob
 import os
 import re
+import signal
+import threading
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -168,14 +170,44 @@ def default_variant(color: str = "rgb") -> str:
     return f"scalar_{color}"
 
 
+@contextlib.contextmanager
+def deferred_interrupt():
+    """Hold Ctrl-C (SIGINT) until the block is done, then raise ``KeyboardInterrupt``.
+
+    Setting a variant imports Mitsuba's C++ modules and runs the variant callbacks (which
+    register phonglab's plugins); a ``KeyboardInterrupt`` raised inside that import surfaces
+    as ``SystemError: <built-in function __import__> returned a result with an exception
+    set`` and can leave the variant half set.  Only in the main thread, and only where
+    Python's own handler is installed (a caller's handler is left alone).
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+    caught: list = []
+    previous = signal.signal(signal.SIGINT, lambda *frame: caught.append(frame))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if caught:
+        raise KeyboardInterrupt
+
+
 def set_variant(variant: str | None = None) -> str:
     """Set a Mitsuba variant, the default one when ``variant`` is None.
 
     A JIT variant that fails to start falls back to the best backend that works, with a
     warning naming both: ``cuda_*`` without a CUDA device becomes ``llvm_ad_*`` (same images up
     to float rounding, on the CPU) when libLLVM is usable, and ``llvm_*`` without a usable
-    libLLVM becomes ``scalar_*`` (:class:`SlowFallbackWarning`: ~150x slower).
+    libLLVM becomes ``scalar_*`` (:class:`SlowFallbackWarning`: ~150x slower).  A Ctrl-C on
+    the way is raised once the variant is set (:func:`deferred_interrupt`).
     """
+    with deferred_interrupt():
+        return _set_variant(variant)
+
+
+def _set_variant(variant: str | None) -> str:
     import mitsuba as mi
 
     configure()

@@ -211,6 +211,9 @@ def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
     try:
         return mi.load_file(str(path), **{k: v for k, v in params.items() if v is not None})
     except Exception as exc:  # Mitsuba raises RuntimeError with its own text
+        if re.search(r"^KeyboardInterrupt\b", str(exc).strip(), re.M):
+            # a Ctrl-C inside a Python plugin's constructor, turned into text by the loader
+            raise KeyboardInterrupt from exc
         raise explain_load_error(path, exc) from exc
 
 

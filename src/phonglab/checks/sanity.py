@@ -51,8 +51,8 @@ def check_sanity(cfg: Config) -> list[Row]:
     for k, (label, spec) in enumerate(cases):
         cfg.note(f"sanity: {label}")
         report = validate_bsdf(spec, topics=TOPICS, seed=cfg.seed * len(cases) + k, quick=True,
-                               family=len(cases), chi2_samples=cfg.chi2_samples)
-        rows += _case_rows(label, report)
+                               family=len(cases), sizes={"chi2_samples": cfg.chi2_samples})
+        rows += _case_rows(label, report, cfg.chi2_samples)
     return rows
 
 
@@ -65,13 +65,12 @@ def _sanity_cases(cfg: Config) -> list[tuple[str, dict]]:
     return cases
 
 
-def _case_rows(label: str, report: Report) -> list[Row]:
+def _case_rows(label: str, report: Report, samples: int) -> list[Row]:
     """The four rows of one case from its validation report."""
     by = {t: [r for r in report.rows if r.topic == t] for t in TOPICS}
     m = report.meta["statistical_tests"]
     rec, fin, wgt, chi = by["reciprocity"], by["finite"], by["weight"], by["chi2"]
     cells = [c for r in chi for c in r.details.get("cells", [])]
-    samples = report.meta["chi2_samples"]
     # A tested cell's hist_sum is the fraction of samples histogrammed; an empty one's is 0.
     hist_min = min((c["hist_sum"] * samples for c in cells), default=0.0)
     level = chi[0].expected if chi else None

@@ -53,19 +53,36 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is a Ctrl-C, or an error a Ctrl-C caused (a C++ call that turned the
+    KeyboardInterrupt raised inside it into a ``SystemError``/``RuntimeError``)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    debug = "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
+        parser = build_parser()          # imports every subcommand: Ctrl-C may land here too
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        debug = args.debug
         return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("phonglab: interrupted; files already written are complete.", file=sys.stderr)
-        return 130
-    except user_errors() as exc:
-        if args.debug:
+    except BaseException as exc:
+        # A Ctrl-C first, whatever wraps it: user_errors() imports Dr.Jit, which must not
+        # start after an import the interrupt broke off (it aborts the process).
+        if interrupted(exc) and not debug:
+            print("\nphonglab: interrupted; files already written are complete.",
+                  file=sys.stderr)
+            return 130
+        if debug or not isinstance(exc, user_errors()):
             raise
         print(f"phonglab: error: {exc}", file=sys.stderr)
         return 2

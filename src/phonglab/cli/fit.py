@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from ..errors import PhonglabError
+from ..settings import parse_sets
 
 
 def add_parser(sub) -> None:
@@ -24,8 +25,9 @@ def add_parser(sub) -> None:
     p.add_argument("target", help="a registered BSDF plugin: roughconductor, roughplastic, "
                                   "principled, plastic, phong, ...")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", dest="settings",
-                   help="a parameter of the target (repeatable): a number, 'r, g, b' or a string, "
-                        "e.g. --set alpha=0.2 --set distribution=ggx")
+                   help="a parameter of the target (repeatable): a number, true/false, 'r, g, b', "
+                        "a string or nested (bsdf.type=...), e.g. --set alpha=0.2 "
+                        "--set distribution=ggx (grammar: phonglab.settings)")
     p.add_argument("--model", choices=["phong", "lambert"], default="phong",
                    help="the classic model to fit (default phong)")
     p.add_argument("--maxiter", type=int, default=200, help="L-BFGS-B iterations at most (default 200)")
@@ -35,19 +37,8 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def parse_settings(items: list[str]) -> dict[str, str]:
-    """NAME=VALUE strings -> {name: value text}; one sentence for a malformed item."""
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip() or not value.strip():
-            raise PhonglabError(f"--set expects NAME=VALUE, got {item!r}; e.g. --set alpha=0.2")
-        out[name.strip()] = value.strip()
-    return out
-
-
 def run(args) -> int:
-    settings = parse_settings(args.settings)
+    params = parse_sets(args.settings)
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
@@ -59,9 +50,8 @@ def run(args) -> int:
             check_folder(Path(path), what)
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
     from .. import registration, runtime
-    from ..fit.optimize import fit, format_result, parse_value
+    from ..fit.optimize import fit, format_result
 
-    params = {k: parse_value(v) for k, v in settings.items()}
     variant = args.variant or runtime.default_variant()
     runtime.check_variant(variant)
     if not variant.endswith(("_ad_rgb", "_ad_mono")):

@@ -4,14 +4,19 @@ from __future__ import annotations
 
 import argparse
 
+from ..settings import split
+
 
 def scene_param(text: str) -> tuple[str, str]:
-    """``NAME=VALUE`` → (name, value): one of the scene's ``<default>`` parameters."""
-    name, sep, value = text.partition("=")
-    if not sep or not name:
+    """``NAME=VALUE`` → (name, value): one of the scene's ``<default>`` parameters.
+
+    The value stays text (:mod:`phonglab.settings`): Mitsuba substitutes it into the XML.
+    """
+    pair = split(text)
+    if pair is None:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE (a scene <default>, e.g. "
                                          f"res=256), got {text!r}")
-    return name, value
+    return pair
 
 
 def add_scene_params(p: argparse.ArgumentParser, *flags: str) -> None:

@@ -11,8 +11,9 @@ import argparse
 from pathlib import Path
 
 from ..parallel import add_arguments, runner_from_args
-from ..validate.inputs import ValidateError, check_topics, parse_sets
-from ..validate.topics import TOPICS
+from ..settings import parse_sets
+from ..validate.bsdf.topics import TOPICS
+from ..validate.inputs import ValidateError, check_topics
 from ..verdict import Report, write_json
 
 EPILOG = """examples:
@@ -54,10 +55,11 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _check_inputs(args) -> dict:
-    """Every check that needs no Mitsuba, in the order a user would fix them."""
+def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
+    """Every check that needs no Mitsuba, in the order a user would fix them: the --set
+    parameters and the topics to run."""
     from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
-    check_topics(args.only)
+    topics = check_topics(args.only)
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
             raise ValidateError("--all-builtins takes no BSDF, --set or --plugin; drop them or "
@@ -77,7 +79,7 @@ def _check_inputs(args) -> dict:
         if path:
             outputs.check_file(Path(path), what)
             outputs.check_folder(Path(path), what)
-    return parse_sets(args.set)
+    return parse_sets(args.set), topics
 
 
 def _all_builtins(args) -> int:
@@ -100,19 +102,19 @@ def _all_builtins(args) -> int:
 
 
 def run(args) -> int:
-    params = _check_inputs(args)
+    params, topics = _check_inputs(args)
     if not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins; "
                             "drop them to validate one BSDF")
     if args.all_builtins:
         return _all_builtins(args)
     from ..validate import core, html   # lazy: Mitsuba and matplotlib load only for a run
+    from ..validate.bsdf.kind import BSDF
 
-    bsdf, label, desc, topics = core.prepare(args.bsdf, variant=args.variant, params=params,
-                                             topics=args.only, plugins=args.plugin)
-    report: Report = core.validate_bsdf(bsdf, params=None, topics=topics, seed=args.seed,
-                                        quick=args.quick)
-    report.meta.update(bsdf=label, spec=desc)
+    target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
+                          plugins=args.plugin)
+    report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
+    label = target.label
     print(report.table())
     if args.json:
         report.write_json(args.json)

@@ -23,7 +23,6 @@ gradient from Dr.Jit's AD.  A non-finite loss or gradient is an error, never a r
 from __future__ import annotations
 
 import math
-import re
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -35,6 +34,7 @@ from .. import probe
 from ..bench.cornell import beckmann_alpha
 from ..errors import PhonglabError
 from ..physics.quadrature import lobe_width
+from ..settings import load_plugin
 from .objective import (MODELS, P_MAX, PHONG, Directions, Model, Objective, fit_directions,
                         luminance_eval, report_directions)
 
@@ -57,43 +57,13 @@ def blinn_phong_exponent(alpha: float) -> float:
 
 
 # ----------------------------------------------------------------------------- the target
-def parse_value(text: str):
-    """A ``--set`` value: a number, an "r, g, b" colour, or a string (e.g. ``ggx``)."""
-    parts = [s.strip() for s in text.split(",")]
-    try:
-        numbers = [float(s) for s in parts]
-    except ValueError:
-        return text
-    if len(numbers) == 1:
-        return numbers[0]
-    if len(numbers) == 3:
-        return {"type": "rgb", "value": numbers}
-    raise PhonglabError(f"the value {text!r} has {len(numbers)} numbers; give one number or "
-                        f"three (an 'r, g, b' colour)")
-
-
-def _mitsuba_reason(exc: Exception) -> str:
-    """The informative part of a Mitsuba loader error, on one line."""
-    text = " ".join(str(exc).split())
-    text = re.sub(r"\[[\w.]+:\d+\] ", "", text)              # [parser.cpp:444] source tags
-    text = re.sub(r"^(While loading|At) dictionary node \"root\": ", "", text)
-    text = text.split(": [")[-1].lstrip("[")                   # the innermost cause
-    return text.replace("] ", ": ").rstrip(".!")
-
-
-def load_target(name: str, params: dict | None = None):
-    """The target BSDF ``{"type": name, **params}``; one sentence when Mitsuba refuses it."""
-    spec = {"type": name, **(params or {})}
-    try:
-        bsdf = mi.load_dict(spec)
-    except Exception as exc:   # Mitsuba reports unknown plugins/parameters as RuntimeError
-        raise PhonglabError(f"cannot build the target BSDF {name!r} ({_mitsuba_reason(exc)}); "
-                            f"name a registered BSDF (e.g. roughconductor, roughplastic, "
-                            f"principled, plastic, phong) and parameters it takes") from None
-    if not isinstance(bsdf, mi.BSDF):
-        raise PhonglabError(f"{name!r} is a {type(bsdf).__name__}, not a BSDF; name a BSDF "
-                            f"such as roughconductor")
-    return bsdf
+def load_target(name, params: dict | None = None):
+    """The target BSDF ``{"type": name, **params}`` (``name`` may also be a ``mi.load_dict``
+    dict or an XML file, :func:`phonglab.settings.load_plugin`); one sentence when Mitsuba
+    refuses it."""
+    return load_plugin(name, params, kind=mi.BSDF, word="BSDF",
+                       hint="name a registered BSDF (e.g. roughconductor, roughplastic, "
+                            "principled, plastic, phong) and parameters it takes").plugin
 
 
 def has_delta(bsdf) -> bool:

@@ -23,7 +23,8 @@ job order, so what is written from them does not depend on which worker was fast
 Faults: a job whose worker dies (killed, out of memory) is rescheduled on another worker by
 the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
 a job whose function raises is re-run up to :data:`RETRIES` times, then its exception is
-raised here.  A scheduler that cannot be reached within :data:`CONNECT_TIMEOUT` seconds is one
+raised here.  A job that cannot be pickled (a loaded ``mi.Scene`` as an argument) is one
+sentence before any job of the batch is sent (:func:`check_sendable`).  A scheduler that cannot be reached within :data:`CONNECT_TIMEOUT` seconds is one
 :class:`~phonglab.errors.PhonglabError` sentence.
 """
 
@@ -32,6 +33,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import signal
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Hashable, Iterator, Sequence
@@ -88,6 +90,18 @@ def call_job(fn: Callable[..., Any], args: tuple, variant: str) -> tuple[Any, fl
     t0 = time.perf_counter()
     result = fn(*args)
     return result, time.perf_counter() - t0
+
+
+def check_sendable(job: Job) -> None:
+    """One sentence unless ``job`` can be pickled for a worker as Dask pickles it."""
+    import cloudpickle  # lazy: a dependency of distributed, needed only where Dask runs
+
+    try:
+        cloudpickle.dumps((job.fn, job.args))
+    except Exception as exc:
+        raise PhonglabError(f"job {job.key!r} cannot be sent to a worker ({type(exc).__name__}: "
+                            f"{exc}); pass what it needs as plain values (a scene's path or "
+                            f"dict, not a loaded mi.Scene) and load it inside the job") from None
 
 
 def check_address(address: str) -> str:
@@ -176,6 +190,8 @@ class Runner:
             return
         from distributed import as_completed  # lazy: only a distributed run needs Dask
 
+        for job in jobs:          # every job can reach a worker, or none is sent
+            check_sendable(job)
         t0 = time.perf_counter()
         futures = [self._client.submit(call_job, job.fn, job.args, self.variant, pure=False,
                                        retries=self.retries) for job in jobs]
@@ -194,8 +210,15 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.CRITICAL)
+        # Ctrl-C reaches every process of the terminal's group: the embedded workers ignore it
+        # (inherited here, and set again by the plugin in a worker a nanny restarts), so only
+        # this process handles it and shuts the cluster down, without a traceback per worker.
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+        finally:
+            signal.signal(signal.SIGINT, previous)
         threads = max(1, (os.cpu_count() or 1) // int(workers))
         client = Client(cluster)
     else:
@@ -210,7 +233,8 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
     try:
         if scheduler is not None:
             _wait_for_a_worker(client, scheduler)
-        client.register_plugin(PhonglabWorker(variant, threads=threads))
+        client.register_plugin(PhonglabWorker(variant, threads=threads,
+                                              ignore_sigint=scheduler is None))
     except BaseException:
         client.close()
         if cluster is not None:

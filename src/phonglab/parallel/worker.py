@@ -32,13 +32,20 @@ threads per process, so N processes do not start N·C kernel threads; on a hand-
 cluster Dr.Jit keeps its default (all cores of the machine) unless ``threads`` is given.
 Results do not depend on the thread count (measured: the stability cells are bit-identical
 with 1 and 2 Dr.Jit threads; the tests compare serial and distributed runs bit for bit).
+
+**Ctrl-C.**  The workers of an embedded LocalCluster ignore SIGINT (``ignore_sigint``): a
+terminal sends it to the whole process group, and each worker used to print its own
+KeyboardInterrupt traceback while the parent shut the cluster down.  A hand-started
+``dask worker`` keeps its own Ctrl-C.
 """
 
 from __future__ import annotations
 
 import fcntl
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -118,10 +125,15 @@ class PhonglabWorker(WorkerPlugin):
 
     name = "phonglab"
 
-    def __init__(self, variant: str, threads: int | None = None, root: str | None = None):
+    def __init__(self, variant: str, threads: int | None = None, root: str | None = None,
+                 ignore_sigint: bool = False):
         self.variant, self.threads, self.root = variant, threads, root
+        self.ignore_sigint = ignore_sigint
 
     def setup(self, worker) -> None:
+        if self.ignore_sigint and threading.current_thread() is threading.main_thread():
+            # An embedded worker: Ctrl-C is its parent's to handle (phonglab.parallel._connect).
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         prepare_process(self.variant, self.threads, self.root)
 
 

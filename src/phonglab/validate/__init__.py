@@ -1,22 +1,26 @@
-"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its :class:`~phonglab.verdict.Report`.
+"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its report.
 
-Topics (one home each): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
-(:mod:`.identities`), ``chi2`` (:mod:`.sampling`), ``energy`` (:mod:`.energy`),
-``reciprocity`` (:mod:`.reciprocity`), ``gradient`` (:mod:`.gradient`), ``cost``
-(:mod:`.cost`).  Sizes and tolerances: :mod:`.config`; the topic list and the validator's row:
-:mod:`.topics`; reports (rows, JSON, table): :mod:`phonglab.verdict`.
+The runner is kind-independent (:mod:`.core`: guarded topics, Šidák over the statistical
+rows, KNOWN causes, the report); a plugin kind brings its topics.  The BSDF kind
+(:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
+(:mod:`.bsdf.identities`), ``chi2`` (:mod:`.bsdf.sampling`), ``energy`` (:mod:`.bsdf.energy`),
+``reciprocity`` (:mod:`.bsdf.reciprocity`), ``gradient`` (:mod:`.bsdf.gradient`), ``cost``
+(:mod:`.bsdf.cost`); sizes and tolerances: :mod:`.bsdf.config`; the topic list and the
+BSDF rows: :mod:`.bsdf.topics`.  Rows and reports: :mod:`phonglab.verdict`; user input:
+:mod:`.inputs` and :mod:`phonglab.settings`; Mitsuba's built-ins and their findings:
+:mod:`.builtins`; many cases as jobs: :mod:`.batch`.
 
 Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` does.
 """
 
 from ..verdict import Report
-from .topics import TOPICS
+from .bsdf.topics import TOPICS
 
 __all__ = ["TOPICS", "validate_bsdf"]
 
 
 def validate_bsdf(spec, **options) -> Report:
-    """Validate a BSDF on every topic; see :func:`phonglab.validate.core.validate_bsdf`."""
-    from .core import validate_bsdf as run   # lazy: imports Mitsuba (seconds) only when called
+    """Validate a BSDF on every topic; see :func:`phonglab.validate.bsdf.kind.validate_bsdf`."""
+    from .bsdf.kind import validate_bsdf as run   # lazy: imports Mitsuba (seconds) only when called
 
     return run(spec, **options)

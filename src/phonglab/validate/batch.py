@@ -17,8 +17,8 @@ import traceback
 from ..parallel import Job, Runner
 from ..verdict import Report
 from . import builtins
-from .core import validate_bsdf
-from .topics import TOPICS, Row
+from .bsdf.kind import validate_bsdf
+from .bsdf.topics import TOPICS, Row
 
 
 def find_case(case):

@@ -30,8 +30,8 @@ import math
 import mitsuba as mi
 import numpy as np
 
-from .. import probe, stats
-from ..physics.quadrature import lobe_quadrature
+from ... import probe, stats
+from ...physics.quadrature import lobe_quadrature
 from . import lanes
 from .topics import Row
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
 
 #: 1 − ε for a float32 sample value: the largest float32 below 1.
 ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))

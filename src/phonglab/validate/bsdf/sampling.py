@@ -32,7 +32,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import probe, stats
+from ... import probe, stats
 from . import lanes
 from .topics import Row
 

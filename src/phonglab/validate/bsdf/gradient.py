@@ -35,7 +35,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
 from . import lanes
 from .config import EPS32
 from .topics import Row

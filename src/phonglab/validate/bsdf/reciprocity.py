@@ -22,10 +22,10 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
 from . import lanes
 from .config import excess, rel_diff, sensitivity
-from .identities import CONDITIONED, _max, _row, _worst
+from .rows import CONDITIONED, bounded_row, max_finite, worst_lane
 from .topics import Row
 
 
@@ -55,16 +55,16 @@ def reciprocity(bsdf, opts) -> list[Row]:
     r = lanes.rng(opts.seed + 1, "reciprocity")
     wi, wo = _pairs(opts, True)
     ex, fwd, bwd = _compare(bsdf, wi, wo, r)
-    rows = [_row("reciprocity", "f(wi, wo) = f(wo, wi), reflection", _max(ex), 1.0,
+    rows = [bounded_row("reciprocity", "f(wi, wo) = f(wo, wi), reflection", max_finite(ex), 1.0,
                  f"relative |f(wi,wo) − f(wo,wi)| over random and grid pairs on the upper "
                  f"hemisphere; {CONDITIONED}",
-                 _worst(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_wo_wi": bwd[:, 0]}))]
+                 worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_wo_wi": bwd[:, 0]}))]
     if lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission) and not lanes.delta_only(bsdf):
         wi, wo = _pairs(opts, False)
         ex, fwd, bwd = _compare(bsdf, wi, wo, r, probe.context(mode=mi.TransportMode.Importance))
-        rows.append(_row("reciprocity", "f(wi, wo) = f*(wo, wi), transmission (η² form)",
-                         _max(ex), 1.0,
+        rows.append(bounded_row("reciprocity", "f(wi, wo) = f*(wo, wi), transmission (η² form)",
+                         max_finite(ex), 1.0,
                          f"relative |f_Radiance(wi,wo) − f_Importance(wo,wi)| over random "
                          f"transmission pairs (the adjoint = η² form); {CONDITIONED}",
-                         _worst(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_adj_wo_wi": bwd[:, 0]})))
+                         worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_adj_wo_wi": bwd[:, 0]})))
     return rows

@@ -14,7 +14,7 @@ import time
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
 from . import lanes
 from .topics import Row
 

@@ -1,7 +1,7 @@
 r"""The deterministic topics: ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``.
 
 Each is an identity that a correct BSDF satisfies lane by lane, so the tolerance is float32
-round-off (:data:`phonglab.validate.config.REL_TOL`), not statistics:
+round-off (:data:`phonglab.validate.bsdf.config.REL_TOL`), not statistics:
 
 * ``finite``: eval, pdf, eval_pdf and sample (weight, pdf, wo) are finite and ≥ 0 (wo a unit
   vector where the weight is non-zero) for random directions on the whole sphere, the mirror
@@ -24,43 +24,15 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from .. import probe
+from ... import probe
 from . import lanes
 from .config import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
+from .rows import BOXED, ROUND_OFF, bounded_row, max_finite, worst_lane
 from .topics import Row
-
-ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
-CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "
-               "8-ulp move of their input directions), must be ≤ 1 (config.sensitivity)")
-BOXED = (CONDITIONED[:-1] + "; a lane that fails gets the evaluated side's sensitivity over "
-         "every float32 wo within 8 ulps per component, config.refine)")
-
 
 SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
                "finite pdf ≥ 0 and a unit wo, a rejected one (weight 0, which integrators "
                "drop) may not: {} rejected samples carry NaN")
-
-
-def _row(topic, name, measured, tol, reason, details, expected=0.0) -> Row:
-    ok = measured is not None and np.isfinite(measured) and measured <= tol
-    return Row(topic, name, float(measured), expected, None, tol, "pass" if ok else "fail",
-               reason, details)
-
-
-def _worst(rel: np.ndarray, wi: np.ndarray, wo: np.ndarray, extra: dict | None = None) -> dict:
-    """details: lanes compared, non-finite lanes dropped, and the worst lane's directions."""
-    finite = np.isfinite(rel)
-    d = {"lanes": int(rel.size), "nonfinite_dropped": int((~finite).sum())}
-    if finite.any():
-        k = int(np.nanargmax(np.where(finite, rel, -1.0)))
-        d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
-        d.update({name: float(v[k]) for name, v in (extra or {}).items()})
-    return d
-
-
-def _max(rel: np.ndarray) -> float:
-    finite = rel[np.isfinite(rel)]
-    return float(finite.max()) if finite.size else 0.0
 
 
 def finite(bsdf, opts) -> list[Row]:
@@ -95,7 +67,7 @@ def finite(bsdf, opts) -> list[Row]:
             k = np.flatnonzero(bad)[:5]
             details["examples"] = [{"wi": w_in[i].tolist(), "wo": w_out[i].tolist()} for i in k]
             details["cos_theta_i"] = sorted({round(float(w_in[i, 2]), 6) for i in k})
-        rows.append(_row("finite", f"{name}: NaN/Inf/negative values", float(bad.sum()), 0.0,
+        rows.append(bounded_row("finite", f"{name}: NaN/Inf/negative values", float(bad.sum()), 0.0,
                          f"count of lanes with a NaN, Inf or negative {name} result over "
                          f"random, mirror, grazing and below-horizon directions"
                          + (SAMPLE_NOTE.format(rejected_nan) if name == "sample" else ""),
@@ -112,12 +84,12 @@ def eval_pdf(bsdf, opts) -> list[Row]:
     rel_e = np.max(rel_diff(ev2, ev), axis=1)
     rel_p = rel_diff(pd2, pd)
     return [
-        _row("eval_pdf", "eval_pdf value = eval", _max(rel_e), REL_TOL,
+        bounded_row("eval_pdf", "eval_pdf value = eval", max_finite(rel_e), REL_TOL,
              f"max relative |eval_pdf[0] − eval| over random wo; {ROUND_OFF}",
-             _worst(rel_e, wi, wo, {"eval": ev[:, 0], "eval_pdf": ev2[:, 0]})),
-        _row("eval_pdf", "eval_pdf pdf = pdf", _max(rel_p), REL_TOL,
+             worst_lane(rel_e, wi, wo, {"eval": ev[:, 0], "eval_pdf": ev2[:, 0]})),
+        bounded_row("eval_pdf", "eval_pdf pdf = pdf", max_finite(rel_p), REL_TOL,
              f"max relative |eval_pdf[1] − pdf| over random wo; {ROUND_OFF}",
-             _worst(rel_p, wi, wo, {"pdf": pd, "eval_pdf": pd2})),
+             worst_lane(rel_p, wi, wo, {"pdf": pd, "eval_pdf": pd2})),
     ]
 
 
@@ -161,9 +133,9 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         rel = np.max(rel_diff(w, ratio), axis=1)
         ex, box = refine(rel, sensitivity(ratio_of, wi, wo, r, ratio), sens_w, ratio_of, wi,
                          wo, ratio)
-        rows.append(_row("weight", "weight = eval/pdf per sample", _max(ex), 1.0,
+        rows.append(bounded_row("weight", "weight = eval/pdf per sample", max_finite(ex), 1.0,
                          f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {BOXED}",
-                         {**_worst(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
+                         {**worst_lane(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
                                                 "rel_diff": rel}), **box}))
     if "pdf" in topics:
         rel = rel_diff(bpdf, pd)
@@ -171,9 +143,9 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
             return probe.pdf(bsdf, a, b)
 
         ex, box = refine(rel, sensitivity(pdf_of, wi, wo, r, pd), sens_p, pdf_of, wi, wo, pd)
-        rows.append(_row("pdf", "bs.pdf = pdf(bs.wo)", _max(ex), 1.0,
+        rows.append(bounded_row("pdf", "bs.pdf = pdf(bs.wo)", max_finite(ex), 1.0,
                          f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {BOXED}",
-                         {**_worst(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel}),
+                         {**worst_lane(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel}),
                           **box}))
     return rows
 
@@ -189,7 +161,7 @@ def component(bsdf, opts) -> list[Row]:
     comp_flags = np.array(flags + [0])[np.where(in_range, comp, k_count)]
     lobe_bits = int(mi.BSDFFlags.All)
     bad = ~in_range | ((stype & lobe_bits) == 0) | ((stype & lobe_bits & ~comp_flags) != 0)
-    rows = [_row("component", "sampled_component/sampled_type agree with the flags",
+    rows = [bounded_row("component", "sampled_component/sampled_type agree with the flags",
                  float(bad.sum()), 0.0,
                  f"count of samples whose sampled_type lobe bits are not within "
                  f"flags(sampled_component) over {int(live.sum())} samples; "
@@ -210,13 +182,13 @@ def component(bsdf, opts) -> list[Row]:
         sk = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 7 * k + 1, ctx=ctx)
         lk = np.any(sk.weight != 0, axis=1)
         wrong += int(np.sum(lk & (sk.sampled_component != k)))
-    rows.append(_row("component", "restricted context samples only its component",
+    rows.append(bounded_row("component", "restricted context samples only its component",
                      float(wrong), 0.0,
                      f"count of samples from a context restricted to component k that "
                      f"report another component, over k = 0..{k_count - 1}", {"bad": wrong}))
     rel = np.max(rel_diff(total, full), axis=1)
-    rows.append(_row("component", "Σ_k eval(component k) = eval", _max(rel), REL_TOL,
+    rows.append(bounded_row("component", "Σ_k eval(component k) = eval", max_finite(rel), REL_TOL,
                      f"max relative |Σ_k eval_k − eval| over random wo; {ROUND_OFF}",
-                     _worst(rel, wi, wo)))
+                     worst_lane(rel, wi, wo)))
     return rows
 

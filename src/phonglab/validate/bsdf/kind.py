@@ -1,0 +1,72 @@
+"""The BSDF kind of the validator: ``mi.BSDF``, its topics table, its statistical tests, and
+:func:`validate_bsdf` (the kind-independent runner :mod:`phonglab.validate.core` does the rest).
+
+The statistical tests of a BSDF are the χ² cells (unless every lobe is a delta) and, when it
+has a delta lobe, the energy cells whose albedo is a mean of sample weights; the other topics
+are identities at float32 round-off, or informational (``cost``).
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+
+from ...verdict import Report
+from .. import core
+from . import lanes
+from .config import options
+from .cost import cost
+from .energy import energy
+from .gradient import gradient
+from .identities import component, eval_pdf, finite, weight_and_pdf
+from .reciprocity import reciprocity
+from .sampling import chi2
+from .topics import TOPICS
+
+
+def statistical_tests(bsdf, opts, topics) -> int:
+    """m: the number of statistical tests the run makes (χ² cells, energy cells with delta lobes)."""
+    m = 0
+    if "chi2" in topics and not lanes.delta_only(bsdf):
+        m += len(opts.cells(opts.chi2_cos, opts.chi2_phi))
+    if "energy" in topics and lanes.bsdf_has(bsdf, int(mi.BSDFFlags.Delta) |
+                                             int(mi.BSDFFlags.Delta1D)):
+        m += len(opts.energy_cos)
+    return max(m, 1)
+
+
+def runners(bsdf, opts, topics, m: int) -> dict:
+    """topic -> the function that makes its rows (``weight`` makes the ``pdf`` rows too when
+    both run: they share the samples)."""
+    return {
+        "finite": lambda: finite(bsdf, opts),
+        "eval_pdf": lambda: eval_pdf(bsdf, opts),
+        "weight": lambda: weight_and_pdf(bsdf, opts, {"weight", "pdf"} & set(topics)),
+        "pdf": lambda: [] if "weight" in topics else weight_and_pdf(bsdf, opts, {"pdf"}),
+        "chi2": lambda: chi2(bsdf, opts, m),
+        "energy": lambda: energy(bsdf, opts, m),
+        "reciprocity": lambda: reciprocity(bsdf, opts),
+        "component": lambda: component(bsdf, opts),
+        "gradient": lambda: gradient(bsdf, opts),
+        "cost": lambda: cost(bsdf, opts),
+    }
+
+
+#: The BSDF kind: what :mod:`phonglab.validate.core` runs.
+BSDF = core.Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
+                 topics=TOPICS, options=options, statistical_tests=statistical_tests,
+                 runners=runners)
+
+
+def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
+                  known=None, plugins=(), family=1, sizes=None) -> Report:
+    """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`.
+
+    ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
+    ``<bsdf>``, or a loaded ``mi.BSDF``; ``params`` are added to a name's or dict's parameters.
+    ``known``: topic -> documented cause (a failing row of that topic is KNOWN); ``plugins``:
+    Python files that call ``mi.register_bsdf``, run after the variant is set.  ``family``,
+    ``sizes``: see :func:`phonglab.validate.core.run`.  Bad input raises
+    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
+    """
+    return core.validate(BSDF, spec, variant=variant, params=params, topics=topics, seed=seed,
+                         quick=quick, known=known, plugins=plugins, family=family, sizes=sizes)

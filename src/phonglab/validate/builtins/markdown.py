@@ -1,0 +1,215 @@
+r"""docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``, and that
+JSON as committed (docs/conformance.json, :func:`without_plot_data`).
+
+:func:`render_markdown` turns the document of :func:`phonglab.validate.batch.run_all` (one
+report per case of :func:`phonglab.validate.builtins.cases`) into the conformance table, each
+case's rows that do not pass, the Mitsuba findings and the validator's own issues
+(:mod:`.findings`), and the plugins left out; the numbers in ``docs/conformance.md`` come from
+that JSON only.
+"""
+
+from __future__ import annotations
+
+from ..bsdf.topics import TOPICS
+from . import findings
+from .catalogue import LEFT_OUT
+from .findings import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL
+
+#: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
+PLOT_ONLY = ("lobes", "histogram", "pdf", "expected")
+
+
+def without_plot_data(data: dict) -> dict:
+    """A copy of a ``--all-builtins`` JSON document without :data:`PLOT_ONLY` arrays, and
+    without mi.chi2's log text of ACCEPTED cells (their p-value and sums stay).
+
+    docs/conformance.json keeps every number the table and the sections quote; the plot
+    arrays (megabytes) are what ``phonglab validate BSDF --report`` draws.
+    """
+    def drop(k, v, x) -> bool:
+        if k in PLOT_ONLY and isinstance(v, (list, dict)):
+            return True
+        return k == "messages" and x.get("status") == "pass" and "p_value" in x
+
+    def strip(x):
+        if isinstance(x, dict):
+            return {k: strip(v) for k, v in x.items() if not drop(k, v, x)}
+        if isinstance(x, list):
+            return [strip(v) for v in x]
+        return x
+    return strip(data)
+
+
+def cell_status(rows: list[dict]) -> str:
+    """One table cell for a topic's rows: fail > KNOWN > pass > skipped ('' when no row)."""
+    statuses = {r["status"] for r in rows}
+    for s in ("fail", "KNOWN", "pass", "skipped"):
+        if s in statuses:
+            return s
+    return ""
+
+
+def _num(x) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    return str(x)
+
+
+def _md(text) -> str:
+    """Text safe inside a markdown table cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _source_link(source: str) -> str:
+    path, _, line = source.partition(":")
+    return f"[`{source}`]({SOURCE_URL}{path}#L{line})"
+
+
+def _label(report: dict) -> str:
+    return report["meta"]["case"]
+
+
+def _table(data: dict) -> list[str]:
+    head = "| case | variant | " + " | ".join(TOPICS) + " |"
+    lines = [head, "|" + "---|" * (len(TOPICS) + 2)]
+    for report in data["reports"]:
+        by_topic = {t: [r for r in report["results"] if r["topic"] == t] for t in TOPICS}
+        cells = [cell_status(by_topic[t]) or " " for t in TOPICS]
+        cells = [f"**{c}**" if c == "fail" else c for c in cells]
+        variant = str(report["meta"].get("variant", "")).replace("llvm_ad_", "")
+        lines.append(f"| `{_label(report)}` | {variant} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _case_section(report: dict) -> list[str]:
+    """The fail and KNOWN rows of one case, with their documented causes."""
+    bad = [r for r in report["results"] if r["status"] in ("fail", "KNOWN")]
+    if not bad:
+        return []
+    label = _label(report)
+    out = [f"### `{label}`", ""]
+    spec = report["meta"].get("spec")
+    if spec:
+        out += [f"Spec: `{_md(spec)}`; {report['meta'].get('note', '')}.", ""]
+    out += ["| status | topic | check | measured | expected | tolerance | reason |",
+            "|---|---|---|---|---|---|---|"]
+    for r in bad:
+        out.append(f"| {r['status']} | {r['topic']} | {_md(r['name'])} | {_num(r['measured'])} "
+                   f"| {_num(r['expected'])} | {_num(r['tolerance'])} | {_md(r['reason'])} |")
+    causes = [f for f in findings.FINDINGS
+              if label in f.labels and any(r["topic"] == f.topic for r in bad)]
+    for f in causes:
+        out.append("")
+        out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
+                   f"`{f.reproducer}`")
+    issues = findings.validator_issues()
+    by_validator = {issues[(label, r["topic"])].key: issues[(label, r["topic"])]
+                    for r in bad if r["status"] == "fail" and (label, r["topic"]) in issues}
+    for v in by_validator.values():
+        out += ["", f"* {v.topic}: **validator**, [{v.key}](#{v.key}) -- not a Mitsuba finding"]
+    explained = {v.topic for v in by_validator.values()} | {f.topic for f in causes}
+    unexplained = sorted({r["topic"] for r in bad if r["status"] == "fail"} - explained)
+    if unexplained:
+        out += ["", f"* **Unexplained fail** ({', '.join(unexplained)}): no documented cause "
+                "in `phonglab.validate.builtins.FINDINGS` yet."]
+    return out + [""]
+
+
+def _findings_section(data: dict) -> list[str]:
+    seen = {_label(r) for r in data["reports"]}
+    out = ["## Findings", "",
+           "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
+           f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
+           "while the behaviour is present (`pytest -m slow tests/test_builtins_catalog.py` runs "
+           "them all).  Rows they cause are reported as KNOWN.  The *measured* lines are what "
+           "the reproducer (or the named mi.chi2 run) prints; the rows above are the JSON's.", ""]
+    for f in findings.FINDINGS:
+        labels = [label for label in f.labels if label in seen]
+        if not labels:
+            continue
+        kind = "bug" if f.bug else "by design"
+        out += [f"### {f.key}", "",
+                f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
+                f"* measured: {f.measured}", f"* expected: {f.expected}",
+                f"* reproducer: `{f.reproducer}`",
+                f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+    return out
+
+
+def _validator_section(data: dict) -> list[str]:
+    """Open validator issues whose rows show in this run, then every fixed one (history)."""
+    shown = {(_label(rep), r["topic"], r["status"]) for rep in data["reports"]
+             for r in rep["results"]}
+    issues = [(v, [label for label in v.labels
+                   if any((label, v.topic, st) in shown for st in v.statuses)])
+              for v in findings.VALIDATOR_ISSUES if not v.fixed]
+    issues = [(v, labels) for v, labels in issues if labels]
+    out = []
+    if issues:
+        out = ["## Rows that fail (or are skipped) because of the validator", "",
+               "These rows keep their status in the JSON (a tolerance is never widened to hide "
+               "them); the fix belongs in `phonglab.validate` / `phonglab.probe`.", ""]
+        for v, labels in issues:
+            out += [f"### {v.key}", "", f"*{v.topic}* -- {v.explanation}.", "",
+                    f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+    fixed = [v for v in findings.VALIDATOR_ISSUES if v.fixed]
+    if fixed:
+        out += ["## Validator mistakes found and fixed", "",
+                "Rows of earlier conformance runs that failed (or were skipped) because of the "
+                "validator, not Mitsuba, and what fixed the validator.  A fixed entry explains "
+                "nothing: a row of its cases that fails again is reported as an unexplained "
+                "fail above.  *Rows now* are this run's statuses of the entry's rows.", ""]
+        for v in fixed:
+            now = {}
+            for rep in data["reports"]:
+                if _label(rep) in v.labels:
+                    for r in rep["results"]:
+                        if r["topic"] == v.topic:
+                            now[r["status"]] = now.get(r["status"], 0) + 1
+            rows_now = ", ".join(f"{n} {s}" for s, n in sorted(now.items())) or "not in this run"
+            out += [f"### {v.key} (fixed)", "", f"*{v.topic}* -- {v.explanation}.", "",
+                    f"* fixed by: {v.fixed_by}",
+                    f"* cases: {', '.join(f'`{x}`' for x in v.labels)}",
+                    f"* rows now: {rows_now}"
+                    + (" -- **still failing**" if now.get("fail") else ""), ""]
+    return out
+
+
+def render_markdown(data: dict) -> str:
+    """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
+    (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``)."""
+    meta = data.get("meta", {})
+    options = meta.get("options") or {}
+    counts: dict[str, int] = {}
+    for report in data["reports"]:
+        for r in report["results"]:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+    if "seconds" in meta:
+        took = f"{_num(float(meta['seconds']))} s wall time"
+    else:
+        took = (f"{_num(float(sum(r['meta'].get('wall_seconds', 0) for r in data['reports'])))}"
+                " s (sum of the cases' wall times)")
+    mode = "--quick" if options.get("quick") else "default settings"
+    lines = [
+        f"# Conformance of Mitsuba {MITSUBA_VERSION}'s built-in BSDFs", "",
+        "Generated by `make conformance` (`scripts/conformance.py`) from `docs/conformance.json`;"
+        " do not edit by hand.  Each case is one BSDF at one parameter setting "
+        "(`phonglab.validate.builtins.cases()`), validated by `phonglab.validate.validate_bsdf` "
+        f"with {mode}, seed {options.get('seed', 0)}: {len(data['reports'])} cases, "
+        + ", ".join(f"{counts.get(s, 0)} {s}" for s in ("pass", "fail", "KNOWN", "skipped"))
+        + f" rows, {took}.", "",
+        "A cell is the worst status of the topic's rows (fail > KNOWN > pass > skipped; empty: no "
+        "row).  KNOWN means the row fails for a documented cause in Mitsuba (see Findings); "
+        "it is still reported, never hidden by a wider tolerance.", "",
+    ]
+    lines += _table(data) + ["", "## Rows that do not pass", ""]
+    for report in data["reports"]:
+        lines += _case_section(report)
+    lines += _findings_section(data)
+    lines += _validator_section(data)
+    lines += ["## Plugins left out", ""]
+    for name, why in LEFT_OUT.items():
+        lines.append(f"* `{name}`: {why}")
+    return "\n".join(lines) + "\n"
