@@ -29,7 +29,7 @@ test-all: setup
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 3 --out docs/bench/planner.json
-	$(BIN)/python -m phonglab.fit.timing --repeats 5 --out docs/bench/fit.json
+	$(BIN)/python -m phonglab.bench.fit_timing --repeats 5 --out docs/bench/fit.json
 	$(BIN)/python scripts/validate_timing.py --repeats 3 --json docs/bench/validate.json
 	$(BIN)/phonglab bench --fresh --out docs/bench --markdown BENCHMARKS.md --quick-run out/bench-quick/run.json
 

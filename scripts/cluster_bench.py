@@ -39,11 +39,11 @@ import json
 import os
 import re
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+from phonglab.bench.timing import ChildFailed, run_child, spread
 from phonglab.parallel import Job, Runner
 
 #: Machines the expected time is computed for.
@@ -64,13 +64,6 @@ def batch_ms(runner: Runner, jobs: int) -> float:
     t0 = time.perf_counter()
     runner.run([Job(time.sleep, (0,), key=k) for k in range(jobs)])
     return (time.perf_counter() - t0) / jobs * 1e3
-
-
-def spread(values: list[float], digits: int = 3) -> dict:
-    """Median, [min, max] and the values themselves."""
-    return {"median": round(statistics.median(values), digits),
-            "spread": [round(min(values), digits), round(max(values), digits)],
-            "values": [round(v, digits) for v in values]}
 
 
 def overhead(workers: int, jobs: int, repeats: int) -> dict:
@@ -104,13 +97,10 @@ def without_timings(x):
 def timed(cmd: list[str], log: Path) -> float:
     """Wall seconds of ``cmd`` as a fresh process (output to ``log``); exit 0 or 1 accepted
     (validate exits 1 when a row fails: a result, not a fault)."""
-    t0 = time.perf_counter()
-    with open(log, "w") as fh:
-        rc = subprocess.run(cmd, stdout=fh, stderr=subprocess.STDOUT, cwd=ROOT).returncode
-    seconds = time.perf_counter() - t0
-    if rc not in (0, 1):
-        raise SystemExit(f"{' '.join(cmd)} exited {rc}; see {log}")
-    return seconds
+    try:
+        return run_child(cmd, log=log, cwd=ROOT, accept=(0, 1)).seconds
+    except ChildFailed as exc:
+        raise SystemExit(str(exc)) from None
 
 
 def commands(work: Path, workers: int) -> dict:

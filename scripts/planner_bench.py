@@ -36,7 +36,6 @@ import argparse
 import json
 import math
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -45,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from phonglab import exr, metrics, planner, references, render, runtime, scenes
+from phonglab.bench import timing
 from phonglab.planner import benchmark
 
 #: The default configuration: ``phonglab render``'s default variant, path at max_depth 8.
@@ -78,12 +78,7 @@ def command(kind: str, scene: str, params: dict, value, seed: int, out: Path) ->
 def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) -> tuple[float, dict]:
     """Wall time of one fresh ``phonglab render`` process, and what its EXR header records
     (for a planned one: the plan and the samples the render took)."""
-    cmd = command(kind, scene, params, value, seed, out)
-    t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    seconds = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stderr[-3000:]}")
+    seconds = timing.run_child(command(kind, scene, params, value, seed, out), capture=True).seconds
     meta = exr.read(out)[1]
     if kind == "default":
         return seconds, {"spp": meta["spp"]}

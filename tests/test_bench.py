@@ -14,6 +14,7 @@ from phonglab.cli import main
 from phonglab.errors import PhonglabError
 from phonglab.metrics import errors
 from phonglab.physics.estimators import METHODS
+from phonglab.physics.roughness import beckmann_alpha
 
 
 def test_pareto_front_keeps_only_undominated_points():
@@ -64,8 +65,44 @@ def test_cornell_variants_load_and_bad_box_is_a_clear_error(variant_llvm_rgb):
 
 def test_beckmann_alpha_matches_lobe_width():
     """α_b = √(2/(4p+2)): the half-vector width of cos^p α (α ≈ 2θ_h) equals Beckmann's."""
-    assert bench.beckmann_alpha(30.0) == pytest.approx(math.sqrt(2 / 122))
-    assert bench.beckmann_alpha(1e4) == pytest.approx(1 / math.sqrt(2e4), rel=1e-4)
+    assert beckmann_alpha(30.0) == pytest.approx(math.sqrt(2 / 122))
+    assert beckmann_alpha(1e4) == pytest.approx(1 / math.sqrt(2e4), rel=1e-4)
+
+
+def test_timing_driver_times_a_fresh_process(tmp_path):
+    """bench.timing on a tiny child: wall and CPU seconds, the three output modes, exit codes."""
+    import sys
+
+    from phonglab.bench import timing
+    busy = ("import sys; s = sum(i * i for i in range(300000)); print('out'); "
+            "print('err', file=sys.stderr)")
+    run = timing.run_child([sys.executable, "-c", busy], capture=True)
+    assert run.returncode == 0 and run.stdout == "out\n" and run.stderr == "err\n"
+    assert run.seconds > 0 and 0 <= run.cpu_seconds <= run.seconds + 0.05
+    log = tmp_path / "child.log"
+    timing.run_child([sys.executable, "-c", busy], log=log)
+    assert sorted(log.read_text().split()) == ["err", "out"]
+    assert timing.run_child([sys.executable, "-c", "pass"], quiet=True).stdout is None
+    fail = [sys.executable, "-c", "import sys; print('boom', file=sys.stderr); sys.exit(1)"]
+    assert timing.run_child(fail, quiet=True, accept=(0, 1)).returncode == 1
+    assert timing.run_child(fail, quiet=True, accept=None).returncode == 1
+    with pytest.raises(timing.ChildFailed, match="exited 1:\nboom"):
+        timing.run_child(fail, capture=True)
+    with pytest.raises(timing.ChildFailed, match=f"exited 1; see {log}"):
+        timing.run_child(fail, log=log)
+    count = tmp_path / "count"
+    tick = [sys.executable, "-c", f"open({str(count)!r}, 'a').write('.')"]
+    runs = timing.run_repeated(tick, 3, warmup=2)
+    assert len(runs) == 3 and count.read_text() == "....."
+
+
+def test_timing_spread_median_range_values():
+    from phonglab.bench.timing import spread
+    assert spread([3.0, 1.0, 2.0, 10.0]) == {"median": 2.5, "spread": [1.0, 10.0],
+                                            "values": [3.0, 1.0, 2.0, 10.0]}
+    assert spread([0.12345, 0.5], 2) == {"median": 0.31, "spread": [0.12, 0.5],
+                                         "values": [0.12, 0.5]}
+    assert spread([1 / 3], None)["median"] == 1 / 3
 
 
 def test_image_errors_remove_reference_noise():

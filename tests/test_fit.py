@@ -22,6 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from phonglab.cli import main
+from phonglab.physics import roughness
 from phonglab.physics.quadrature import lobe_width
 
 EPS32 = 2.0 ** -24
@@ -54,12 +55,19 @@ def _hessian(obj, x, idx, h=1e-4):
     return 0.5 * (H + H.T)
 
 
-def test_folk_rules_invert_the_bench_rule(fitlib):
-    _, optimize = fitlib
-    from phonglab.bench.cornell import beckmann_alpha
+def test_folk_rules_invert_the_bench_rule():
     for p in (1.0, 10.0, 30.0, 1000.0):
-        assert optimize.phong_exponent(beckmann_alpha(p)) == pytest.approx(p, rel=1e-12)
-        assert optimize.blinn_phong_exponent(beckmann_alpha(p)) == pytest.approx(4 * p, rel=1e-12)
+        assert roughness.phong_exponent(roughness.beckmann_alpha(p)) == pytest.approx(p, rel=1e-12)
+        assert roughness.blinn_phong_exponent(roughness.beckmann_alpha(p)) == pytest.approx(
+            4 * p, rel=1e-12)
+
+
+@given(alpha=st.floats(1e-3, 1.0))
+def test_folk_rules_round_trip(alpha):
+    """α → p → α and α → p_h = 4p: each rule inverts the other (float64 round-off only)."""
+    p = roughness.phong_exponent(alpha)
+    assert roughness.beckmann_alpha(p) == pytest.approx(alpha, rel=1e-12)
+    assert roughness.blinn_phong_exponent(alpha) == pytest.approx(4 * p, rel=1e-12, abs=1e-12)
 
 
 @pytest.mark.parametrize("truth,start", [((0.3, 0.4, 30.0), (0.6, 0.1, 8.0)),
@@ -126,7 +134,7 @@ def test_fit_stays_energy_conserving_and_finite(variant_llvm_rgb, target, alpha,
     from phonglab.fit import objective, optimize
     params = {"roughconductor": {"alpha": alpha}, "roughplastic": {"alpha": alpha},
               "principled": {"roughness": math.sqrt(alpha)},
-              "phong": {"exponent": optimize.phong_exponent(alpha)}, "diffuse": {}}[target]
+              "phong": {"exponent": roughness.phong_exponent(alpha)}, "diffuse": {}}[target]
     start = objective.PHONG.physical((t, s, q))
     r = optimize.fit(target, params, start=start, maxiter=25)
     kd, ks, p = r.fitted
@@ -175,6 +183,7 @@ def test_cli_fit_set_grammar(tmp_path, capsys, variant_llvm_rgb):
     (["fit", "roughconductor", "--set", "alpha"], "--set expects NAME=VALUE"),
     (["fit", "roughconductor", "--set", "foo=1"], "unreferenced property"),
     (["fit", "roughconductor", "--set", "alpha=-0.5"], "outside (0, 1]"),
+    (["fit", "roughconductor", "--set", "alpha=0"], "outside (0, 1]"),   # ZeroDivisionError
     (["fit", "roughconductor", "--set", "alpha=1,2"], "give one number or three"),
     (["fit", "conductor"], "reflects nothing that eval can see"),
     (["fit", "roughconductor", "--variant", "scalar_rgb"], "*_ad_rgb"),
@@ -219,8 +228,8 @@ def test_timing_record_and_bench_section(tmp_path):
     from types import SimpleNamespace
 
     from phonglab.bench.report import fitting_section
-    from phonglab.fit import timing
-    assert timing.main(["--repeats", "1", "--out", str(tmp_path / "fit.json")]) == 0
+    from phonglab.bench import fit_timing
+    assert fit_timing.main(["--repeats", "1", "--out", str(tmp_path / "fit.json")]) == 0
     record = json.loads((tmp_path / "fit.json").read_text())
     assert record["repeats"] == 1 and record["wall_min_s"] == record["wall_median_s"] > 0
     assert record["met"] == (record["wall_median_s"] < 60)

@@ -381,3 +381,30 @@ def test_ctrl_c_at_any_point_of_a_render_is_one_line(tmp_path, delay):
         return
     assert proc.returncode == 130 and lines == [INTERRUPT_MESSAGE], (proc.returncode, err[-2000:])
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+# --- seeds: Mitsuba's 32-bit range, refused outside it before any work -------------------------
+
+@pytest.mark.parametrize("command", [["render", "gray_direct"], ["check", "--only", "snell"],
+                                     ["validate", "diffuse", "--quick"],
+                                     ["compare-models", "gray_direct"]])
+@pytest.mark.parametrize("bad", ["-1", str(1 << 32), "1e3"])
+def test_a_seed_outside_32_bits_is_refused_before_any_work(command, bad, capsys):
+    """-1 and 2³² − 1 used to render the same image (pass seeds are taken mod 2³²) while the
+    headers recorded different seeds; `validate --seed -1` reported seven failing topics."""
+    with pytest.raises(SystemExit) as info:
+        cli.main([*command, "--seed", bad])
+    assert info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "argument --seed: the seed must" in err and "Traceback" not in err, err
+
+
+def test_distinct_seeds_give_distinct_first_pass_seeds():
+    """pass_seed(s, 0) = s·1_000_003 mod 2³² is a bijection of 0..2³² − 1 (the factor is odd):
+    no two accepted seeds share their first pass."""
+    from phonglab.render import pass_seed
+
+    seeds = np.random.default_rng(5).integers(0, 1 << 32, 200_000, dtype=np.uint64)
+    seeds = np.unique(np.concatenate([seeds, [0, 1, (1 << 32) - 1]]))
+    mapped = {pass_seed(int(s), 0) for s in seeds}
+    assert len(mapped) == len(seeds) and all(0 <= m < 1 << 32 for m in mapped)

@@ -39,7 +39,7 @@ from phonglab.parallel import Job, Runner, check_address
 TIMING = {"wall_time_s", "first_call_s", "seconds", "t_a", "t_b", "ratio", "steady_s",
           "compile_ms", "kernels", "cache_hits", "cold_compile_ms", "t_graphics", "t_radiance"}
 #: Methods whose sums Dr.Jit reduces with concurrent float64 atomic adds, so that their last
-#: bits vary from run to run even serially: ``mis_optimal`` (physics.estimators._row_sums,
+#: bits vary from run to run even serially: ``mis_optimal`` (physics.estimators.kernel.row_sums,
 #: dr.scatter_reduce(Add, mode=ReduceMode.Local); measured: var_n differed in the last hex
 #: digit between serial runs with 2 Dr.Jit threads, not with 1).
 ATOMIC_SUMS = {"mis_optimal"}

@@ -208,6 +208,57 @@ def test_plan_json_has_the_documented_fields(plans):
     assert d["variant"] == plans["cornell_phong"].variant and isinstance(d["reasons"], list)
 
 
+def test_plan_holds_its_pilot_scene_outside_its_json(plans):
+    p = plans["cornell_phong"]
+    assert p.loaded is not None and p.info is not None and p.info.path.name == "cornell_phong.xml"
+    d = p.to_dict()
+    assert "loaded" not in d and "info" not in d
+    assert json.loads(p.to_json()) == json.loads(json.dumps(d))
+
+
+def test_noise_target_is_what_the_total_error_leaves_to_noise():
+    """metrics.noise_target: E² = b² + n², so n = √(E² − b²); b = 0 gives E; floored at E/100."""
+    assert metrics.noise_target(0.05, 0.03) == pytest.approx(0.04)
+    assert metrics.noise_target(0.05) == 0.05
+    assert metrics.noise_target(0.05, 0.06) == pytest.approx(0.0005)
+    p = planner.Plan(**{**_PLAN_FIELDS, "target_error": 0.05, "predicted_bias": 0.03})
+    assert p.noise_target == pytest.approx(0.04)
+
+
+_PLAN_FIELDS = dict(scene="s.xml", target_error=0.05, variant="llvm_ad_rgb", backend="llvm",
+                    color="rgb", max_depth=8, spp=16, passes=8, predicted_error=0.05,
+                    predicted_bias=0.0, predicted_noise=0.05, predicted_seconds=1.0,
+                    seconds_per_sample=1e-9, seconds_per_pass=1e-3, resolution=(8, 8),
+                    params={}, pilot_spp=64, pilot_seconds=1.0)
+
+
+def test_render_plan_reuses_the_pilot_scene_and_reports_its_error(plans, tmp_path, monkeypatch):
+    """planner.render_plan renders with the scene the pilot loaded (no second load), without
+    files or into the CLI's file set, and reports achieved (given a reference) and estimated
+    error; the same seed gives the same image on both routes."""
+    p = plans["gray_direct"]
+    ref = references.reference("gray_direct", 1024, params=RES)
+
+    def no_load(*args, **kwargs):
+        raise AssertionError("the planned render loaded the scene again")
+
+    monkeypatch.setattr(render, "load_scene", no_load)
+    done = planner.render_plan(p, seed=4, reference=ref)
+    w, h = p.resolution
+    assert done.image.shape[:2] == (h, w)
+    err = done.error
+    assert err.achieved == metrics.relative_rmse(done.image, ref.image, ref_stderr=ref.stderr)
+    assert err.reference_spp == ref.spp and err.target == TARGET and err.bias == p.predicted_bias
+    assert err.estimated == pytest.approx(math.hypot(err.noise, p.predicted_bias))
+    out = tmp_path / "gd.exr"
+    filed = planner.render_plan(p, seed=4, out=out, reference=ref)
+    image, meta = exr.read(out)
+    assert meta["target_error"] == TARGET and meta["planned"]["model"] == p.model
+    np.testing.assert_allclose(image.reshape(done.image.shape), done.image, rtol=1e-5,
+                               atol=1e-6)
+    assert filed.error.achieved == pytest.approx(err.achieved, rel=1e-4)
+
+
 def test_explicit_settings_override_the_plan():
     p = planner.plan("gray_direct", TARGET, variant="llvm_ad_rgb", max_depth=1, spp=4,
                      params=RES)

@@ -39,9 +39,11 @@ of freedom instead of passes − 1.  The relative error of pixel p is
 relative MSE).
 
 **Target and allocation.**  The target E is the image's relative RMSE against a converged
-reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.metrics.relative_rmse`); its square
-is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative variance of one sample),
-minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
+reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.metrics.relative_rmse`), as far as
+noise makes it: the renderer has no depth-bias estimate, so E is the total error only for an
+unbiased render (:mod:`phonglab.metrics`, the one definition of E; the planner passes
+√(E² − b²)).  Its square is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative
+variance of one sample), minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
 ``N_p* = √v_p · mean_q √v_q / E²`` — each pixel's budget is ``e_p*² = v_p/N_p* =
 E² √v_p / mean √v``: noisy pixels are allowed more error, quiet ones less, and the mean meets
 E².  A pass adds ``min(N_p* − N_p, (GROWTH − 1)·N_p)`` samples to each pixel below N_p*
@@ -76,14 +78,11 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import __version__, exr
+from . import exr
 from .errors import PhonglabError
 from .metrics import REL_EPS
-from .outputs import RenderOutputs, check_file
-from .render import MAX_SPP, available_memory, pass_seed, preflight
-from .runtime import default_variant, quiet_mitsuba
-from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
-                     scene_path)
+from .render import MAX_SPP, available_memory, pass_seed, preflight, render_scene_file
+from .runtime import default_variant
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
 #: Samples every pixel gets in the pilot pass (the first guard).
@@ -488,6 +487,59 @@ def spp_paths(out: str | Path) -> tuple[Path, Path]:
     return out.with_name(out.stem + ".spp.exr"), out.with_name(out.stem + ".spp.png")
 
 
+@dataclass
+class AdaptiveSampling:
+    """Adaptive sampling for :func:`phonglab.render.render_scene_file`: :func:`render_adaptive`
+    to ``target_error`` (its arguments), the spp map written beside the image set
+    (:func:`spp_paths`)."""
+
+    target_error: float
+    max_seconds: float | None = None
+    max_spp: int | None = None
+    min_spp: int = MIN_SPP
+    #: Mitsuba's warnings are silenced while the scene loads
+    quiet_load = True
+
+    def variant(self, variant: str | None) -> str:
+        """The variant to load in: the one given, else the default JIT one (the active variant
+        may be a scalar one, which this renderer refuses: choose, as a render does)."""
+        return variant or default_variant()
+
+    def settings(self) -> dict[str, Any]:
+        """The ``<default>`` entries this sampling sets (none: it chooses the spp itself)."""
+        return {}
+
+    def check(self) -> None:
+        _check(self.target_error, self.max_seconds, self.max_spp, self.min_spp)
+
+    def extra_outputs(self, out: Path) -> list[tuple[Path, str]]:
+        spp_exr, spp_img = spp_paths(out)
+        return [(spp_exr, "spp map"), (spp_img, "spp map preview")]
+
+    def render(self, sf, seed: int) -> tuple[AdaptiveResult, dict[str, Any]]:
+        """The render and its header fields (target, estimate, stop, spp, passes, seed,
+        integrator, depth, filter)."""
+        result = render_adaptive(sf.scene, self.target_error, seed=seed,
+                                 max_seconds=self.max_seconds, max_spp=self.max_spp,
+                                 min_spp=self.min_spp, integrator=sf.integrator, path=sf.path)
+        integ = sf.integrator or sf.scene.integrator()
+        return result, {
+            "adaptive": True, "target_error": self.target_error,
+            "estimated_error": round(result.estimated_error, 6), "stopped": result.stopped,
+            "spp_mean": round(result.total_spp, 3), "spp_min": int(result.spp.min()),
+            "spp_max": int(result.spp.max()), "min_spp": self.min_spp,
+            "passes": len(result.passes), "seed": seed, "integrator": integ.class_name(),
+            "max_depth": sf.max_depth if sf.max_depth is not None
+            else sf.declared.get("max_depth"),
+            "filter": "the film's, density-normalised (phonglab.adaptive)"}
+
+    def write_extra(self, out: Path, result: AdaptiveResult) -> None:
+        """The spp map: ``x.spp.exr`` (channel Y, the image's header) and ``x.spp.png``."""
+        spp_exr, spp_img = spp_paths(out)
+        exr.write(spp_exr, result.spp.astype(np.float32), result.metadata)
+        write_spp_map_png(spp_img, result.spp)
+
+
 def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float, *,
                          variant: str | None = None, seed: int = 0,
                          max_seconds: float | None = None, max_spp: int | None = None,
@@ -496,49 +548,16 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
                          extra_metadata: dict[str, Any] | None = None) -> AdaptiveResult:
     """Load ``scene``, render it adaptively and write ``out`` (+ .stderr.exr, .png, .spp.exr, .spp.png).
 
-    Everything is checked before the render: the arguments (one sentence each), the five
-    output files, the scene.  ``max_depth`` applies as in :func:`phonglab.render.render_file`
-    (the scene's ``$max_depth`` default, else its integrator rebuilt with it);
-    ``integrator`` (a ``mi.load_dict`` dictionary) replaces the scene's (the planner's models).
+    :class:`AdaptiveSampling` through :func:`phonglab.render.render_scene_file`, the one
+    render of a scene file.  Everything is checked before the render: the arguments (one
+    sentence each, first), the five output files, the scene.  ``max_depth`` applies as in
+    :func:`phonglab.render.render_file` (the scene's ``$max_depth`` default, else its
+    integrator rebuilt with it); ``integrator`` (a ``mi.load_dict`` dictionary) replaces the
+    scene's (the planner's models).  ``target_error`` is a noise target: see
+    :mod:`phonglab.metrics` for what it means against a converged reference.
     """
-    _check(target_error, max_seconds, max_spp, min_spp)
-    path = scene_path(scene)
-    outputs = RenderOutputs.beside(out)
-    outputs.check()
-    spp_exr, spp_img = spp_paths(out)
-    check_file(spp_exr, "spp map")
-    check_file(spp_img, "spp map preview")
-    declared = scene_defaults(path)
-    params = {k: v for k, v in (params or {}).items() if v is not None}
-    if max_depth is not None and "max_depth" in declared:
-        params["max_depth"] = max_depth
-    with quiet_mitsuba():   # the active variant may be a scalar one: choose, as a render does
-        loaded = load_scene(path, variant or default_variant(), **params)
-    if integrator is not None:
-        integrator = mi.load_dict(integrator)
-    elif max_depth is not None and "max_depth" not in declared:
-        integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
-    result = render_adaptive(loaded, target_error, seed=seed, max_seconds=max_seconds,
-                             max_spp=max_spp, min_spp=min_spp, integrator=integrator,
-                             path=path)
-    integ = integrator or loaded.integrator()
-    result.metadata = {
-        "scene": str(path), "scene_sha256": file_hash(path), "variant": mi.variant(),
-        "adaptive": True, "target_error": target_error,
-        "estimated_error": round(result.estimated_error, 6), "stopped": result.stopped,
-        "spp_mean": round(result.total_spp, 3), "spp_min": int(result.spp.min()),
-        "spp_max": int(result.spp.max()), "min_spp": min_spp, "passes": len(result.passes),
-        "seed": seed, "integrator": integ.class_name(), "max_depth": max_depth if max_depth is not None
-        else declared.get("max_depth"), "filter": "the film's, density-"
-        "normalised (phonglab.adaptive)", "render_seconds": round(result.seconds, 4),
-        "params": {k: str(v) for k, v in params.items()},
-        "phonglab_version": __version__, "mitsuba_version": mi.__version__,
-    }
-    result.metadata.update(extra_metadata or {})
-    ev = auto_exposure(result.image, darken_only=True)
-    result.metadata["preview_exposure_ev"] = round(ev, 2)
-    result.metadata["render_id"] = outputs.write(result.image, result.stderr, result.metadata,
-                                                 exposure=ev)
-    exr.write(spp_exr, result.spp.astype(np.float32), result.metadata)
-    write_spp_map_png(spp_img, result.spp)
-    return result
+    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp)
+    sampling.check()
+    return render_scene_file(scene, out, sampling, variant=variant, seed=seed,
+                             max_depth=max_depth, params=params, integrator=integrator,
+                             extra_metadata=extra_metadata)

@@ -18,6 +18,27 @@ A reference rendered by Monte Carlo carries its own noise, standard error s_r pe
 E[d²] = MSE_true + s_r², so passing ``ref_stderr`` subtracts mean(s_r² / (r² + ε)) (and
 mean(s_r²) from the MSE), clamped at 0 (:func:`errors`).
 
+**The error target E** (``--target-error E`` on every route of ``phonglab render`` and
+``phonglab plan``, :func:`phonglab.planner.plan`, :func:`phonglab.adaptive.render_adaptive`;
+the one definition, which the others refer to) is the *total* relative RMSE of the image
+against a converged reference r: the image at unbounded depth (``max_depth = -1``, paths ended
+by Russian roulette, no depth bias; :func:`phonglab.references.reference`), its own noise
+subtracted as above.  Its square splits into bias and noise, E² = b² + n² (MSE = bias² +
+variance: Veach, PhD thesis, Stanford 1997, §2.4.3), with b the relative RMS of what the
+render leaves out systematically (the energy of the bounces past a finite max_depth: the
+planner's depth bias b(d), :mod:`phonglab.planner`) and n its relative noise
+(:func:`relative_noise`).  A render that stops on its own noise estimate therefore aims its
+noise at :func:`noise_target` (E, b) = √(E² − b²):
+
+* ``render --target-error E`` (planned) has b from the pilot: a uniform render takes the spp
+  with b² + n² <= E², a wavefront one (another model, adaptive sampling) aims at √(E² − b²);
+* ``render --adaptive --target-error E`` has no bias estimate and takes b = 0: its noise target
+  is E itself.  E is then its total error only when the render is unbiased against the
+  reference (the scene's integrator at ``max_depth = -1``, or at a depth past which the scene
+  carries no energy); at a finite depth that omits energy the total error is about √(E² + b²),
+  b the depth bias of that max_depth (``phonglab plan SCENE --max-depth D`` gives b(D) in
+  its reasons).
+
 **Luminance** is Rec. 709 / sRGB, with the coefficients Mitsuba's ``mi.luminance`` and its
 mono variants use: Y = 0.212671 R + 0.715160 G + 0.072169 B.
 """
@@ -87,6 +108,13 @@ def relative_noise(image, stderr, eps: float = REL_EPS) -> float:
     """√mean(s² / (x² + ε)): the relative error that a per-pixel standard error s amounts to."""
     x, s = match_channels(image, stderr)
     return math.sqrt(float(np.mean(s * s / (x * x + eps))))
+
+
+def noise_target(total_error: float, bias: float = 0.0) -> float:
+    """√(E² − b²): the relative noise a render may leave to reach the total relative error E
+    with a relative bias b (module docstring), at least E/100 (where b alone reaches E the
+    render cannot meet E, and a smaller noise target would only cost samples)."""
+    return math.sqrt(max(total_error ** 2 - bias ** 2, (0.01 * total_error) ** 2))
 
 
 def errors(image, reference, ref_stderr=None, eps: float = REL_EPS) -> dict[str, float]:

@@ -1,5 +1,10 @@
 """Rendering in passes: the one loop around ``mi.render``, and a scene file to EXR + PNG.
 
+:func:`render_scene_file` is the one render of a scene file, uniform (:class:`UniformPasses`,
+:func:`render_file`) or adaptive (:class:`phonglab.adaptive.AdaptiveSampling`,
+:func:`phonglab.adaptive.render_file_adaptive`): path resolution, output checks, the
+``<default>`` merge, loading (:func:`open_scene_file`), provenance, exposure and writing.
+
 Rendering in passes (independent seeds, equal sample counts) gives both the image and a
 per-pixel standard error of its mean, which the statistical checks, the convergence charts,
 the bench and the planner all use.  Pass k of a render with seed s uses Mitsuba's seed
@@ -14,6 +19,7 @@ means, is s = √( Σ spp_k (x_k − x̄)² / (N − N/P) / P ) (:func:`render_s
 
 from __future__ import annotations
 
+import contextlib
 import re
 import resource
 import time
@@ -28,10 +34,10 @@ from tqdm import tqdm
 
 from . import __version__
 from .errors import PhonglabError, SceneError, user_errors
-from .outputs import RenderOutputs
+from .outputs import RenderOutputs, check_file
 from .runtime import quiet_mitsuba
-from .scenes import (file_hash, inspect_scene, integrator_with_depth, load_scene, scene_defaults,
-                     scene_path, sensor_with_sampler)
+from .scenes import (SceneInfo, file_hash, inspect_scene, integrator_with_depth, load_scene,
+                     scene_defaults, scene_path, sensor_with_sampler)
 from .tonemap import auto_exposure
 
 
@@ -213,6 +219,170 @@ def _render_call(scene, **kwargs):
         raise
 
 
+@dataclass
+class SceneFile:
+    """A scene file opened for a render (:func:`open_scene_file`): the loaded scene, the
+    ``<default>`` values it is rendered with and the integrator that applies ``max_depth``."""
+
+    path: Path
+    scene: Any                        #: the loaded ``mi.Scene``
+    params: dict[str, Any]            #: ``<default>`` values of the render (its provenance)
+    declared: dict[str, str]          #: the scene's own ``<default>`` entries
+    integrator: Any = None            #: replaces the scene's own (None: the scene's)
+    max_depth: int | None = None      #: the max_depth asked for (None: the scene's)
+    info: SceneInfo | None = None     #: the inspected file, when already at hand
+    sensors: dict[str | None, Any] = field(default_factory=dict, repr=False)
+
+    def sensor(self, sampler: str | None = None):
+        """The render's sensor, checked by :func:`preflight`: the scene's first, or that
+        sensor rebuilt with ``sampler`` when it names another sampler than the scene's
+        (:func:`phonglab.scenes.sensor_with_sampler`); built once per sampler."""
+        key = None if sampler is None or sampler == self.inspect().sampler else sampler
+        if key not in self.sensors:
+            self.sensors[key] = preflight(self.scene, self.path, 0 if key is None
+                                          else sensor_with_sampler(self.inspect(), key))
+        return self.sensors[key]
+
+    def inspect(self) -> SceneInfo:
+        """The scene file read by :func:`phonglab.scenes.inspect_scene` with :attr:`params`
+        (once)."""
+        if self.info is None:
+            self.info = inspect_scene(self.path, **self.params)
+        return self.info
+
+    def provenance(self, fields: dict[str, Any], seconds: float) -> dict[str, Any]:
+        """The EXR header of a render of this file: scene, hash and variant, the sampling's
+        own ``fields``, render time, parameters and versions."""
+        return {"scene": str(self.path), "scene_sha256": file_hash(self.path),
+                "variant": mi.variant(), **fields, "render_seconds": round(seconds, 4),
+                "params": {k: str(v) for k, v in self.params.items()},
+                "phonglab_version": __version__, "mitsuba_version": mi.__version__}
+
+
+def open_scene_file(scene: str | Path, *, variant: str | None = None,
+                    max_depth: int | None = None, params: dict[str, Any] | None = None,
+                    settings: dict[str, Any] | None = None, integrator: dict | None = None,
+                    loaded=None, info: SceneInfo | None = None,
+                    quiet: bool = False) -> SceneFile:
+    """Load ``scene`` for a render with ``params`` for its ``<default>`` entries.
+
+    ``max_depth`` and ``settings`` (``{"spp": 64}``) override the scene's ``<default>`` of that
+    name when it declares one (they win over ``params``).  ``max_depth`` applies to the scene's
+    own integrator: through its ``$max_depth`` default when it has one, else by rebuilding the
+    integrator with ``max_depth`` set (refused, with the reason, when that integrator takes no
+    depth).  ``integrator`` (a ``mi.load_dict`` dictionary: the planner's models) replaces the
+    scene's.  ``loaded`` is the scene already loaded from this file with ``params`` in the
+    active variant (the planner's pilot scene, with its ``info``): it is used as it is, and a
+    declared ``max_depth`` is applied by rebuilding the integrator instead of by reloading
+    (the same integrator); ``quiet`` silences Mitsuba's warnings while loading.
+    """
+    path = scene_path(scene)
+    declared = scene_defaults(path)
+    given = {k: v for k, v in (params or {}).items() if v is not None}
+    merged = dict(given, **{k: v for k, v in dict(settings or {}, max_depth=max_depth).items()
+                            if v is not None and k in declared})
+    reuse = loaded is not None
+    if reuse and max_depth is not None and "max_depth" in declared:
+        info = info or inspect_scene(path, **given)
+        reuse = info.integrator_dict is not None   # else reload with $max_depth
+    if not reuse:
+        with quiet_mitsuba() if quiet else contextlib.nullcontext():
+            loaded = load_scene(path, variant, **merged)
+        info = None
+    sf = SceneFile(path, loaded, merged, declared, max_depth=max_depth, info=info)
+    if integrator is not None:
+        sf.integrator = mi.load_dict(integrator)
+    elif max_depth is not None and ("max_depth" not in declared or reuse):
+        sf.integrator = integrator_with_depth(sf.inspect(), max_depth)
+    return sf
+
+
+@dataclass
+class UniformPasses:
+    """Uniform sampling for :func:`render_scene_file`: ``spp`` samples per pixel (the scene's
+    when None) in ``passes`` passes (8 from 16 spp on, else 1) through :func:`render_scene`,
+    with the scene's sampler or ``sampler`` (a Mitsuba sampler name)."""
+
+    spp: int | None = None
+    passes: int | None = None
+    sampler: str | None = None
+    progress: bool = True
+    #: Mitsuba's warnings are left on while the scene loads
+    quiet_load = False
+
+    def variant(self, variant: str | None) -> str | None:
+        """The variant to load in: the one given, else the active one (:func:`load_scene`)."""
+        return variant
+
+    def settings(self) -> dict[str, Any]:
+        """The ``<default>`` entries this sampling sets when the scene declares them."""
+        return {"spp": self.spp}
+
+    def check(self) -> None:
+        if self.spp is not None:
+            check_spp(self.spp)
+
+    def extra_outputs(self, out: Path) -> list[tuple[Path, str]]:
+        return []
+
+    def render(self, sf: SceneFile, seed: int) -> tuple[RenderResult, dict[str, Any]]:
+        """The render and its header fields (spp, passes, seed, sampler, integrator, depth)."""
+        spp = int(self.spp or sf.sensor().sampler().sample_count())
+        sensor = sf.sensor(self.sampler)
+        passes = self.passes or (min(spp, 8) if spp >= 16 else 1)
+        result = render_scene(sf.scene, spp, seed=seed, passes=passes, progress=self.progress,
+                              integrator=sf.integrator, sensor=sensor)
+        integrator = sf.integrator or sf.scene.integrator()
+        name = (integrator.class_name() if hasattr(integrator, "class_name")
+                else str(type(integrator)))
+        return result, {"spp": int(sum(result.pass_spp)), "passes": passes, "seed": seed,
+                        "sampler": sensor.sampler().class_name(), "integrator": name,
+                        "max_depth": _max_depth(integrator)}
+
+    def write_extra(self, out: Path, result) -> None:
+        pass
+
+
+def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
+                      variant: str | None = None, seed: int = 0, max_depth: int | None = None,
+                      params: dict[str, Any] | None = None, integrator: dict | None = None,
+                      png: bool = True, extra_metadata: dict[str, Any] | None = None,
+                      loaded=None, info: SceneInfo | None = None):
+    """The one render of a scene file: check, load, render, write ``out`` with provenance.
+
+    ``sampling`` is :class:`UniformPasses` (the default) or
+    :class:`phonglab.adaptive.AdaptiveSampling`: its ``check()`` (arguments),
+    ``extra_outputs(out)`` (files it writes beside the set), ``settings()`` (``<default>``
+    entries it sets), ``render(scene_file, seed) -> (result, header fields)`` and
+    ``write_extra(out, result)``.  Everything that can be checked is checked before the
+    render starts: the output files (:class:`phonglab.outputs.RenderOutputs` and the
+    sampling's own), the arguments, the scene (:func:`preflight`).  The scene is opened by
+    :func:`open_scene_file` (``variant``, ``max_depth``, ``params``, ``integrator``,
+    ``loaded``, ``info``).  ``extra_metadata`` is added to the EXR header (the planner
+    records its plan there); with ``png`` a preview is written at the auto exposure
+    (darken only).  The image, standard-error and preview files are replaced as one set.
+    """
+    sampling = sampling or UniformPasses()
+    outputs = RenderOutputs.beside(out, png)
+    outputs.check()
+    sampling.check()
+    for extra, what in sampling.extra_outputs(Path(out)):
+        check_file(extra, what)
+    sf = open_scene_file(scene, variant=sampling.variant(variant), max_depth=max_depth,
+                         params=params, settings=sampling.settings(), integrator=integrator,
+                         loaded=loaded, info=info, quiet=sampling.quiet_load)
+    result, fields = sampling.render(sf, seed)
+    result.metadata = sf.provenance(fields, result.seconds)
+    result.metadata.update(extra_metadata or {})
+    ev = auto_exposure(result.image, darken_only=True) if png else 0.0
+    if png:
+        result.metadata["preview_exposure_ev"] = round(ev, 2)
+    result.metadata["render_id"] = outputs.write(result.image, result.stderr, result.metadata,
+                                                 exposure=ev)
+    sampling.write_extra(Path(out), result)
+    return result
+
+
 def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 variant: str | None = None, seed: int = 0, passes: int | None = None,
                 max_depth: int | None = None, progress: bool = True,
@@ -221,55 +391,16 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
                 params: dict[str, Any] | None = None) -> RenderResult:
     """Load, render and write ``out`` (EXR with provenance) plus its standard error and a PNG.
 
-    Everything that can be checked is checked before the render starts: the output files
-    (:class:`phonglab.outputs.RenderOutputs`), ``spp``, the scene (:func:`preflight`: a
-    sensor, a film of at least one pixel, the memory it needs).  ``max_depth`` applies to
-    the scene's own integrator: through its ``$max_depth`` default when it has one, else by
-    rebuilding the integrator with ``max_depth`` set (refused, with the reason, when that
-    integrator takes no depth).  ``params`` are values for the scene's ``<default>`` entries
-    (``{"res": 256}``; ``spp`` and ``max_depth`` given above win).  ``extra_metadata`` is
-    added to the EXR header (the planner records its plan there).  The files are replaced as
-    one set.
+    A uniform render (:class:`UniformPasses`) through :func:`render_scene_file`: ``spp``
+    (checked first; the scene's own when None) in ``passes``, the scene's sampler or
+    ``sampler``.  ``max_depth`` applies to the scene's own integrator (its ``$max_depth``
+    default, else the integrator rebuilt with it: :func:`open_scene_file`); ``params`` are
+    values for the scene's ``<default>`` entries (``{"res": 256}``; ``spp`` and
+    ``max_depth`` given above win).  ``extra_metadata`` is added to the EXR header.
     """
-    path = scene_path(scene)
-    outputs = RenderOutputs.beside(out, png)
-    outputs.check()
-    if spp is not None:
-        check_spp(spp)
-    declared = scene_defaults(path)
-    params = dict({k: v for k, v in (params or {}).items() if v is not None},
-                  **{k: v for k, v in (("spp", spp), ("max_depth", max_depth))
-                     if v is not None and k in declared})
-    loaded = load_scene(path, variant, **params)
-    integrator = None
-    if max_depth is not None and "max_depth" not in declared:
-        integrator = integrator_with_depth(inspect_scene(path, **params), max_depth)
-    sensor = preflight(loaded, path)
-    spp = int(spp or sensor.sampler().sample_count())
-    if sampler is not None:
-        info = inspect_scene(path, **params)
-        if sampler != info.sampler:
-            sensor = preflight(loaded, path, sensor_with_sampler(info, sampler))
-    passes = passes or (min(spp, 8) if spp >= 16 else 1)
-    result = render_scene(loaded, spp, seed=seed, passes=passes, progress=progress,
-                          integrator=integrator, sensor=sensor)
-    integrator = integrator or loaded.integrator()
-    result.metadata = {
-        "scene": str(path), "scene_sha256": file_hash(path), "variant": mi.variant(),
-        "spp": int(sum(result.pass_spp)), "passes": passes, "seed": seed,
-        "sampler": sensor.sampler().class_name(),
-        "integrator": integrator.class_name() if hasattr(integrator, "class_name") else str(type(integrator)),
-        "max_depth": _max_depth(integrator), "render_seconds": round(result.seconds, 4),
-        "params": {k: str(v) for k, v in params.items()},
-        "phonglab_version": __version__, "mitsuba_version": mi.__version__,
-    }
-    result.metadata.update(extra_metadata or {})
-    ev = auto_exposure(result.image, darken_only=True) if png else 0.0
-    if png:
-        result.metadata["preview_exposure_ev"] = round(ev, 2)
-    result.metadata["render_id"] = outputs.write(result.image, result.stderr, result.metadata,
-                                                 exposure=ev)
-    return result
+    return render_scene_file(scene, out, UniformPasses(spp, passes, sampler, progress),
+                             variant=variant, seed=seed, max_depth=max_depth, params=params,
+                             png=png, extra_metadata=extra_metadata)
 
 
 #: Host memory one film pixel costs through a render (Mitsuba's image block, the float64

@@ -39,6 +39,10 @@ matplotlib, Agg): error against time on log-log axes, one curve per method, the 
 front marked; the stability heatmaps.  :func:`write_markdown` (:mod:`.report`) turns the
 CSVs into BENCHMARKS.md; :func:`run_bench` (:mod:`.run`) runs it all.  Sizes and
 constants: :mod:`.config`.
+
+Whole commands (``phonglab fit``, ``validate``, ``render``; ``make bench``'s fit, validate,
+planner and cluster records) are timed as fresh processes by the one driver :mod:`.timing`;
+:mod:`.fit_timing` is the ``phonglab fit`` record.
 """
 
 from ..lazy import lazy_exports
@@ -52,7 +56,7 @@ _EXPORTS = {
     "config": ("BIAS_FLOOR", "BREAKDOWN_REL_RMSE", "Config", "DEFAULT_OUT", "ESTIMATOR_SCENES",
                "NEAR_ZERO_REL_SD", "PARTS", "RATIO_COMPARISONS", "STABILITY_ANGLES",
                "STABILITY_EXPONENTS", "STABILITY_LIGHTS", "STABILITY_N"),
-    "cornell": ("BOX_TYPES", "CornellSpec", "beckmann_alpha", "cornell_xml", "render_setups"),
+    "cornell": ("BOX_TYPES", "CornellSpec", "cornell_xml", "render_setups"),
     "csvlog": ("CsvLog",),
     "report": ("stability_explanations", "write_markdown"),
     "run": ("machine_info", "run_bench"),

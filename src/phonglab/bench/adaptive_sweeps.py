@@ -7,7 +7,8 @@ reference (:func:`phonglab.references.reference`, its noise subtracted from ever
   pass, ``mi.render``) at the spp ladder of :attr:`Config.adaptive_spps`;
 * **adaptive**: :func:`phonglab.adaptive.render_adaptive` at the targets of
   :attr:`Config.adaptive_targets`, several seeds;
-* **planned**: :func:`phonglab.planner.plan` at each target, then the render it chose; its
+* **planned**: :func:`phonglab.planner.plan` at each target, then the render it chose
+  (:mod:`phonglab.planner.execute`, as ``phonglab render --target-error`` runs it); its
   time is the render's plus the pilot's (``pilot_seconds``), i.e. what the user waits for.
 
 Times are steady state (each configuration compiled once first) and measured side by side in
@@ -30,17 +31,15 @@ dashed) and ``adaptive_sppmap.png`` (image and spp map of gray_direct).
 from __future__ import annotations
 
 import json
-import math
 import statistics
 import time
 from pathlib import Path
 from typing import Any
 
-import mitsuba as mi
 import numpy as np
 
 from .. import adaptive, metrics, planner, references, render, scenes
-from ..planner import choice
+from ..planner import execute
 from ..runtime import quiet_mitsuba, set_variant
 from .analysis import pareto_front
 from .config import VARIANT, Config
@@ -67,27 +66,14 @@ def _timed(fn):
     return out, time.perf_counter() - t0
 
 
-def _planned(name: str, params: dict, target: float, loaded, info, seed: int) -> dict:
-    """plan() then the render it chose: error and the time a user waits (pilot included)."""
+def _planned(name: str, params: dict, target: float, ref, seed: int) -> dict:
+    """plan() then the render it chose (:func:`phonglab.planner.execute.prepare`, the scene the
+    pilot loaded): error and the time a user waits (pilot included)."""
     with quiet_mitsuba():
         plan = planner.plan(name, target, params=params)
-        scene = scenes.load_scene(info.path, plan.variant, **params) if plan.variant != VARIANT \
-            else loaded
-    integ = scenes.path_integrator(plan.max_depth, info) if plan.model == "path" else \
-        mi.load_dict(choice.model_dict(plan.model, plan.max_depth, info))
-    if plan.uses_wavefront:
-        spp = max(2, math.ceil(plan.chosen_spp))
-        uniform = plan.sampling == "uniform"
-        run = lambda: adaptive.render_adaptive(  # noqa: E731
-            scene, plan.noise_target, seed=seed, integrator=integ,
-            min_spp=spp if uniform else adaptive.MIN_SPP, max_spp=spp if uniform else None)
-    else:
-        kw = plan.render_kwargs()
-        sensor = plan.uniform_sensor(info)
-        run = lambda: render.render_scene(scene, kw["spp"], seed=seed, integrator=integ,  # noqa: E731
-                                          passes=kw["passes"], sensor=sensor)
-    run()                                                   # compile
-    result, seconds = _timed(run)
+    job = execute.prepare(plan)
+    job.render(seed)                                        # compile
+    result, seconds = _timed(lambda: job.render(seed))
     set_variant(VARIANT)                  # the plan may have switched to another variant
     return {"method": "planned", "target": target, "seed": seed, "render_seconds": seconds,
             "pilot_seconds": plan.pilot_seconds, "seconds": seconds + plan.pilot_seconds,
@@ -95,7 +81,8 @@ def _planned(name: str, params: dict, target: float, loaded, info, seed: int) ->
                                                           != "independent" else ""),
             "variant": plan.variant,
             "uniform_spp": plan.spp,
-            "max_depth": plan.max_depth, "image": result.image}
+            "max_depth": plan.max_depth,
+            "error": execute.error_report(plan, result, ref).achieved}
 
 
 def sweep_scene(name: str, cfg: Config, progress: bool = False) -> dict[str, Any]:
@@ -121,8 +108,7 @@ def sweep_scene(name: str, cfg: Config, progress: bool = False) -> dict[str, Any
                    "estimated_error": res.estimated_error, "error": _error(res.image, ref)}
             rows.append(_paired(row, loaded, round(res.total_spp), 50 + seed, ref))
         if name != UNIFORM_SCENE and target in cfg.adaptive_planned_targets:
-            p = _planned(name, params, target, loaded, info, seed=30)
-            p["error"] = _error(p.pop("image"), ref)
+            p = _planned(name, params, target, ref, seed=30)
             rows.append(_paired(p, loaded, p["uniform_spp"], 60, ref))
     return {"scene": name, "params": params, "reference_spp": ref.spp, "rows": rows,
             "speedups": speedups(rows)}

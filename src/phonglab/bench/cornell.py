@@ -12,14 +12,13 @@ Look match of the built-ins (stated, not claimed equal BRDFs): ``diffuse`` / ``l
 boxes take ρ = k_d = 0.5; ``plastic`` takes diffuse_reflectance 0.5 and its default smooth
 dielectric coating (IOR 1.49: a mirror highlight with Fresnel reflectance 4 % at normal
 incidence instead of phong's k_s = 0.3 glossy lobe); ``roughplastic`` the same coating with
-the Beckmann roughness :func:`beckmann_alpha` matching the highlight width of phong's
-exponent.
+the Beckmann roughness matching the highlight width of phong's exponent
+(:func:`phonglab.physics.roughness.beckmann_alpha`).
 """
 
 from __future__ import annotations
 
 import hashlib
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from ..errors import PhonglabError
 from ..exr import atomic_path
 from ..parallel import Runner
 from ..physics.estimators import kernel_stats
+from ..physics.roughness import beckmann_alpha
 from ..references import CACHE_DIR, Reference, reference
 from ..render import render_scene
 from ..scenes import scene_path
@@ -40,17 +40,6 @@ from .config import RATIO_RES, RENDER_RES
 #: Box materials a render comparison can swap in (the walls take ``wall=``).
 BOX_TYPES = ("phong", "lambert", "diffuse", "plastic", "roughplastic")
 _GLOSSY_BLOCK = re.compile(r'<bsdf type="phong" id="glossy">.*?</bsdf>', re.S)
-
-
-def beckmann_alpha(exponent: float) -> float:
-    r"""Beckmann roughness whose highlight matches the modified-Phong lobe cos^p α.
-
-    Around the mirror direction the outgoing angle is twice the half-vector angle θ_h,
-    so cos^p α ≈ exp(−p α²/2) = exp(−2p θ_h²); Beckmann's D ∝ exp(−tan²θ_h/α_b²) ≈
-    exp(−θ_h²/α_b²) gives α_b = 1/√(2p) (Walter et al. 2007, eq. 33 with the Phong
-    microfacet exponent 4p: α_b = √(2/(4p + 2)), used here).
-    """
-    return math.sqrt(2.0 / (4.0 * exponent + 2.0))
 
 
 def _box_block(boxes: str, exponent: float) -> str | None:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..physics.estimators import METHODS
+from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table
 from .adaptive_sweeps import report_section as adaptive_report_section
 from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
@@ -28,7 +29,6 @@ from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_rati
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
                      WHITTED_TARGET)
-from .cornell import beckmann_alpha
 from .csvlog import number, open_log
 
 
@@ -399,8 +399,9 @@ def mis_section(d: RunData) -> list[str]:
                      if k.split("/")[1] in ("bsdf", "light", "mis", "mis_optimal"))
     L = ["## Optimal MIS against the better single strategy\n",
          f"![MIS ratios]({d.rel}/mis.png)\n",
-         "`mis_optimal` ([physics/estimators.py](src/phonglab/physics/estimators.py)): a pilot of "
-         "N/32 samples (at most 2048; half BSDF, half light sampling, then discarded) chooses the "
+         "`mis_optimal` ([physics/estimators/optimal_mis.py]"
+         "(src/phonglab/physics/estimators/optimal_mis.py)): a pilot of N/32 samples (at most "
+         "2048; half BSDF, half light sampling, then discarded) chooses the "
          "BSDF share c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a "
          "2×2 solve per candidate); the other samples give the estimate. Ratios are errors at "
          "equal time (√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the "
@@ -453,9 +454,10 @@ def fitting_section(d: RunData) -> list[str]:
     if r is None:
         return []
     return ["\n## Fitting: `phonglab fit`\n",
-            f"`python -m phonglab.fit.timing` (run by `make bench`): `{r['command']}` as a fresh "
-            f"process (import, JIT compilation and fit), {r['repeats']} runs on {r['cores']} cores, "
-            f"load average {r['load_before']} before and {r['load_after']} after.\n",
+            f"`python -m phonglab.bench.fit_timing` (run by `make bench`): `{r['command']}` as a "
+            f"fresh process (import, JIT compilation and fit), {r['repeats']} runs on "
+            f"{r['cores']} cores, load average {r['load_before']} before and {r['load_after']} "
+            f"after.\n",
             "| median wall [s] | min | max | median CPU [s] | target | |",
             "|---|---|---|---|---|---|",
             f"| {r['wall_median_s']:.2f} | {r['wall_min_s']:.2f} | {r['wall_max_s']:.2f} "

@@ -16,6 +16,7 @@ import mitsuba as mi
 from .. import __version__, checks, register
 from ..errors import PhonglabError
 from ..verdict import Report, format_number
+from .options import add_seed
 
 
 def add_parser(sub) -> None:
@@ -34,7 +35,7 @@ def add_parser(sub) -> None:
     p.add_argument("--spp", type=int, default=256,
                    help="samples per pixel of the statistical renders (default 256; BSDF-level "
                         "estimates use 1024x this many directions, chi-square 4096x)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--out-dir", default="out/checks",
                    help="where difference images of a failing scene check go (default out/checks)")
     p.add_argument("--lambert", default="lambert", metavar="PLUGIN",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import add_scene_params
+from .options import add_scene_params, add_seed
 
 
 def add_parser(sub) -> None:
@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
                    help="samples per pixel of the path tracer (default 8 x --spp)")
     p.add_argument("--max-depth", type=int, default=None,
                    help="path length for all three (default: the scene's, else 5)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
     add_scene_params(p, "-D", "--param", "--set")
     p.add_argument("-o", "--output", default=None,

@@ -30,8 +30,9 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
     p.add_argument("--target-error", type=float, default=0.01,
-                   help="relative RMSE to reach, sqrt(mean((x-r)^2/(r^2+0.01))) "
-                        "(default 0.01 = 1%%)")
+                   help="relative RMSE to reach, sqrt(mean((x-r)^2/(r^2+0.01))) against a "
+                        "converged reference, depth bias included (phonglab.metrics; "
+                        "default 0.01 = 1%%)")
     p.add_argument("--json", action="store_true", help="print the plan as JSON")
     p.add_argument("--polarized", action="store_true", help="plan a polarized variant")
     p.add_argument("--variant", default=None, help="fix the variant (the plan follows it)")

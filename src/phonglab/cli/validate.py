@@ -15,6 +15,7 @@ from ..settings import parse_sets
 from ..validate.bsdf.topics import TOPICS
 from ..validate.inputs import ValidateError, check_topics
 from ..verdict import Report, write_json
+from .options import add_seed
 
 EPILOG = """examples:
   phonglab validate diffuse
@@ -46,7 +47,7 @@ def add_parser(sub) -> None:
                    help=f"run only this topic (repeatable): {', '.join(TOPICS)}")
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--quick", action="store_true",
                    help="fewer samples and angles (every topic kept; about 10 s)")
     p.add_argument("--all-builtins", action="store_true",

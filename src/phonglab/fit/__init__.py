@@ -5,8 +5,10 @@
 * :mod:`.optimize`    folk rules, the start, L-BFGS-B, :class:`FitResult` and its report
   (``phonglab fit``);
 * :mod:`.table`       the table of docs/fitting.md (``make fitting-table``);
-* :mod:`.render_fit`  the same fit from images, by differentiable rendering (``prb``);
-* :mod:`.timing`      ``phonglab fit roughconductor --set alpha=0.2`` timed for ``make bench``.
+* :mod:`.render_fit`  the same fit from images, by differentiable rendering (``prb``).
+
+``phonglab fit roughconductor --set alpha=0.2`` is timed for ``make bench`` by
+:mod:`phonglab.bench.fit_timing`.
 
 The submodules import Mitsuba; import them after :func:`phonglab.registration.register`.
 """

@@ -1,19 +1,11 @@
 r"""Fitting phong (or lambert) to a target BSDF: the start from the folk rules, L-BFGS-B on the AD gradient.
 
-Folk rules relating a microfacet roughness α to a Phong exponent (α is the Beckmann width;
-renderers apply the same rules to GGX):
-
-* Blinn–Phong: D_Blinn ∝ cos^{p_h} θ_h ≈ exp(−p_h θ_h²/2) against Beckmann exp(−θ_h²/α²)
-  gives α = √(2/(p_h + 2)) (Walter et al. 2007, eq. 33), so p_h = 2/α² − 2;
-* Phong lobe around the mirror direction: the outgoing angle is about twice the half-vector
-  angle, so p = p_h/4 = (1/α² − 1)/2, the inverse of
-  :func:`phonglab.bench.cornell.beckmann_alpha` (α = √(2/(4p + 2))).
-
-The start: p from the Phong-lobe rule when the target has a roughness (``alpha`` of the rough
-plugins, ``roughness``² of ``principled``, ``exponent`` of a phong), else the best of a
-logarithmic grid of exponents; k_s and k_d from the target's glossy and diffuse albedo at
-normal incidence (its glossy and diffuse lobes evaluated separately, with a
-``BSDFContext`` type mask), scaled down together when they sum above 1.
+The start: p from the Phong-lobe folk rule p = (1/α² − 1)/2 (:mod:`phonglab.physics.roughness`
+derives it) when the target has a roughness (``alpha`` of the rough plugins, ``roughness``² of
+``principled``, ``exponent`` of a phong), else the best of a logarithmic grid of exponents;
+k_s and k_d from the target's glossy and diffuse albedo at normal incidence (its glossy and
+diffuse lobes evaluated separately, with a ``BSDFContext`` type mask), scaled down together
+when they sum above 1.
 
 Optimizer: scipy's L-BFGS-B on the box of :mod:`.objective` (the box maps onto the
 energy-conserving region, and L-BFGS-B evaluates only inside its bounds), with the
@@ -31,9 +23,9 @@ import numpy as np
 from scipy.optimize import minimize
 
 from .. import probe
-from ..bench.cornell import beckmann_alpha
 from ..errors import PhonglabError
 from ..physics.quadrature import lobe_width
+from ..physics.roughness import beckmann_alpha, phong_exponent
 from ..settings import load_plugin
 from .objective import (MODELS, P_MAX, PHONG, Directions, Model, Objective, fit_directions,
                         luminance_eval, report_directions)
@@ -44,16 +36,6 @@ REPORT_DEG = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0)
 GRAZING_DEG = 80.0
 #: Exponents tried when the target has no roughness to start from.
 START_GRID = (1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0)
-
-
-def phong_exponent(alpha: float) -> float:
-    """The Phong-lobe folk rule p = (1/α² − 1)/2 (inverse of α = √(2/(4p + 2)))."""
-    return 0.5 * (1.0 / alpha ** 2 - 1.0)
-
-
-def blinn_phong_exponent(alpha: float) -> float:
-    """The Blinn–Phong folk rule p_h = 2/α² − 2 (inverse of α = √(2/(p_h + 2)))."""
-    return 2.0 / alpha ** 2 - 2.0
 
 
 # ----------------------------------------------------------------------------- the target
@@ -186,11 +168,11 @@ def fit(target: str, params: dict | None = None, model: str = "phong", maxiter: 
     m = MODELS[model]
     bsdf = load_target(target, params)
     alpha = target_alpha(bsdf)
-    width = lobe_width(phong_exponent(alpha) if alpha is not None else 30.0)
-    dirs = fit_directions(width)
-    if alpha is not None and not 0.0 < alpha <= 1.0:
+    if alpha is not None and not 0.0 < alpha <= 1.0:     # before the folk rule divides by it
         raise PhonglabError(f"the target's roughness alpha = {alpha:g} is outside (0, 1]; "
                             f"give e.g. --set alpha=0.2")
+    width = lobe_width(phong_exponent(alpha) if alpha is not None else 30.0)
+    dirs = fit_directions(width)
     g_t = luminance_eval(bsdf, dirs)
     if not np.all(np.isfinite(g_t)) or np.min(g_t) < 0:
         raise PhonglabError(f"{target} returns negative or non-finite values of f cos θ at some "

@@ -16,7 +16,8 @@ import json
 from pathlib import Path
 
 from .. import registration
-from .optimize import GRAZING_DEG, blinn_phong_exponent, fit, format_result, phong_exponent
+from ..physics.roughness import blinn_phong_exponent, phong_exponent
+from .optimize import GRAZING_DEG, fit, format_result
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)
 #: (target plugin, distribution)

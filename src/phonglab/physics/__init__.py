@@ -6,6 +6,8 @@
 * :mod:`.quadrature`  the reflection equation by a quadrature adapted to a glossy lobe
   (deterministic albedo, used by the checks);
 * :mod:`.estimators`  Monte Carlo estimators of the reflection equation (uniform, cosine, BSDF,
-  light, MIS) in Dr.Jit, with exact values by quadrature;
+  light, MIS, optimal MIS) in Dr.Jit, with exact values by quadrature (a package: the problem,
+  the exact values, the shared kernel pieces, the i.i.d. estimators, optimal MIS, the runner);
+* :mod:`.roughness`   Beckmann α ↔ Phong exponent p ↔ Blinn–Phong p_h (the folk rules);
 * :mod:`.opengl`      the OpenGL fixed-function local model and its mapping to phonglab's.
 """

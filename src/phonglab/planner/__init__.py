@@ -50,26 +50,26 @@ RMSE of E, and at what cost?" in four steps, each with a reason the user can rea
    ``T(spp) = a + b·spp`` (medians); a render of N samples in ``p`` passes is predicted to take
    ``p·a + b·N``.
 
-The error is phonglab's relative error, :func:`phonglab.metrics.relative_rmse` with
-ε = 0.01: ``E = √relMSE = √mean((x − r)² / (r² + ε))`` over every pixel and channel, ``r``
-the converged full-depth image (:func:`phonglab.references.reference`); the same definition is
-used when the achieved error is measured (:func:`phonglab.metrics.errors` with the
-reference's standard error subtracted).  Monte Carlo noise falls as ``1/√N``, so E² is the sum
-of the squared depth bias and the variance term: MSE = bias² + variance (E. Veach, *Robust
-Monte Carlo Methods for Light Transport Simulation*, PhD thesis, Stanford 1997, §2.4.3;
-M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., §2.1.4, and §2.2.4 on
-Russian roulette).
+E is phonglab's error target, defined once in :mod:`phonglab.metrics`: the total relative RMSE
+(:func:`phonglab.metrics.relative_rmse`, ε = 0.01) against the converged full-depth image
+(:func:`phonglab.references.reference`), bias included, E² = b² + n²; the achieved error is
+measured with the same definition (:func:`phonglab.planner.execute.error_report`).  Monte
+Carlo noise falls as ``1/√N`` (M. Pharr, W. Jakob, G. Humphreys, *Physically Based
+Rendering*, 4th ed., §2.1.4, and §2.2.4 on Russian roulette).
 
-Modules: :mod:`.planning` (:class:`Plan`, :func:`plan` and its steps), :mod:`.pilot` (the
-pilot renders, depth search, weights, noise and time model), :mod:`.ladder` (one render that
-gives the image at several depths), :mod:`.benchmark` (the table of
+Modules: :mod:`.planning` (:class:`Plan`, :func:`plan` and its steps), :mod:`.execute`
+(:func:`render_plan`: the plan's render and its error report, for the CLI and the bench),
+:mod:`.pilot` (the pilot renders, depth search, weights, noise and time model), :mod:`.ladder`
+(one render that gives the image at several depths), :mod:`.benchmark` (the table of
 ``scripts/planner_bench.py``).
 """
 
 from .benchmark import benchmark_table
+from .execute import render_plan
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
                     DepthSample, Pilot)
 from .planning import MAX_SECONDS, Plan, plan, render_passes
 
-__all__ = ["BIAS_FRACTION", "DEPTH_LADDER", "EPS", "MAX_SECONDS", "PILOT_PASSES", "PILOT_SEED", "PILOT_SPP",
-           "DepthSample", "Pilot", "Plan", "benchmark_table", "plan", "render_passes"]
+__all__ = ["BIAS_FRACTION", "DEPTH_LADDER", "EPS", "MAX_SECONDS", "PILOT_PASSES", "PILOT_SEED",
+           "PILOT_SPP", "DepthSample", "Pilot", "Plan", "benchmark_table", "plan", "render_passes",
+           "render_plan"]

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanError, SceneError
+from ..metrics import noise_target
 from ..render import MAX_SPP, check_spp
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
@@ -59,12 +60,17 @@ class Plan:
     chosen_seconds: float = 0.0      #: its predicted steady-state time
     sampler: str = "independent"     #: Mitsuba sampler of the render (uniform path)
     chosen_passes: int = 0           #: passes of the chosen uniform render
+    #: the scene file as :func:`plan` inspected it (with :attr:`params`), and the scene the
+    #: pilot loaded (:attr:`variant`, :attr:`params`): the render reuses them
+    #: (:mod:`.execute`); neither is part of :meth:`to_dict`
+    info: SceneInfo | None = field(default=None, repr=False, compare=False)
+    loaded: Any = field(default=None, repr=False, compare=False)
 
     @property
     def noise_target(self) -> float:
-        """√(E² − bias²): the noise the render may leave (what an adaptive render aims at)."""
-        return math.sqrt(max(self.target_error ** 2 - self.predicted_bias ** 2,
-                             (0.01 * self.target_error) ** 2))
+        """The noise the render may leave, √(E² − bias²) (:func:`phonglab.metrics.noise_target`:
+        what a wavefront render aims at)."""
+        return noise_target(self.target_error, self.predicted_bias)
 
     @property
     def uses_wavefront(self) -> bool:
@@ -73,7 +79,10 @@ class Plan:
         return self.sampling == "adaptive" or self.model != "path"
 
     def to_dict(self) -> dict[str, Any]:
-        d = dataclasses.asdict(self)
+        """The plan as plain values (JSON, the EXR header), without :attr:`info` and
+        :attr:`loaded`."""
+        d = dataclasses.asdict(dataclasses.replace(self, info=None, loaded=None))
+        del d["info"], d["loaded"]
         d["resolution"] = list(self.resolution)
         return d
 
@@ -138,7 +147,8 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
 
     Args:
         scene_path: scene file, or a name in ``scenes_xml/``.
-        target_error: E, a relative RMSE (package docstring; ``0.01`` = 1 %).
+        target_error: E, the total relative RMSE, bias included (:mod:`phonglab.metrics`;
+            ``0.01`` = 1 %).
         pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
             of the film: 64, fewer beyond 64² pixels, at least 4) and the passes they are split
             into (at most ``pilot_passes``).
@@ -203,7 +213,7 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
                 depths=pilot.depths(), reasons=reasons, overrides=overrides,
                 model=option.model, sampling=option.sampling, chosen_spp=float(option.spp),
                 chosen_seconds=option.seconds, sampler=option.sampler,
-                chosen_passes=option.passes or passes)
+                chosen_passes=option.passes or passes, info=info, loaded=scene)
 
 
 def _stratified_sensor(info: SceneInfo, overrides: dict[str, Any], reasons: list[str]):

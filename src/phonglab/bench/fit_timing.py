@@ -1,11 +1,11 @@
 """The speed of ``phonglab fit``: the issue's example command timed as a user runs it.
 
-``python -m phonglab.fit.timing --out docs/bench/fit.json`` (run by ``make bench``) starts
-``phonglab fit roughconductor --set alpha=0.2`` as a fresh process ``repeats`` times (so every
-run pays the import, the variant set-up and the JIT compilation) and records the median, the
-minimum and the maximum wall time, the median CPU time of the child, and the load average
-around the runs; BENCHMARKS.md's fitting section reads it.  The target is under a minute on
-two cores.
+``python -m phonglab.bench.fit_timing --out docs/bench/fit.json`` (run by ``make bench``)
+starts ``phonglab fit roughconductor --set alpha=0.2`` as a fresh process ``repeats`` times
+(:mod:`.timing`: so every run pays the import, the variant set-up and the JIT compilation)
+and records the median, the minimum and the maximum wall time, the median CPU time of the
+child, and the load average around the runs; BENCHMARKS.md's fitting section reads it.  The
+target is under a minute on two cores.
 """
 
 from __future__ import annotations
@@ -14,10 +14,9 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
-import sys
-import time
 from pathlib import Path
+
+from .timing import PHONGLAB, run_repeated, spread
 
 #: The command the issue times, and its limit in seconds.
 COMMAND = ["fit", "roughconductor", "--set", "alpha=0.2"]
@@ -26,24 +25,16 @@ LIMIT_S = 60.0
 
 def time_command(repeats: int = 5, args: list[str] = COMMAND) -> dict:
     """Wall and CPU seconds of ``python -m phonglab.cli ARGS``, fresh process each time."""
-    walls, cpus = [], []
     load_before = os.getloadavg()[0]
-    for _ in range(repeats):
-        before = os.times()
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "phonglab.cli", *args], check=True,
-                       stdout=subprocess.DEVNULL)
-        walls.append(time.perf_counter() - t0)
-        after = os.times()
-        cpus.append((after.children_user - before.children_user)
-                    + (after.children_system - before.children_system))
-    median = statistics.median(walls)
+    runs = run_repeated(PHONGLAB + list(args), repeats)
+    wall = spread([r.seconds for r in runs], 3)
     return {"command": "phonglab " + " ".join(args), "repeats": repeats,
-            "wall_median_s": round(median, 3), "wall_min_s": round(min(walls), 3),
-            "wall_max_s": round(max(walls), 3), "cpu_median_s": round(statistics.median(cpus), 3),
+            "wall_median_s": wall["median"], "wall_min_s": wall["spread"][0],
+            "wall_max_s": wall["spread"][1],
+            "cpu_median_s": round(statistics.median(r.cpu_seconds for r in runs), 3),
             "cores": os.cpu_count(), "load_before": round(load_before, 2),
             "load_after": round(os.getloadavg()[0], 2), "limit_s": LIMIT_S,
-            "met": median < LIMIT_S}
+            "met": statistics.median(r.seconds for r in runs) < LIMIT_S}
 
 
 def main(argv=None) -> int:
