@@ -9,8 +9,9 @@ import pytest
 
 from phonglab.scenes import REPO_ROOT
 from phonglab.validate import builtins
+from phonglab.validate.bsdf.topics import TOPICS, Row
 from phonglab.validate.builtins import findings
-from phonglab.validate.report import TOPICS, Report, Row
+from phonglab.verdict import Report
 
 CASES = builtins.cases()
 SOURCE_LINE = re.compile(r"^(src|include)/[\w/]+\.(cpp|h):\d+: \S")

@@ -2,7 +2,7 @@
 
 Each broken variant subclasses a real plugin class (``registration.plugin_class``) and is
 registered under another name; plugins/ is never edited.  Every test runs the relevant checks
-on the broken plugin (Config.small()) and asserts which rows FAIL, and that the rows that
+on the broken plugin (Config.small()) and asserts which rows fail, and that the rows that
 cannot see the mistake (by construction) still pass, so the failures are attributable.
 
 * ``lambert_nopi``   eval drops the 1/π (f = ρ instead of ρ/π); sample() still returns ρ.
@@ -87,11 +87,11 @@ def _small(out_dir, **kw):
 
 
 def _failed(rows) -> set[str]:
-    return {r.name for r in rows if r.status == "FAIL"}
+    return {r.name for r in rows if r.status == "fail"}
 
 
 def _passed(rows) -> set[str]:
-    return {r.name for r in rows if r.passed}
+    return {r.name for r in rows if r.status == "pass"}
 
 
 def test_broken_variants_are_really_broken(cfg):
@@ -195,4 +195,4 @@ def test_cli_exits_nonzero_and_names_the_failing_rows(cfg, capsys):
                  "--no-progress", "--out-dir", str(cfg)])
     out = capsys.readouterr().out
     assert code == 1
-    assert "FAIL reflection/phong_p1 p=0: normal incidence" in out
+    assert "fail reflection/phong_p1 p=0: normal incidence" in out

@@ -11,10 +11,12 @@ from pathlib import Path
 import pytest
 
 from phonglab.cli import main
-from phonglab.testing import assert_bsdf_valid
-from phonglab.validate import STATUSES, TOPICS, Report, Row, validate_bsdf
 from phonglab.settings import ParameterError, parse_sets
+from phonglab.testing import assert_bsdf_valid
+from phonglab.validate import TOPICS, validate_bsdf
+from phonglab.validate.bsdf.topics import Row
 from phonglab.validate.inputs import ValidateError
+from phonglab.verdict import STATUSES, Report
 
 DEFECTS = Path(__file__).parent / "defects"
 ROW_FIELDS = {"topic", "name", "measured", "expected", "stderr", "tolerance", "status", "reason",

@@ -1,8 +1,9 @@
 r"""The comparator: physics checks of phonglab's plugins and of Mitsuba's built-ins, side by side.
 
-Each ``check_<name>(cfg)`` returns a list of :class:`CheckResult` rows: what is compared, the
-measured value, the expected value and where the expectation comes from, the Monte Carlo
-standard error, the tolerance and the verdict.  :func:`run_checks` runs several of them;
+Each ``check_<name>(cfg)`` returns a list of :class:`phonglab.verdict.Row` records (topic = the
+check's name): what is compared (``reason``), the measured value, the expected value and where
+the expectation comes from (``details["source"]``), the Monte Carlo standard error, the
+tolerance and the verdict (pass | fail | KNOWN).  :func:`run_checks` runs several of them;
 ``phonglab check`` prints the rows as a table (:mod:`phonglab.cli.check`).
 
 The six checks, one module each (docs/checks.md has the table of a real run):
@@ -19,11 +20,12 @@ The six checks, one module each (docs/checks.md has the table of a real run):
                 radiance kept by a mirror and L/n² kept across a dielectric interface.
 ``snell``       refraction directions (seed formula, ``mi.refract``, built-in ``dielectric``),
                 n₁ sin θ₁ = n₂ sin θ₂, total internal reflection, R + T = 1.
-``sanity``      reciprocity, non-negativity and finiteness, weight = eval/pdf, χ² sampling test.
+``sanity``      reciprocity, non-negativity and finiteness, weight = eval/pdf, χ² sampling test:
+                the rows of :func:`phonglab.validate.validate_bsdf`'s topics on each plugin.
 
-:mod:`.common` holds the row record, the row collector :class:`Rows`, :class:`Config` and the
-rendering helpers; :mod:`.report` the registry, :func:`run_checks`, :func:`format_table` and
-:func:`write_json`.  BSDFs are probed through :mod:`phonglab.probe`.
+:mod:`.common` holds the row collector :class:`Rows`, :class:`Config` and the rendering
+helpers; :mod:`.registry` the registry and :func:`run_checks`.  BSDFs are probed through
+:mod:`phonglab.probe`.
 
 Statistics (:mod:`phonglab.stats`): every statistical row has an analytic expectation μ and
 an estimate x with standard error s (sample standard deviation / √n, or the per-pixel errors
@@ -31,8 +33,9 @@ of independent render passes); it passes when |x − μ| ≤ z s, with z the two
 quantile at the per-row level 1 − (1 − α)^(1/m): α = ALPHA = 0.01 and a Šidák correction
 over the m statistical tests of that check [Šidák 1967] (the Student t quantile for a
 standard error from few passes).  Deterministic rows compare against a float32 rounding
-budget stated where they are built.  Seeds are fixed (``Config.seed``), so a run is
-reproducible.
+budget stated where they are built; the sanity rows carry the validator's tolerances and its
+χ² levels, Šidák over the sanity check's cases (:mod:`.sanity`).  Seeds are fixed
+(``Config.seed``), so a run is reproducible.
 """
 
 from __future__ import annotations
@@ -44,8 +47,8 @@ CHECK_NAMES = ("energy", "reflection", "scene", "constancy", "snell", "sanity")
 
 # The public API, re-exported from the submodules on first use (phonglab.lazy says why).
 _EXPORTS = {
-    "common": ("CheckResult", "Config", "Rows", "EPS32", "gray", "phong_dict"),
-    "report": ("CHECKS", "run_checks", "format_table", "write_json"),
+    "common": ("Config", "Rows", "EPS32", "gray", "phong_dict"),
+    "registry": ("CHECKS", "run_checks"),
     "energy": ("check_energy", "SPHERE_BIAS_NOTE"),
     "reflection": ("check_reflection", "EXPONENTS", "INCIDENCE"),
     "scene": ("check_scene",),

@@ -1,5 +1,5 @@
-"""What every check shares: the row record, the row collector, the settings, the test cases
-and the rendering helpers.
+"""What every check shares: the row collector, the settings, the test cases and the rendering
+helpers.  The rows are :class:`phonglab.verdict.Row` records (the project's one result record).
 
 :class:`Rows` gives each statistical row its tolerance z·s once the check knows how many
 statistical tests m it made: z is :func:`phonglab.stats.z_critical` (or
@@ -10,9 +10,9 @@ m tests with family-wise α = :data:`phonglab.stats.ALPHA`.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
@@ -20,107 +20,63 @@ from .. import stats
 from ..errors import PhonglabError
 from ..render import RenderResult, render_scene
 from ..scenes import load_scene
+from ..verdict import Row
 
 #: float32 unit roundoff 2^-24.
 EPS32 = 2.0 ** -24
 
 
 # --------------------------------------------------------------------------------------------
-# Records
+# Rows
 # --------------------------------------------------------------------------------------------
 
-@dataclass
-class CheckResult:
-    """One row of the table.
-
-    ``relation`` says how measured and expected are compared: ``"=="`` passes when
-    |measured − expected| ≤ tolerance, ``"<="`` when measured ≤ expected + tolerance,
-    ``">="`` when measured ≥ expected − tolerance.  A row with a ``known_issue`` that does
-    not pass is reported as KNOWN (a documented discrepancy outside phonglab, with its
-    measured size) and does not fail the run.
-    """
-
-    check: str                   #: the check it belongs to (energy, reflection, ...)
-    name: str                    #: short row id, unique within the check
-    compared: str                #: what is compared, in words
-    measured: float
-    expected: float
-    source: str                  #: where the expectation comes from
-    stderr: float                #: Monte Carlo standard error of measured (0: deterministic)
-    tolerance: float
-    passed: bool
-    relation: str = "=="
-    known_issue: str | None = None
-    details: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def status(self) -> str:
-        if self.passed:
-            return "pass"
-        return "KNOWN" if self.known_issue else "FAIL"
-
-    @property
-    def ok(self) -> bool:
-        """True unless this row should make ``phonglab check`` fail."""
-        return self.passed or self.known_issue is not None
-
-    def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["status"] = self.status
-        return jsonable(d)
-
-
-def jsonable(x):
-    """``x`` with numpy scalars, paths and non-finite floats made JSON-safe (recursively)."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        x = float(x)
-        return x if math.isfinite(x) else str(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    if isinstance(x, Path):
-        return str(x)
-    return x
-
-
 class Rows:
-    """Collects a check's rows; statistical rows get their tolerance z·s once m is known."""
+    """Collects a check's rows (:class:`phonglab.verdict.Row`, topic = the check's name);
+    statistical rows get their tolerance z·s once m is known.
+
+    A row's ``reason`` says what is compared; ``details["source"]`` where the expectation comes
+    from and ``details["relation"]`` how measured and expected are compared: ``"=="`` passes
+    when |measured − expected| ≤ tolerance, ``"<="`` when measured ≤ expected + tolerance,
+    ``">="`` when measured ≥ expected − tolerance.  A row given a ``known_issue`` (kept in
+    ``details["known_issue"]``) that does not pass is KNOWN (a documented discrepancy outside
+    phonglab, with its measured size) and does not fail the run.
+    """
 
     def __init__(self, check: str):
         self.check = check
-        self.rows: list[CheckResult] = []
-        self._stat: list[tuple[CheckResult, int, float, float | None]] = []
+        self.rows: list[Row] = []
+        self._stat: list[tuple[Row, int, float, float | None]] = []
 
-    def exact(self, name, compared, measured, expected, source, tolerance, *, relation="==",
-              stderr=0.0, extra_ok=True, known_issue=None, **details) -> CheckResult:
-        """A deterministic row: passes on the float budget ``tolerance`` (and ``extra_ok``)."""
-        row = CheckResult(self.check, name, compared, float(measured), float(expected), source,
-                          float(stderr), float(tolerance),
-                          bool(_compare(measured, expected, tolerance, relation) and extra_ok),
-                          relation, known_issue, details)
+    def _row(self, name, compared, measured, expected, source, stderr, tolerance, passed,
+             relation, known_issue, details) -> Row:
+        known = {"known_issue": known_issue} if known_issue else {}
+        row = Row(self.check, name, float(measured), float(expected), float(stderr),
+                  float(tolerance), _status(passed, known_issue), compared,
+                  {"source": source, "relation": relation, **known, **details})
         self.rows.append(row)
         return row
 
+    def exact(self, name, compared, measured, expected, source, tolerance, *, relation="==",
+              stderr=0.0, extra_ok=True, known_issue=None, **details) -> Row:
+        """A deterministic row: passes on the float budget ``tolerance`` (and ``extra_ok``)."""
+        passed = bool(_compare(measured, expected, tolerance, relation) and extra_ok)
+        return self._row(name, compared, measured, expected, source, stderr, tolerance, passed,
+                         relation, known_issue, details)
+
     def stat(self, name, compared, measured, expected, source, stderr, *, tests=1,
-             floor=0.0, dof=None, known_issue=None, **details) -> CheckResult:
+             floor=0.0, dof=None, known_issue=None, **details) -> Row:
         """A statistical row: |measured − expected| ≤ z·stderr (+ floor, a stated float budget).
 
         ``tests`` counts the independent tests the row stands for (e.g. the worst of 3 channels).
         ``dof``: degrees of freedom of a standard error estimated from few independent passes
         (Student t quantile instead of the normal one); None when it pools many pixels.
         """
-        row = CheckResult(self.check, name, compared, float(measured), float(expected), source,
-                          float(stderr), math.nan, False, "==", known_issue, details)
-        self.rows.append(row)
+        row = self._row(name, compared, measured, expected, source, stderr, math.nan, False,
+                        "==", known_issue, details)
         self._stat.append((row, tests, floor, dof))
         return row
 
-    def finish(self) -> list[CheckResult]:
+    def finish(self) -> list[Row]:
         """The rows, statistical ones with their tolerance and verdict."""
         m = sum(t for _, t, _, _ in self._stat)
         if m:
@@ -129,12 +85,20 @@ class Rows:
                 z = (stats.z_critical(stats.ALPHA, m) if dof is None
                      else stats.t_critical(dof, stats.ALPHA, m))
                 row.tolerance = z * row.stderr + floor
-                row.passed = bool(np.isfinite(row.measured)
-                                  and abs(row.measured - row.expected) <= row.tolerance)
+                passed = bool(np.isfinite(row.measured)
+                              and abs(row.measured - row.expected) <= row.tolerance)
+                row.status = _status(passed, row.details.get("known_issue"))
                 row.details.setdefault("z", round(z, 3))
                 if row.stderr > 0:
                     row.details.setdefault("z_score", (row.measured - row.expected) / row.stderr)
         return self.rows
+
+
+def _status(passed: bool, known_issue: str | None = None) -> str:
+    """A check row's status: pass, else KNOWN with a documented cause, else fail."""
+    if passed:
+        return "pass"
+    return "KNOWN" if known_issue else "fail"
 
 
 def _compare(measured, expected, tol, relation) -> bool:

@@ -15,7 +15,8 @@ import math
 
 import numpy as np
 
-from .common import EPS32, CheckResult, Config, Rows, image_mean, render, worst
+from ..verdict import Row
+from .common import EPS32, Config, Rows, image_mean, render, worst
 
 #: Camera-to-surface distances (scene units).
 DISTANCES = (1.0, 10.0, 100.0, 1000.0)
@@ -23,7 +24,7 @@ DISTANCES = (1.0, 10.0, 100.0, 1000.0)
 LE = 1.0
 
 
-def check_constancy(cfg: Config) -> list[CheckResult]:
+def check_constancy(cfg: Config) -> list[Row]:
     """Radiance constancy, inverse square, mirror and dielectric (module docstring)."""
     rows = Rows("constancy")
     _emitter_at_distances(cfg, rows)

@@ -22,7 +22,8 @@ import mitsuba as mi
 import numpy as np
 
 from .. import probe, registration
-from .common import EPS32, CheckResult, Config, Rows, gray, image_mean, render, worst
+from ..verdict import Row
+from .common import EPS32, Config, Rows, gray, image_mean, render, worst
 
 SPHERE_BIAS_NOTE = (
     "Mitsuba 3.9.1 sphere emitter: sample_direction() treats a point on the sphere as inside "
@@ -39,7 +40,7 @@ LE = 1.0
 DEPTH = 5
 
 
-def check_energy(cfg: Config) -> list[CheckResult]:
+def check_energy(cfg: Config) -> list[Row]:
     """White furnace and the multi-bounce furnace for ``lambert`` and the built-in ``diffuse``
     (the module docstring derives every expectation)."""
     registration.register()

@@ -23,7 +23,8 @@ import numpy as np
 
 from .. import probe, registration
 from ..physics.quadrature import albedo_by_quadrature, lobe_width
-from .common import CheckResult, Config, Rows, gray, image_mean, phong_dict, render, worst
+from ..verdict import Row
+from .common import Config, Rows, gray, image_mean, phong_dict, render, worst
 
 #: Exponents of the Phong albedo grid (0 and >= 1000 included).
 EXPONENTS = (0.0, 1.0, 10.0, 100.0, 1000.0, 10000.0, 100000.0)
@@ -35,7 +36,7 @@ QTOL = 1e-5
 RHO, KD, KS = 0.7, 0.5, 0.5
 
 
-def check_reflection(cfg: Config) -> list[CheckResult]:
+def check_reflection(cfg: Config) -> list[Row]:
     """The reflection equation by quadrature, Monte Carlo and render (module docstring)."""
     registration.register()
     rows = Rows("reflection")

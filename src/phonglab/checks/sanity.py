@@ -1,129 +1,120 @@
 r"""Check 6, ``sanity``: reciprocity, non-negativity/finiteness, weight = eval/pdf and χ², per plugin.
 
-* Reciprocity: f(ω_i, ω_o) = eval(ω_i → ω_o)/cos θ_o equals f(ω_o, ω_i); the relative
-  difference over random pairs (both above the surface, incl. grazing ones) must stay within
-  the float32 budget 32·2⁻²⁴·(p + 1): cos α = ω_o·R(ω_i) is rounded differently in the two
-  orders, and cos^p α amplifies a relative error by p.
-* Non-negativity and finiteness of eval, pdf and sample weight over random directions on the
-  whole sphere (below the horizon included) and grazing ones (|cos θ| down to 1e-7):
-  the number of negative or non-finite values must be 0.
-* weight = eval/pdf at the sampled directions, relative budget 64·2⁻²⁴.
-* χ² test of sample() against pdf() (``mi.chi2.ChiSquareTest``, ``BSDFAdapter``) at
-  θ_i ∈ {0°, 45°, 80°}; its p-value must exceed the Šidák level of all χ² tests of this check,
-  and the histogram must not be empty (an empty one passes vacuously).  The expected cell
-  counts integrate pdf() with 16 x 16 trapezoid points per cell (``ires=16``): with the
-  default 4 x 4 a p = 300 lobe at normal incidence, narrower than one cos θ row of the
-  101-row grid, is integrated too coarsely and the test rejects a correct sampler.
+The rows come from the validator (:func:`phonglab.validate.validate_bsdf`, the project's one
+BSDF test harness), run on each case -- ``lambert`` and ``diffuse`` (ρ = 0.7), ``phong``
+(k_d = 0.4, k_s = 0.5) at p = 0, 30, 300; ``Config.lambert``/``Config.phong`` name the plugins
+-- on its topics ``finite``, ``weight``, ``reciprocity`` and ``chi2`` with its quick grid
+(incidence cells cos θ_i ∈ {1, 0.6, 0.2, 1e-4, 0} × φ_i ∈ {0, 2.1}; χ² at
+cos θ_i ∈ {0.8, 0.5, 0.2}, φ_i = 0, 61 × 122 bins) and the check's χ² sample count
+``Config.chi2_samples``.  Each case gives four rows:
+
+* ``reciprocity`` (topic ``reciprocity``): f(ω_i, ω_o) = f(ω_o, ω_i) over random and grid pairs
+  on the upper hemisphere; measured = the worst lane's relative difference over its tolerance
+  2⁻¹⁰ + the lane's sensitivity to an 8-ulp move of both directions
+  (:mod:`phonglab.validate.config`), passes at ≤ 1.
+* ``non-negative, finite`` (topic ``finite``): the number of lanes with a negative or
+  non-finite eval, pdf, eval_pdf or sample result over random, mirror, grazing and
+  below-horizon directions (the sum of the topic's four rows), must be 0.
+* ``weight = eval/pdf`` (topic ``weight``): every non-delta sample's weight against eval/pdf at
+  its direction, measured as for reciprocity (≤ 1).
+* ``χ² sampling`` (topic ``chi2``): the minimum p-value of Pearson's χ² of sample() against
+  pdf() over the three incidences, which must all pass at the level below; an empty histogram
+  with a non-zero pdf fails.  ``histogram_min_sum`` is the smallest histogram's sample count.
+
+Before the validator was the harness, this check had its own probes and fixed float budgets:
+32·2⁻²⁴·(p + 1) on the relative reciprocity difference and 64·2⁻²⁴ on the weight's; the
+sensitivity model replaces both.
+
+Family-wise α.  The validator tests each χ² cell of one BSDF at the Šidák level of its m
+cells, so a correct BSDF fails by chance with probability α = :data:`phonglab.stats.ALPHA`.
+This check judges its five cases as one family: it passes ``family=5``, so every cell is at
+the Šidák level of 5 × 3 = 15 tests, 1 − (1 − α)^(1/15) ≈ 6.7e-4, and correct plugins fail
+the sanity check by chance with probability α (the cases draw independent numbers:
+case k runs the validator with seed 5·``Config.seed`` + k).  The other rows are
+deterministic identities, not tests at a level.
 """
 
 from __future__ import annotations
 
-import math
+from ..validate import validate_bsdf
+from ..verdict import Report, Row
+from .common import Config, gray, phong_dict
 
-import mitsuba as mi
-import numpy as np
-
-from .. import probe, registration, stats
-from .common import EPS32, CheckResult, Config, Rows, gray, phong_dict
-
-#: Incidence angles (degrees) of the χ² tests.
-CHI2_ANGLES = (0.0, 45.0, 80.0)
+#: The validator's topics the rows come from.
+TOPICS = ("finite", "weight", "reciprocity", "chi2")
 
 
-def check_sanity(cfg: Config) -> list[CheckResult]:
+def check_sanity(cfg: Config) -> list[Row]:
     """Reciprocity, non-negativity/finiteness, weight = eval/pdf and χ² for every case."""
-    registration.register()
-    rows = Rows("sanity")
     cases = _sanity_cases(cfg)
-    n = max(4096, cfg.samples // 4)
-    chi2_tests = len(cases) * len(CHI2_ANGLES)
-    for k, (label, spec, p) in enumerate(cases):
+    rows: list[Row] = []
+    for k, (label, spec) in enumerate(cases):
         cfg.note(f"sanity: {label}")
-        bsdf = mi.load_dict(spec)
-        rng = cfg.rng(600 + k)
-        _reciprocity(rows, label, bsdf, p, rng, n)
-        _values_and_weights(rows, label, bsdf, rng, n)
-        _chi2(cfg, rows, label, spec, k, chi2_tests)
-    return rows.finish()
+        report = validate_bsdf(spec, topics=TOPICS, seed=cfg.seed * len(cases) + k, quick=True,
+                               family=len(cases), sizes={"chi2_samples": cfg.chi2_samples})
+        rows += _case_rows(label, report, cfg.chi2_samples)
+    return rows
 
 
-def _sanity_cases(cfg: Config) -> list[tuple[str, dict, float]]:
-    """(label, plugin dict, exponent p for the float budget)."""
-    cases = [(f"{cfg.lambert}", gray(cfg.lambert, reflectance=0.7), 0.0),
-             ("diffuse", gray("diffuse", reflectance=0.7), 0.0)]
+def _sanity_cases(cfg: Config) -> list[tuple[str, dict]]:
+    """(label, plugin dict)."""
+    cases = [(f"{cfg.lambert}", gray(cfg.lambert, reflectance=0.7)),
+             ("diffuse", gray("diffuse", reflectance=0.7))]
     for p in (0.0, 30.0, 300.0):
-        cases.append((f"{cfg.phong} p={p:g}", phong_dict(cfg.phong, 0.4, 0.5, p), p))
+        cases.append((f"{cfg.phong} p={p:g}", phong_dict(cfg.phong, 0.4, 0.5, p)))
     return cases
 
 
-def _random_dirs(rng, n: int, grazing: int) -> np.ndarray:
-    """Uniform directions on the sphere plus ``grazing`` ones with |cos θ| in [1e-7, 1e-2]."""
-    d = rng.normal(size=(n, 3))
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    phi = rng.uniform(0, 2 * np.pi, grazing)
-    cz = 10.0 ** rng.uniform(-7, -2, grazing) * rng.choice([-1.0, 1.0], grazing)
-    s = np.sqrt(1 - cz * cz)
-    g = np.stack([s * np.cos(phi), s * np.sin(phi), cz], axis=1)
-    return np.concatenate([d, g])
+def _case_rows(label: str, report: Report, samples: int) -> list[Row]:
+    """The four rows of one case from its validation report."""
+    by = {t: [r for r in report.rows if r.topic == t] for t in TOPICS}
+    m = report.meta["statistical_tests"]
+    rec, fin, wgt, chi = by["reciprocity"], by["finite"], by["weight"], by["chi2"]
+    cells = [c for r in chi for c in r.details.get("cells", [])]
+    # A tested cell's hist_sum is the fraction of samples histogrammed; an empty one's is 0.
+    hist_min = min((c["hist_sum"] * samples for c in cells), default=0.0)
+    level = chi[0].expected if chi else None
+    return [
+        _row(label, "reciprocity", rec, _worst(rec), 0.0, 1.0,
+             "max relative |f(ωi,ωo) − f(ωo,ωi)| over its float32 tolerance (validate "
+             "topic reciprocity, random and grid pairs)",
+             "Helmholtz reciprocity; tolerance 2^-10 + each pair's sensitivity"),
+        _row(label, "non-negative, finite", fin, _total(fin), 0.0, 0.0,
+             "negative or non-finite eval/pdf/eval_pdf/sample lanes (validate topic finite: "
+             "random, mirror, grazing and below-horizon directions)", "f_r >= 0, pdf >= 0"),
+        _row(label, "weight = eval/pdf", wgt, _worst(wgt), 0.0, 1.0,
+             "max relative |weight − eval/pdf| at sampled directions over its float32 "
+             "tolerance (validate topic weight)",
+             "sample() must agree with eval() and pdf(); tolerance 2^-10 + each lane's "
+             "sensitivity"),
+        _row(label, "χ² sampling", chi, chi[0].measured if chi else None, level, 0.0,
+             "min χ² p-value of sample() vs pdf() (validate topic chi2, θ_i "
+             + "/".join(f"{c['theta_deg']:.1f}" for c in cells) + "°)",
+             f"Pearson χ²; Šidák level over {m} tests", relation=">=",
+             histogram_min_sum=hist_min),
+    ]
 
 
-def _reciprocity(rows: Rows, label: str, bsdf, p: float, rng, n: int) -> None:
-    up = _random_dirs(rng, n, n // 8)
-    up[:, 2] = np.abs(up[:, 2])
-    up2 = _random_dirs(rng, n, n // 8)
-    up2[:, 2] = np.abs(up2[:, 2])
-    f_io = probe.eval(bsdf, up, up2)[:, 0] / up2[:, 2]
-    f_oi = probe.eval(bsdf, up2, up)[:, 0] / up[:, 2]
-    scale = np.maximum(np.abs(f_io), np.abs(f_oi))
-    rel = np.where(scale > 0, np.abs(f_io - f_oi) / np.where(scale > 0, scale, 1.0), 0.0)
-    rows.exact(f"{label}: reciprocity", f"{label}: max relative |f(ωi,ωo) − f(ωo,ωi)| "
-               f"({len(up)} pairs, grazing incl.)", float(rel.max()), 0.0,
-               "Helmholtz reciprocity", 32 * EPS32 * (p + 1))
+def _row(label, what, vrows: list[Row], measured, expected, tolerance, compared, source,
+         relation="==", **details) -> Row:
+    """A check row standing for the validator rows ``vrows`` (kept in ``details["validate"]``)."""
+    statuses = {r.status for r in vrows}
+    status = ("fail" if "fail" in statuses or not vrows else
+              "KNOWN" if "KNOWN" in statuses else
+              "skipped" if statuses == {"skipped"} else "pass")
+    return Row("sanity", f"{label}: {what}", measured, expected, 0.0, tolerance, status,
+               f"{label}: {compared}",
+               {"source": source, "relation": relation, **details,
+                "validate": [r.to_dict() for r in vrows]})
 
 
-def _values_and_weights(rows: Rows, label: str, bsdf, rng, n: int) -> None:
-    """Non-negative, finite eval/pdf/sample over the whole sphere; weight = eval/pdf."""
-    wi = _random_dirs(rng, n, n // 8)
-    wo = _random_dirs(rng, n, n // 8)
-    ev, pd = probe.eval(bsdf, wi, wo)[:, 0], probe.pdf(bsdf, wi, wo)
-    u = rng.random((len(wi), 3))
-    s = probe.sample(bsdf, wi, u[:, 0], u[:, 1:])
-    swo, spdf, sw = s.wo, s.pdf, s.weight[:, 0]
-    values = np.concatenate([ev, pd, sw, spdf])
-    bad = int(np.sum(~np.isfinite(values)) + np.sum(values < 0)
-              + np.sum(~np.isfinite(swo)))
-    rows.exact(f"{label}: non-negative, finite", f"{label}: negative or non-finite eval/pdf/"
-               f"sample values ({len(values)}, whole sphere + grazing)", bad, 0,
-               "f_r >= 0, pdf >= 0", 0.0)
-    ok = (sw > 0) & (spdf > 0)
-    ev_s = probe.eval(bsdf, wi[ok], swo[ok])[:, 0]
-    pd_s = probe.pdf(bsdf, wi[ok], swo[ok])
-    ratio = ev_s / np.where(pd_s > 0, pd_s, 1.0)
-    relw = np.abs(sw[ok] - ratio) / np.maximum(np.abs(ratio), 1e-30)
-    rows.exact(f"{label}: weight = eval/pdf", f"{label}: max relative |weight − eval/pdf| "
-               f"at sampled directions", float(relw.max()) if relw.size else math.inf, 0.0,
-               "sample() must agree with eval() and pdf()", 64 * EPS32)
+def _worst(rows: list[Row]) -> float | None:
+    """The largest measured value of ``rows`` (None when none was measured)."""
+    values = [r.measured for r in rows if r.measured is not None]
+    return max(values) if values else None
 
 
-def _chi2(cfg: Config, rows: Rows, label: str, spec: dict, k: int, tests: int) -> None:
-    """Pearson χ² of sample() against pdf() at each of :data:`CHI2_ANGLES`; the minimum p."""
-    pmin, hist_min, per_angle = 1.0, math.inf, {}
-    for t in CHI2_ANGLES:
-        wi = probe.direction(math.radians(t)).tolist()
-        sample_func, pdf_func = mi.chi2.BSDFAdapter(spec["type"], spec, wi=wi)
-        test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
-                                     pdf_func=pdf_func, sample_dim=3,
-                                     sample_count=cfg.chi2_samples, res=101, ires=16,
-                                     seed=cfg.seed + k)
-        test.run(significance_level=stats.ALPHA, test_count=1, quiet=True)
-        hist = float(np.sum(np.array(test.histogram)))
-        pv = float(test.p_value) if test.p_value is not None else 0.0
-        if test.fail or not math.isfinite(pv):
-            pv = 0.0
-        per_angle[f"{t:g}"] = {"p_value": pv, "histogram_sum": hist}
-        pmin, hist_min = min(pmin, pv), min(hist_min, hist)
-    rows.exact(f"{label}: χ² sampling", f"{label}: min χ² p-value of sample() vs pdf() "
-               f"(θ_i 0/45/80°)", pmin, stats.sidak(stats.ALPHA, tests),
-               f"Pearson χ²; Šidák level over {tests} tests", 0.0,
-               relation=">=", extra_ok=hist_min > 0, histogram_min_sum=hist_min,
-               per_angle=per_angle)
+def _total(rows: list[Row]) -> float | None:
+    """The sum of the rows' counts (None when one of them was not measured)."""
+    values = [r.measured for r in rows]
+    return float(sum(values)) if values and None not in values else None

@@ -17,10 +17,11 @@ from typing import Any
 import numpy as np
 
 from .. import exr, stats
-from .common import CheckResult, Config, Rows, render
+from ..verdict import Row
+from .common import Config, Rows, render
 
 
-def check_scene(cfg: Config) -> list[CheckResult]:
+def check_scene(cfg: Config) -> list[Row]:
     """``lambert`` against ``diffuse`` in the Cornell box, per pixel and on the mean."""
     rows = Rows("scene")
     passes = max(cfg.passes, 16)
@@ -46,7 +47,7 @@ def check_scene(cfg: Config) -> list[CheckResult]:
                          float(mean_ch[worst]), 0.0, "same BSDF: expected difference 0",
                          float(se_ch[worst]), tests=3, mean_per_channel=mean_ch.tolist())
     result = rows.finish()
-    if not (row_px.passed and row_mean.passed):
+    if not (row_px.status == "pass" and row_mean.status == "pass"):
         path = _write_failure_images(cfg, diff, t)
         row_px.details["difference_image"] = str(path)
         row_mean.details["difference_image"] = str(path)

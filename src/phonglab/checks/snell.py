@@ -23,7 +23,8 @@ import numpy as np
 
 from .. import probe, registration
 from ..physics import optics
-from .common import EPS32, CheckResult, Config, Rows
+from ..verdict import Row
+from .common import EPS32, Config, Rows
 
 #: Relative indices of refraction int_ior/ext_ior (their inverses are checked too).
 INDICES = (1.33, 1.5, 2.4)
@@ -44,7 +45,7 @@ class _Worst:
     min_f_tir: float = 1.0        #: min F and reflect pdf past the critical angle
 
 
-def check_snell(cfg: Config) -> list[CheckResult]:
+def check_snell(cfg: Config) -> list[Row]:
     """Refraction and Fresnel: the seed formula, ``mi.refract`` and ``dielectric`` agree."""
     registration.register()
     worst = _Worst()
@@ -124,7 +125,7 @@ def _measure_side(bsdf, int_ior: float, ext_ior: float, side: int, worst: _Worst
         worst.r_plus_t = max(worst.r_plus_t, float(np.abs(pdf_r[both] + pdf[both] - 1.0).max()))
 
 
-def _rows(worst: _Worst) -> list[CheckResult]:
+def _rows(worst: _Worst) -> list[Row]:
     rows = Rows("snell")
     rows.exact("refract: seed vs mi.refract", "max angle between optics.refract (seed formula) "
                "and mi.refract [rad]", worst.angle_mi, 0.0, "same law: identical directions", 1e-5)

@@ -15,6 +15,7 @@ import mitsuba as mi
 
 from .. import __version__, checks, register
 from ..errors import PhonglabError
+from ..verdict import Report, format_number
 from .options import add_seed
 
 
@@ -79,33 +80,45 @@ def run(args) -> int:
             bar.update(1)
             bar.close()
     seconds = time.perf_counter() - t0
-    print(checks.format_table(results))
+    report = Report({
+        "phonglab_version": __version__, "mitsuba_version": mi.__version__,
+        "variant": mi.variant(), "spp": cfg.spp, "seed": cfg.seed,
+        "samples": cfg.samples, "chi2_samples": cfg.chi2_samples, "alpha": stats.ALPHA,
+        "seconds": round(seconds, 2), "checks": names, "python": platform.python_version()},
+        results)
+    print(report.table(digits=6, stderr=True, reasons=False))
     if args.details:
         print()
         for r in results:
-            print(f"[{r.check}] {r.name}: {r.compared}; expected from: {r.source}"
-                  + (f"; known issue: {r.known_issue}" if r.known_issue and not r.passed else ""))
-    failed = [r for r in results if not r.ok]
-    known = [r for r in results if not r.passed and r.known_issue]
-    print(f"\n{len(results)} rows: {sum(r.passed for r in results)} pass, {len(known)} known "
-          f"discrepancies (documented in docs/checks.md), {len(failed)} fail "
+            print(f"[{r.topic}] {r.name}: {r.reason}; expected from: {r.details.get('source')}"
+                  + (f"; known issue: {_issue(r)}" if r.status == "KNOWN" else ""))
+    _summary(report, seconds, cfg)
+    if args.json:
+        print(f"JSON: {report.write_json(args.json)}")
+    return 0 if report.passed else 1
+
+
+def _summary(report: Report, seconds: float, cfg) -> None:
+    """The counts, then each documented discrepancy and each failing row on a line."""
+    rows = report.rows
+    known = [r for r in rows if r.status == "KNOWN"]
+    print(f"\n{len(rows)} rows: {sum(r.status == 'pass' for r in rows)} pass, {len(known)} known "
+          f"discrepancies (documented in docs/checks.md), {len(report.failing)} fail "
           f"({seconds:.1f} s, spp {cfg.spp}, seed {cfg.seed}).")
-    for issue in dict.fromkeys(r.known_issue for r in known):
-        which = ", ".join(f"{r.check}/{r.name}" for r in known if r.known_issue == issue)
+    for issue in dict.fromkeys(_issue(r) for r in known):
+        which = ", ".join(f"{r.topic}/{r.name}" for r in known if _issue(r) == issue)
         print(f"  KNOWN {which}: {issue}")
-    for r in failed:
-        print(f"  FAIL {r.check}/{r.name}: measured {r.measured:.6g}, expected {r.expected:.6g} "
-              f"± {r.tolerance:.3g} ({r.source})"
+    for r in report.failing:
+        print(f"  fail {r.topic}/{r.name}: measured {format_number(r.measured, 6)}, expected "
+              f"{format_number(r.expected, 6)} ± {format_number(r.tolerance, 3)} "
+              f"({r.details.get('source')})"
               + (f"; difference image {r.details['difference_image']}"
                  if "difference_image" in r.details else ""))
-    if args.json:
-        path = checks.write_json(args.json, results, {
-            "phonglab_version": __version__, "mitsuba_version": mi.__version__,
-            "variant": mi.variant(), "spp": cfg.spp, "seed": cfg.seed,
-            "samples": cfg.samples, "chi2_samples": cfg.chi2_samples, "alpha": stats.ALPHA,
-            "seconds": round(seconds, 2), "checks": names, "python": platform.python_version()})
-        print(f"JSON: {path}")
-    return 1 if failed else 0
+
+
+def _issue(row) -> str:
+    """The documented cause of a KNOWN row."""
+    return row.details.get("known_issue", row.reason)
 
 
 def _require_plugins(*names: str) -> None:

@@ -8,13 +8,13 @@ sentence, checked before any expensive work.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
+from ..validate.bsdf.topics import TOPICS
 from ..validate.inputs import ValidateError, check_topics
-from ..validate.report import TOPICS, Report
+from ..verdict import Report, write_json
 from .options import add_seed
 
 EPILOG = """examples:
@@ -83,11 +83,6 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     return parse_sets(args.set), topics
 
 
-def _write_json(path, data) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(data, indent=1))
-
-
 def _all_builtins(args) -> int:
     from ..validate import batch
 
@@ -102,7 +97,7 @@ def _all_builtins(args) -> int:
         result = batch.run_all(options={"seed": args.seed, "quick": args.quick,
                                         "topics": args.only}, progress=progress, runner=runner)
     if args.json:
-        _write_json(args.json, result)
+        write_json(args.json, result)
     print(f"{result['meta']['cases']} cases, {len(result['meta']['failed'])} failing")
     return 1 if result["meta"]["failed"] else 0
 
@@ -123,7 +118,7 @@ def run(args) -> int:
     label = target.label
     print(report.table())
     if args.json:
-        _write_json(args.json, report.to_dict())
+        report.write_json(args.json)
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)

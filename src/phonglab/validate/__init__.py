@@ -1,20 +1,22 @@
-"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its :class:`Report`.
+"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its report.
 
 The runner is kind-independent (:mod:`.core`: guarded topics, Šidák over the statistical
 rows, KNOWN causes, the report); a plugin kind brings its topics.  The BSDF kind
 (:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
 (:mod:`.bsdf.identities`), ``chi2`` (:mod:`.bsdf.sampling`), ``energy`` (:mod:`.bsdf.energy`),
 ``reciprocity`` (:mod:`.bsdf.reciprocity`), ``gradient`` (:mod:`.bsdf.gradient`), ``cost``
-(:mod:`.bsdf.cost`); sizes and tolerances: :mod:`.bsdf.config`.  Rows and reports:
-:mod:`.report`; user input: :mod:`.inputs` and :mod:`phonglab.settings`; Mitsuba's built-ins
-and their findings: :mod:`.builtins`; many cases as jobs: :mod:`.batch`.
+(:mod:`.bsdf.cost`); sizes and tolerances: :mod:`.bsdf.config`; the topic list and the
+BSDF rows: :mod:`.bsdf.topics`.  Rows and reports: :mod:`phonglab.verdict`; user input:
+:mod:`.inputs` and :mod:`phonglab.settings`; Mitsuba's built-ins and their findings:
+:mod:`.builtins`; many cases as jobs: :mod:`.batch`.
 
 Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` does.
 """
 
-from .report import STATUSES, TOPICS, Report, Row, table
+from ..verdict import Report
+from .bsdf.topics import TOPICS
 
-__all__ = ["Report", "Row", "STATUSES", "TOPICS", "table", "validate_bsdf"]
+__all__ = ["TOPICS", "validate_bsdf"]
 
 
 def validate_bsdf(spec, **options) -> Report:

@@ -15,9 +15,10 @@ import time
 import traceback
 
 from ..parallel import Job, Runner
+from ..verdict import Report
 from . import builtins
 from .bsdf.kind import validate_bsdf
-from .report import TOPICS, Report, Row
+from .bsdf.topics import TOPICS, Row
 
 
 def find_case(case):

@@ -23,7 +23,7 @@ from __future__ import annotations
 import runpy
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -31,8 +31,8 @@ import mitsuba as mi
 
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
+from ..verdict import Report, Row
 from .inputs import ValidateError, check_topics
-from .report import Report, Row
 
 
 @dataclass(frozen=True)
@@ -107,10 +107,19 @@ def mark_known(rows: list[Row], known) -> None:
             r.status, r.reason = "KNOWN", f"{known[r.topic]} ({r.reason})"
 
 
-def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None) -> Report:
-    """Every topic of ``topics`` (checked, in table order) on the prepared ``target``."""
+def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, family=1,
+        sizes=None) -> Report:
+    """Every topic of ``topics`` (checked, in table order) on the prepared ``target``.
+
+    ``family``: how many plugins the caller judges as one family (``phonglab check``'s sanity
+    cases); each statistical test is then at the Šidák level of family × m tests, so the whole
+    family fails by chance with probability α (``meta["statistical_tests"]`` is that product).
+    ``sizes``: fields of the kind's sizes to replace (e.g. ``{"chi2_samples": 65536}``).
+    """
     opts = kind.options(quick, seed, topics)
-    m = kind.statistical_tests(target.plugin, opts, topics)
+    if sizes:
+        opts = replace(opts, **sizes)
+    m = kind.statistical_tests(target.plugin, opts, topics) * family
     runners = kind.runners(target.plugin, opts, topics, m)
     rows, seconds = [], {}
     t_all = time.perf_counter()
@@ -124,12 +133,17 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None) 
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
             "known": dict(known or {})}
+    if family != 1:
+        meta["family"] = family
+    if sizes:
+        meta["sizes"] = dict(sizes)
     return Report(meta, rows)
 
 
 def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-             known=None, plugins=()) -> Report:
+             known=None, plugins=(), family=1, sizes=None) -> Report:
     """Validate one plugin of ``kind`` on every topic (or ``topics``): check, prepare, run."""
     topics = check_topics(topics, kind.topics)
     target = prepare(kind, spec, variant=variant, params=params, plugins=plugins)
-    return run(kind, target, topics=topics, seed=seed, quick=quick, known=known)
+    return run(kind, target, topics=topics, seed=seed, quick=quick, known=known, family=family,
+               sizes=sizes)

@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .report import Report, format_number  # noqa: E402
+from ..verdict import Report, cells, header  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}
 STYLE = ("body{font-family:sans-serif;margin:1.5em;max-width:1100px}"
@@ -40,13 +40,10 @@ def _img(uri: str, alt: str) -> str:
 
 
 def _table(report: Report) -> str:
-    head = ("status", "topic", "name", "measured", "expected", "tolerance", "reason")
-    rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"]
+    rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in header() + ("reason",)) + "</tr>"]
     for r in report.rows:
-        cells = (r.status, r.topic, r.name, format_number(r.measured), format_number(r.expected),
-                 format_number(r.tolerance))
         rows.append(f'<tr style="background:{COLOURS.get(r.status, "#fff")}">'
-                    + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells)
+                    + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells(r))
                     + f'<td class="reason">{html.escape(r.reason)}</td></tr>')
     return "<table>" + "".join(rows) + "</table>"
 

@@ -7,7 +7,7 @@ documented there); plugins are loaded by :func:`phonglab.settings.load_plugin`.
 from __future__ import annotations
 
 from ..errors import PhonglabError
-from .report import TOPICS
+from .bsdf.topics import TOPICS
 
 
 class ValidateError(PhonglabError):

@@ -3,8 +3,8 @@
 ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component`` (:mod:`.identities`), ``chi2``
 (:mod:`.sampling`), ``energy`` (:mod:`.energy`), ``reciprocity`` (:mod:`.reciprocity`),
 ``gradient`` (:mod:`.gradient`), ``cost`` (:mod:`.cost`); the lanes they probe
-(:mod:`.lanes`), their sizes and round-off tolerances (:mod:`.config`), the identity rows'
-reduction (:mod:`.rows`), and the table that ties them to the kind-independent runner
+(:mod:`.lanes`), their sizes and round-off tolerances (:mod:`.config`), the topic list and the
+row that checks it (:mod:`.topics`), the identity rows' reduction (:mod:`.rows`), and the table that ties them to the kind-independent runner
 (:mod:`.kind`: :data:`~.kind.BSDF`, :func:`~.kind.validate_bsdf`).
 
 Importing this package imports nothing; its modules import Mitsuba.

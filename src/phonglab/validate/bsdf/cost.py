@@ -15,8 +15,8 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..report import Row
 from . import lanes
+from .topics import Row
 
 
 def _median_times(fa, fb, repeats: int) -> tuple[float, float]:

@@ -32,8 +32,8 @@ import numpy as np
 
 from ... import probe, stats
 from ...physics.quadrature import lobe_quadrature
-from ..report import Row
 from . import lanes
+from .topics import Row
 
 #: Float32 floor of the band: an eval summed over ~10⁴ nodes is good to ~1e-5 relative.
 FLOOR = 1e-5

@@ -36,9 +36,9 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..report import Row
 from . import lanes
 from .config import EPS32
+from .topics import Row
 
 #: Round-off multiplier of a float32 eval lane (see the module docstring).
 ROUND_OFF = 64 * EPS32

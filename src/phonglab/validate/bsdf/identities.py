@@ -25,10 +25,10 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..report import Row
 from . import lanes
 from .config import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
 from .rows import BOXED, ROUND_OFF, bounded_row, max_finite, worst_lane
+from .topics import Row
 
 SAMPLE_NOTE = ("; edge sample values 0 and 1 − ε; a sample with non-zero weight must have a "
                "finite pdf ≥ 0 and a unit wo, a rejected one (weight 0, which integrators "

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import mitsuba as mi
 
+from ...verdict import Report
 from .. import core
-from ..report import TOPICS, Report
 from . import lanes
 from .config import options
 from .cost import cost
@@ -20,6 +20,7 @@ from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .reciprocity import reciprocity
 from .sampling import chi2
+from .topics import TOPICS
 
 
 def statistical_tests(bsdf, opts, topics) -> int:
@@ -57,14 +58,15 @@ BSDF = core.Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.regis
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                  known=None, plugins=()) -> Report:
+                  known=None, plugins=(), family=1, sizes=None) -> Report:
     """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`.
 
     ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
     ``<bsdf>``, or a loaded ``mi.BSDF``; ``params`` are added to a name's or dict's parameters.
     ``known``: topic -> documented cause (a failing row of that topic is KNOWN); ``plugins``:
-    Python files that call ``mi.register_bsdf``, run after the variant is set.  Bad input
-    raises :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
+    Python files that call ``mi.register_bsdf``, run after the variant is set.  ``family``,
+    ``sizes``: see :func:`phonglab.validate.core.run`.  Bad input raises
+    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
     """
     return core.validate(BSDF, spec, variant=variant, params=params, topics=topics, seed=seed,
-                         quick=quick, known=known, plugins=plugins)
+                         quick=quick, known=known, plugins=plugins, family=family, sizes=sizes)

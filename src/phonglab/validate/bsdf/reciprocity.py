@@ -23,10 +23,10 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..report import Row
 from . import lanes
 from .config import excess, rel_diff, sensitivity
 from .rows import CONDITIONED, bounded_row, max_finite, worst_lane
+from .topics import Row
 
 
 def _pairs(opts, upper_only: bool):

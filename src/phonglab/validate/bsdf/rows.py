@@ -1,5 +1,5 @@
 r"""Rows of the lane-wise identity topics (``finite``, ``eval_pdf``, ``weight``, ``pdf``,
-``component``, ``reciprocity``): many lanes reduced to one :class:`~phonglab.validate.report.Row`.
+``component``, ``reciprocity``): many lanes reduced to one :class:`~phonglab.validate.bsdf.topics.Row`.
 
 A row's ``measured`` is the largest finite per-lane value (:func:`max_finite`: a count of bad
 lanes, a relative difference, or the excess over the lane's tolerance); the row passes when that
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..report import Row
+from .topics import Row
 
 #: The reason text of a row compared at float32 round-off alone.
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"

@@ -33,8 +33,8 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe, stats
-from ..report import Row
 from . import lanes
+from .topics import Row
 
 #: Tolerance of a delta sample's direction, per vector component (see the module docstring).
 DIRECTION_TOL = 1e-4

@@ -10,7 +10,7 @@ that JSON only.
 
 from __future__ import annotations
 
-from ..report import TOPICS
+from ..bsdf.topics import TOPICS
 from . import findings
 from .catalogue import LEFT_OUT
 from .findings import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL

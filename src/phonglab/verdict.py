@@ -1,0 +1,172 @@
+"""The one result record of phonglab: a :class:`Row` per verdict, a :class:`Report` of rows.
+
+Every harness writes its verdicts here: ``phonglab validate`` (one report per BSDF, a row's
+``topic`` one of :data:`phonglab.validate.TOPICS`) and ``phonglab check`` (one report per run,
+``topic`` the check's name).  A harness checks its own topic names (the validator's row,
+:class:`phonglab.validate.bsdf.topics.Row`, refuses any other); this module knows none.
+
+A row compares ``measured`` with ``expected`` within ``tolerance`` (``stderr``: the Monte Carlo
+standard error of ``measured``, None or 0 for a deterministic quantity); ``reason`` says what
+is compared and why the verdict is what it is, ``details`` holds what a reader needs to find a
+problem (JSON-able data).  Its ``status`` is one of :data:`STATUSES`:
+
+* ``pass``    the measured value is within the tolerance of the expected one;
+* ``fail``    it is not;
+* ``KNOWN``   it is not, and the harness names a documented cause (``reason`` or
+  ``details["known_issue"]``); the tolerance is the same as for ``fail``;
+* ``skipped`` the check does not apply (``reason`` says why).
+
+One key of ``details`` has a meaning here: ``relation`` (``"=="``, ``"<="``, ``">="``), how
+``measured`` is held against ``expected`` ± ``tolerance`` (``<=``: measured ≤ expected +
+tolerance); the table shows a one-sided row's expected value as ``≤ x`` or ``≥ x``.  A row
+without it states its comparison in ``reason``.
+
+JSON (:meth:`Report.to_json`, :func:`write_json`): ``{"meta": {...}, "results": [row, ...]}``
+with each row's fields exactly those of :class:`Row`, made strict-JSON-safe by
+:func:`jsonable` (numpy scalars and arrays to Python numbers and lists, NaN/Inf to strings,
+paths to strings).  Text: :func:`table`; the HTML report (:mod:`phonglab.validate.html`)
+formats its cells with the same :func:`cells`.
+
+No Mitsuba import here: reports are built, merged and printed in processes that never load it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+#: The possible values of :attr:`Row.status`.
+STATUSES = ("pass", "fail", "KNOWN", "skipped")
+
+#: How ``details["relation"]`` shows on the expected value of a table row.
+RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
+
+
+def jsonable(x):
+    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
+    if hasattr(x, "tolist"):
+        x = x.tolist()
+    if isinstance(x, float):
+        return x if math.isfinite(x) else str(x)
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, Path):
+        return str(x)
+    return x
+
+
+@dataclass
+class Row:
+    """One verdict: ``measured`` against ``expected`` within ``tolerance``, on one topic."""
+
+    topic: str
+    name: str
+    measured: float | None
+    expected: float | None
+    stderr: float | None
+    tolerance: float | None
+    status: str
+    reason: str
+    details: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.status not in STATUSES:
+            raise ValueError(f"unknown status {self.status!r}; choose one of {', '.join(STATUSES)}")
+
+    def to_dict(self) -> dict:
+        return jsonable(asdict(self))
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Row":
+        return cls(**{k: d.get(k) for k in ("topic", "name", "measured", "expected", "stderr",
+                                             "tolerance", "status", "reason")},
+                   details=d.get("details") or {})
+
+
+def format_number(x, digits: int = 4) -> str:
+    """A cell of the table: ``digits`` significant digits, "-" for None."""
+    if x is None:
+        return "-"
+    if isinstance(x, str):
+        return x
+    return f"{x:.{digits}g}"
+
+
+def header(stderr: bool = False) -> tuple[str, ...]:
+    """The column names of :func:`cells` (with a ``stderr`` column when asked)."""
+    return ("status", "topic", "name", "measured", "expected") + (("stderr",) if stderr else ()) \
+        + ("tolerance",)
+
+
+def cells(row: Row, digits: int = 4, stderr: bool = False) -> tuple[str, ...]:
+    """A row's cells under :func:`header`: numbers to ``digits`` significant digits, the
+    expected value prefixed by ``≤``/``≥`` for a one-sided ``details["relation"]``."""
+    prefix = RELATION_PREFIX[row.details.get("relation", "==")]
+    expected = format_number(row.expected, digits)
+    return ((row.status, row.topic, row.name, format_number(row.measured, digits),
+             prefix + expected if row.expected is not None else expected)
+            + ((format_number(row.stderr, digits),) if stderr else ())
+            + (format_number(row.tolerance, digits),))
+
+
+def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool = True) -> str:
+    """Rows as aligned plain text, one line each (:func:`cells`), each row's reason below it
+    (``reasons``)."""
+    head = header(stderr)
+    body = [cells(r, digits, stderr) for r in rows]
+    widths = [max(len(str(x)) for x in col) for col in zip(head, *body)] if body else \
+        [len(h) for h in head]
+    lines = ["  ".join(str(x).ljust(w) for x, w in zip(head, widths)).rstrip()]
+    for r, line in zip(rows, body):
+        lines.append("  ".join(str(x).ljust(w) for x, w in zip(line, widths)).rstrip())
+        if reasons and r.reason:
+            lines.append(" " * (widths[0] + 2) + r.reason)
+    return "\n".join(lines)
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """JSON-able ``data`` (a report's :meth:`Report.to_dict`, or several) at ``path``, indent 1,
+    creating its folder."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1))
+    return path
+
+
+@dataclass
+class Report:
+    """The rows of one run (one BSDF's validation, one ``phonglab check``) with ``meta``."""
+
+    meta: dict
+    rows: list[Row] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        """True when no row has status ``fail`` (``KNOWN`` and ``skipped`` rows are allowed)."""
+        return not self.failing
+
+    @property
+    def failing(self) -> list[Row]:
+        return [r for r in self.rows if r.status == "fail"]
+
+    def to_dict(self) -> dict:
+        return {"meta": jsonable(self.meta), "results": [r.to_dict() for r in self.rows]}
+
+    def to_json(self, indent: int | None = 1) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+    def write_json(self, path: str | Path) -> Path:
+        """:meth:`to_dict` as JSON at ``path`` (:func:`write_json`)."""
+        return write_json(path, self.to_dict())
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Report":
+        return cls(meta=dict(d.get("meta") or {}), rows=[Row.from_dict(r) for r in d["results"]])
+
+    def table(self, rows: list[Row] | None = None, **options) -> str:
+        """:func:`table` of ``rows`` (all rows by default); ``options`` as there."""
+        return table(self.rows if rows is None else rows, **options)
