@@ -248,3 +248,35 @@ def test_a_topic_that_raises_is_one_failing_row(variant_llvm_rgb, tmp_path):
     assert "raised RuntimeError" in failing["eval_pdf"].reason
     assert "traceback" in failing["eval_pdf"].details
     assert {r.topic for r in report.rows if r.status == "pass"} == {"energy", "weight"}
+
+
+EXITS = "import sys\nsys.exit(0)\n"
+REGISTERS_NOTHING = "import mitsuba as mi\n\nclass Nothing(mi.BSDF):\n    pass\n"
+REGISTERS_AN_EMITTER = ("import mitsuba as mi\n\nclass Lamp(mi.Emitter):\n"
+                        "    def __init__(self, props):\n        mi.Emitter.__init__(self, props)\n\n"
+                        "mi.register_emitter('my_lamp', lambda props: Lamp(props))\n")
+
+
+@pytest.mark.parametrize("text, needle", [
+    (EXITS, "called sys.exit(0) while it was loaded"),
+    (REGISTERS_NOTHING, "registered nothing; validating a BSDF needs a file that calls "
+                        "mi.register_bsdf"),
+    (REGISTERS_AN_EMITTER, "registered the emitter 'my_lamp'"),
+], ids=["sys.exit(0)", "nothing", "an emitter"])
+def test_a_plugin_file_that_registers_no_bsdf_is_bad_input(variant_llvm_rgb, tmp_path, capsys,
+                                                           text, needle):
+    """A --plugin file that called sys.exit(0) made `validate` exit 0 ('all pass') without
+    validating anything; one that registered nothing or another kind left 'cannot load'."""
+    plugin = tmp_path / "p.py"
+    plugin.write_text(text)
+    assert main(["validate", "diffuse", "--quick", "--plugin", str(plugin)]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_plugin_file_that_registers_another_name_says_which(variant_llvm_rgb, tmp_path, capsys):
+    plugin = tmp_path / "p.py"
+    plugin.write_text((DEFECTS / "energy_gain.py").read_text())
+    assert main(["validate", "my_bsdf", "--quick", "--plugin", str(plugin)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot load BSDF 'my_bsdf'" in err and "registered 'defect_energy_gain'" in err, err

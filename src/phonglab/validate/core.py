@@ -52,18 +52,64 @@ class Kind:
     runners: Callable[[Any, Any, tuple, int], dict[str, Callable[[], list[Row]]]]
 
 
-def load_plugins(paths, kind: Kind) -> None:
-    """Execute each plugin file (it registers its plugin itself) in the active variant."""
+#: Mitsuba's registration calls a plugin file may make, and the kind each registers.
+REGISTER_CALLS = {"register_bsdf": "BSDF", "register_emitter": "emitter",
+                  "register_integrator": "integrator", "register_texture": "texture",
+                  "register_sensor": "sensor", "register_medium": "medium",
+                  "register_phasefunction": "phase function", "register_film": "film",
+                  "register_sampler": "sampler", "register_rfilter": "reconstruction filter"}
+
+
+def load_plugins(paths, kind: Kind) -> list[tuple[str, str]]:
+    """Execute each plugin file in the active variant; the (kind word, name) pairs it registered.
+
+    A file that exits (``sys.exit``, even with status 0), registers nothing, or registers no
+    plugin of ``kind`` is bad input (:class:`ValidateError`, naming what it did register):
+    the report must never say "all pass" of a plugin that was never loaded.
+    """
+    found: list[tuple[str, str]] = []
     for p in paths:
         path = Path(p)
         if not path.is_file():
             raise ValidateError(f"plugin file {str(p)!r} does not exist; give the path of a "
                                 f"Python file that calls {kind.register}")
-        try:
-            runpy.run_path(str(path), run_name="__phonglab_plugin__")
-        except Exception as exc:
-            raise ValidateError(f"plugin file {str(p)!r} failed: {type(exc).__name__}: "
-                                f"{str(exc).splitlines()[0] if str(exc) else ''}") from exc
+        mine = _run_plugin_file(path, kind)
+        if not any(word == kind.word for word, _ in mine):
+            what = (", ".join(f"the {word} {name!r}" for word, name in mine) if mine
+                    else "nothing")
+            raise ValidateError(f"plugin file {str(p)!r} registered {what}; validating a "
+                                f"{kind.word} needs a file that calls {kind.register}(name, "
+                                f"constructor)")
+        found += mine
+    return found
+
+
+def _run_plugin_file(path: Path, kind: Kind) -> list[tuple[str, str]]:
+    """Run one plugin file with Mitsuba's registration calls recorded; what it registered."""
+    calls: list[tuple[str, str]] = []
+    originals = {name: getattr(mi, name) for name in REGISTER_CALLS if hasattr(mi, name)}
+
+    def recording(name, original):
+        def register(plugin_name, *args, **kwargs):
+            calls.append((REGISTER_CALLS[name], str(plugin_name)))
+            return original(plugin_name, *args, **kwargs)
+        return register
+
+    for name, original in originals.items():
+        setattr(mi, name, recording(name, original))
+    try:
+        runpy.run_path(str(path), run_name="__phonglab_plugin__")
+    except SystemExit as exc:
+        raise ValidateError(f"plugin file {str(path)!r} called sys.exit({exc.code!r}) while it "
+                            f"was loaded; a plugin file must only define its plugin and call "
+                            f"{kind.register}") from None
+    except Exception as exc:
+        raise ValidateError(f"plugin file {str(path)!r} failed: {type(exc).__name__}: "
+                            f"{str(exc).splitlines()[0] if str(exc) else ''}") from exc
+    finally:
+        for name, original in originals.items():
+            setattr(mi, name, original)
+    return calls
 
 
 def _first_line(exc) -> str:
@@ -80,11 +126,13 @@ def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loade
             registration.register(variant)
         except ValueError as exc:
             raise ValidateError(str(exc)) from exc
-    load_plugins(plugins, kind)
+    registered = load_plugins(plugins, kind)
+    names = [name for word, name in registered if word == kind.word]
+    hint = ("check the type name and --set values, or register it with --plugin FILE.py"
+            if not names else f"the plugin files registered {', '.join(map(repr, names))}")
     try:
         return load_plugin(spec, params, kind=getattr(mi, kind.class_name), word=kind.word,
-                           hint="check the type name and --set values, or register it with "
-                                "--plugin FILE.py")
+                           hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
 
