@@ -280,3 +280,43 @@ def test_a_plugin_file_that_registers_another_name_says_which(variant_llvm_rgb, 
     assert main(["validate", "my_bsdf", "--quick", "--plugin", str(plugin)]) == 2
     err = capsys.readouterr().err
     assert "cannot load BSDF 'my_bsdf'" in err and "registered 'defect_energy_gain'" in err, err
+
+
+def test_all_builtins_keeps_each_case_and_resumes(variant_llvm_rgb, tmp_path, capsys,
+                                                  monkeypatch):
+    """Ctrl-C after 45 s of --all-builtins lost every finished case (the JSON was written only
+    at the end); now each case is kept as it finishes and a rerun runs only the rest."""
+    from phonglab.validate import batch, builtins
+
+    small = [builtins.Case("diffuse/test", {"type": "diffuse"}),
+             builtins.Case("roughconductor/test", {"type": "roughconductor"}),
+             builtins.Case("conductor/test", {"type": "conductor"}, delta=True)]
+    monkeypatch.setattr(builtins, "cases", lambda: small)
+    ran = []
+    real = batch.run_case
+
+    def interrupted_after_two(case, options=None):
+        if len(ran) == 2:
+            raise KeyboardInterrupt
+        ran.append(case.label)
+        return real(case, options)
+
+    monkeypatch.setattr(batch, "run_case", interrupted_after_two)
+    out = tmp_path / "all.json"
+    argv = ["validate", "--all-builtins", "--quick", "--only", "finite", "--json", str(out)]
+    assert main(argv) == 130
+    log = Path(str(out) + ".partial.jsonl")
+    assert not out.exists() and len(log.read_text().splitlines()) == 3   # options + 2 cases
+    ran.clear()
+    monkeypatch.setattr(batch, "run_case", lambda case, options=None:
+                        ran.append(case.label) or real(case, options))
+    assert main(argv) == 0
+    assert "resuming: 2 cases already done" in capsys.readouterr().out
+    assert ran == ["conductor/test"] and not log.exists()
+    data = json.loads(out.read_text())
+    assert [r["meta"]["case"] for r in data["reports"]] == [c.label for c in small]
+    # Other options start afresh.
+    monkeypatch.setattr(batch, "run_case", interrupted_after_two)
+    ran.clear()
+    assert main(argv[:-2] + ["--seed", "1", "--json", str(out)]) == 130
+    assert len(log.read_text().splitlines()) == 3 and '"seed": 1' in log.read_text()

@@ -37,6 +37,8 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from .exr import atomic_path
+
 #: The possible values of :attr:`Row.status`.
 STATUSES = ("pass", "fail", "KNOWN", "skipped")
 
@@ -130,10 +132,12 @@ def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool 
 
 def write_json(path: str | Path, data: dict) -> Path:
     """JSON-able ``data`` (a report's :meth:`Report.to_dict`, or several) at ``path``, indent 1,
-    creating its folder."""
+    creating its folder; strict JSON, written atomically (:func:`phonglab.exr.atomic_path`)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1))
+    text = json.dumps(jsonable(data), indent=1, allow_nan=False)   # strict JSON, never NaN
+    with atomic_path(path, ".json") as tmp:           # complete and checked, or not at all
+        Path(tmp).write_text(text)
     return path
 
 

@@ -51,7 +51,9 @@ def add_parser(sub) -> None:
     p.add_argument("--quick", action="store_true",
                    help="fewer samples and angles (every topic kept; about 10 s)")
     p.add_argument("--all-builtins", action="store_true",
-                   help="validate every case of the built-in catalogue (phonglab.validate.builtins)")
+                   help="validate every case of the built-in catalogue (phonglab.validate.builtins); "
+                        "with --json each finished case is kept in JSON.partial.jsonl at once, "
+                        "and a rerun with the same options resumes from it")
     add_arguments(p)         # --workers / --scheduler: where the --all-builtins cases run
     p.set_defaults(func=run)
 
@@ -93,11 +95,15 @@ def _all_builtins(args) -> int:
               + (f"  (KNOWN: {','.join(known)})" if known else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
+    options = {"seed": args.seed, "quick": args.quick, "topics": args.only}
+    log = batch.CaseLog(args.json, options) if args.json else None
+    if log is not None and log.done:
+        print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
     with runner_from_args(args) as runner:
-        result = batch.run_all(options={"seed": args.seed, "quick": args.quick,
-                                        "topics": args.only}, progress=progress, runner=runner)
+        result = batch.run_all(options=options, progress=progress, runner=runner, log=log)
     if args.json:
         write_json(args.json, result)
+        log.remove()
     print(f"{result['meta']['cases']} cases, {len(result['meta']['failed'])} failing")
     return 1 if result["meta"]["failed"] else 0
 

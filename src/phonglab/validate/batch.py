@@ -11,11 +11,14 @@ case never loses the others' results.
 
 from __future__ import annotations
 
+import json
+import os
 import time
 import traceback
+from pathlib import Path
 
 from ..parallel import Job, Runner
-from ..verdict import Report
+from ..verdict import Report, jsonable
 from . import builtins
 from .bsdf.kind import validate_bsdf
 from .bsdf.topics import TOPICS, Row
@@ -54,25 +57,78 @@ def run_case(case, options: dict | None = None) -> dict:
     return d
 
 
+class CaseLog:
+    """The finished cases of one ``--all-builtins`` run, kept as they finish so that an
+    interrupted run loses none of them and a rerun with the same options resumes.
+
+    ``<json>.partial.jsonl`` beside the final JSON: a first line with the run's options, then
+    one line per finished case report, each flushed and fsync'ed as it is appended (as the
+    bench's CSV rows are).  A rerun with other options starts afresh; a last line cut short
+    by a crash is dropped (that case runs again); the log is removed once the final JSON is
+    written.
+    """
+
+    def __init__(self, json_path: str | Path, options: dict):
+        self.path = Path(str(json_path) + ".partial.jsonl")
+        self.options = jsonable(dict(options))
+        self.done: dict[str, dict] = {}
+        lines = self.path.read_text().splitlines() if self.path.is_file() else []
+        try:
+            same = bool(lines) and json.loads(lines[0]) == {"options": self.options}
+        except ValueError:
+            same = False
+        for line in lines[1:] if same else ():
+            try:
+                report = json.loads(line)
+            except ValueError:       # cut short by the interruption: that case runs again
+                break
+            self.done[report["meta"]["case"]] = report
+        if not same:
+            self._append({"options": self.options}, mode="w")
+
+    def add(self, report: dict) -> None:
+        self.done[report["meta"]["case"]] = report
+        self._append(report)
+
+    def _append(self, data: dict, mode: str = "a") -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path, mode) as f:
+            f.write(json.dumps(data, allow_nan=False) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+
+    def remove(self) -> None:
+        self.path.unlink(missing_ok=True)
+
+
 def run_all(cases=None, options: dict | None = None, progress=None,
-            runner: Runner | None = None) -> dict:
+            runner: Runner | None = None, log: CaseLog | None = None) -> dict:
     """Every case in order: ``{"meta": {...}, "reports": [run_case(...), ...]}``.
 
     ``runner`` (:class:`phonglab.parallel.Runner`) is where the cases run: one job each,
     sent by label (a Case holds Mitsuba objects that do not pickle), ``progress(report)``
     called as each finishes; the reports come back in case order.  Default: serially here.
+    ``log`` (:class:`CaseLog`): cases it already holds are not run again, each new one is
+    added to it as it finishes.
     """
     cases = builtins.cases() if cases is None else cases
+    results = dict(log.done) if log is not None else {}
+    todo = [case for case in cases if case.label not in results]
+
+    def finished(d):
+        results[d["meta"]["case"]] = d
+        if log is not None:
+            log.add(d)
+        if progress:
+            progress(d)
+
     if runner is None or runner.serial:
-        reports = []
-        for case in cases:
-            reports.append(run_case(case, options))
-            if progress:
-                progress(reports[-1])
+        for case in todo:
+            finished(run_case(case, options))
     else:
-        jobs = [Job(run_case, (case.label, options), key=case.label) for case in cases]
-        reports = runner.run(jobs, (lambda job, d: progress(d)) if progress else None,
-                             desc="validate")
+        jobs = [Job(run_case, (case.label, options), key=case.label) for case in todo]
+        runner.run(jobs, lambda job, d: finished(d), desc="validate")
+    reports = [results[case.label] for case in cases]
     failed = [r["meta"]["case"] for r in reports
               if any(x["status"] == "fail" for x in r["results"])]
     return {"meta": {"cases": len(reports), "failed": failed, "options": dict(options or {})},
