@@ -180,6 +180,12 @@ def test_cli_check_with_known_rows_exits_zero_and_keeps_meta(tmp_path, capsys):
 def test_cli_rejects_bad_input(capsys):
     assert main(["check", "--spp", "2", "--only", "snell", "--no-progress"]) == 2
     assert "--spp must be at least 8" in capsys.readouterr().err
+    # --spp 1e9 died in numpy ("Unable to allocate 22.4 TiB"): bounded before any work.
+    for spp, needle in (("1000000000", "must be at most 16777216"),
+                        ("16000000", "GiB is available; lower --spp")):
+        assert main(["check", "--spp", spp, "--only", "snell", "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and len(err.strip().splitlines()) == 1, err
     assert main(["check", "--lambert", "no_such_plugin", "--no-progress"]) == 2
     assert "no BSDF plugin named 'no_such_plugin'" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
