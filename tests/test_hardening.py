@@ -509,3 +509,41 @@ def test_a_wide_film_has_a_bounded_spp_preview(tmp_path):
     for shape in [(4, 4096), (4096, 4), (3, 9000), (16, 16)]:
         path = write_spp_map_png(tmp_path / "m.png", np.full(shape, 4))
         assert max(Image.open(path).size) <= SPP_PNG_MAX_SIDE + 70, shape
+
+
+# --- one render, one file set: the spp map is a member --------------------------------------------
+
+def test_a_uniform_render_removes_the_spp_map_of_an_earlier_adaptive_one(tmp_path, capsys):
+    """The spp map was written after the set and never removed: a later uniform render left
+    an old x.spp.exr / x.spp.png beside its new image."""
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.2",
+                     "-D", "res=16", "-o", str(out)]) == 0
+    spp_map, spp_png = tmp_path / "x.spp.exr", tmp_path / "x.spp.png"
+    assert exr.read(spp_map)[1]["render_id"] == exr.read(out)[1]["render_id"]
+    assert spp_png.is_file()
+    assert cli.main(["render", "gray_direct", "--spp", "16", "-D", "res=16", "-o",
+                     str(out)]) == 0
+    assert not spp_map.exists() and not spp_png.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr", "x.png", "x.stderr.exr"]
+
+
+def test_a_failing_member_leaves_the_whole_previous_set(tmp_path, capsys, monkeypatch):
+    """The members were renamed one by one as each finished: a failure in the last (the spp
+    map preview) left a new image beside an old spp map."""
+    from phonglab import adaptive
+
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.2",
+                     "-D", "res=16", "-o", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+
+    def broken(spp):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(adaptive, "spp_map_image", broken)
+    capsys.readouterr()
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--adaptive", "--target-error",
+                                    "0.2", "-D", "res=16", "--seed", "4", "-o", str(out)],
+                           "No space left on device")
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -81,6 +81,7 @@ import numpy as np
 from . import exr
 from .errors import PhonglabError
 from .metrics import REL_EPS
+from .outputs import spp_paths
 from .render import (MAX_SPP, available_memory, film_channels, pass_seed, preflight,
                      render_scene_file)
 from .runtime import default_variant
@@ -452,7 +453,16 @@ SPP_PNG_MAX_SIDE = 2048
 
 
 def write_spp_map_png(path: str | Path, spp: np.ndarray) -> Path:
-    """Write the spp map of an adaptive render as a PNG, atomically: log2 samples per pixel in
+    """Write :func:`spp_map_image` of ``spp`` as a PNG, atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with exr.atomic_path(path, ".png") as tmp:
+        spp_map_image(spp).save(tmp, format="PNG")
+    return path
+
+
+def spp_map_image(spp: np.ndarray):
+    """The spp map of an adaptive render as a Pillow image: log2 samples per pixel in
     matplotlib's viridis, one film pixel a square of whole pixels, over a colour bar labelled
     at the powers of two from the map's least to its most samples, under a line giving mean,
     min and max.
@@ -493,17 +503,7 @@ def write_spp_map_png(path: str | Path, spp: np.ndarray) -> Path:
         draw.text((min(max(x - 3 * len(label), 0), width - 6 * len(label)), top + 16), label,
                   fill="black", font=font)
     draw.text((4, top + 16 + line), "samples per pixel (log2 scale)", fill="black", font=font)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with exr.atomic_path(path, ".png") as tmp:
-        canvas.save(tmp, format="PNG")
-    return path
-
-
-def spp_paths(out: str | Path) -> tuple[Path, Path]:
-    """The spp map beside an output EXR: ``x.spp.exr`` (channel Y) and ``x.spp.png``."""
-    out = Path(out)
-    return out.with_name(out.stem + ".spp.exr"), out.with_name(out.stem + ".spp.png")
+    return canvas
 
 
 @dataclass
@@ -531,10 +531,6 @@ class AdaptiveSampling:
     def check(self) -> None:
         _check(self.target_error, self.max_seconds, self.max_spp, self.min_spp)
 
-    def extra_outputs(self, out: Path) -> list[tuple[Path, str]]:
-        spp_exr, spp_img = spp_paths(out)
-        return [(spp_exr, "spp map"), (spp_img, "spp map preview")]
-
     def render(self, sf, seed: int) -> tuple[AdaptiveResult, dict[str, Any]]:
         """The render and its header fields (target, estimate, stop, spp, passes, seed,
         integrator, depth, filter)."""
@@ -552,11 +548,14 @@ class AdaptiveSampling:
             else sf.declared.get("max_depth"),
             "filter": "the film's, density-normalised (phonglab.adaptive)"}
 
-    def write_extra(self, out: Path, result: AdaptiveResult) -> None:
-        """The spp map: ``x.spp.exr`` (channel Y, the image's header) and ``x.spp.png``."""
+    def extra_files(self, out: Path, result: AdaptiveResult):
+        """The spp map, members of the render's file set: ``x.spp.exr`` (channel Y, the
+        image's header) and ``x.spp.png``."""
         spp_exr, spp_img = spp_paths(out)
-        exr.write(spp_exr, result.spp.astype(np.float32), result.metadata)
-        write_spp_map_png(spp_img, result.spp)
+        spp = result.spp
+        return [(spp_exr, ".tmp", lambda tmp, meta: exr.write_file(tmp, spp.astype(np.float32),
+                                                                     meta)),
+                (spp_img, ".png", lambda tmp, meta: spp_map_image(spp).save(tmp, format="PNG"))]
 
 
 def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float, *,

@@ -80,30 +80,63 @@ def atomic_path(path: Path, suffix: str):
 
     The bytes are fsync'ed before the rename and the file gets the usual permissions
     (mkstemp creates 0600); on any error the temporary file is removed and a previous file
-    at ``path`` stays untouched.
+    at ``path`` stays untouched (:func:`atomic_paths` of one file).
     """
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=suffix, dir=path.parent)
-    except OSError as exc:
-        raise write_error(path, exc) from None
-    os.close(fd)
-    try:
+    with atomic_paths([(path, suffix)]) as (tmp,):
         yield tmp
+
+
+@contextlib.contextmanager
+def atomic_paths(targets):
+    """Temporaries beside each of ``targets`` [(path, suffix)], renamed over them as one set.
+
+    Every temporary is written, fsync'ed and checked (none may be empty) before the first
+    rename, so a failure in any member (a full disk, an exception, Ctrl-C) leaves every
+    previous file of the set untouched and no temporary behind.
+    """
+    paths = [Path(p) for p, _ in targets]
+    temps: list[str] = []
+    try:
+        for path, (_, suffix) in zip(paths, targets):
+            try:
+                fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=suffix,
+                                           dir=path.parent)
+            except OSError as exc:
+                raise write_error(path, exc) from None
+            os.close(fd)
+            temps.append(tmp)
+        yield list(temps)
+        for path, tmp in zip(paths, temps):
+            _settle(path, tmp)
+        for path, tmp in zip(paths, temps):
+            os.replace(tmp, path)
+    except (OSError, WriteError) as exc:
+        for tmp in temps:
+            _remove(tmp)
+        if isinstance(exc, WriteError) and exc.path not in map(Path, temps):
+            raise                    # already named by its target
+        about = getattr(exc, "path", None) or getattr(exc, "filename", None)
+        target = dict(zip(map(Path, temps), paths)).get(Path(about) if about else None,
+                                                        paths[0])
+        raise write_error(target, exc) from None     # named by the target, not a temporary
+    except BaseException:
+        for tmp in temps:
+            _remove(tmp)
+        raise
+
+
+def _settle(path: Path, tmp: str) -> None:
+    """``tmp``'s bytes on disk (fsync), not empty, with the usual permissions; else one
+    :class:`WriteError` sentence naming ``path``."""
+    try:
         with open(tmp, "rb") as f:       # the bytes reach the disk before the rename
             os.fsync(f.fileno())
-            if os.fstat(f.fileno()).st_size == 0:
-                raise write_error(path, "the file came out empty: is the disk full?")
+            empty = os.fstat(f.fileno()).st_size == 0
         os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except (OSError, WriteError) as exc:
-        _remove(tmp)
-        if isinstance(exc, WriteError) and exc.path != Path(tmp):
-            raise                # about another file of a set, already named by its target
-        raise write_error(path, exc) from None   # named by the target, not the temporary
-    except BaseException:
-        _remove(tmp)
-        raise
+    except OSError as exc:
+        raise write_error(path, exc) from None
+    if empty:
+        raise write_error(path, "the file came out empty: is the disk full?")
 
 
 def _remove(tmp: str) -> None:

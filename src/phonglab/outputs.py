@@ -9,22 +9,25 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
   writable folder in which a file can actually be created (probed with a temporary file).  A problem is one
   sentence, and nothing has been computed yet.
 * **Replaced as a set.**  Every file is written to a temporary beside its target, and the
-  temporaries are renamed over the targets only once all of them are complete
-  (:func:`phonglab.exr.atomic_path`).  A render without a standard error removes an old
-  ``x.stderr.exr``; every EXR of the set carries the same ``render_id`` in its header, so a
-  standard-error file left by another render is recognised (``phonglab compare`` refuses it).
+  temporaries are renamed over the targets only once all of them are complete: written,
+  fsync'ed and checked (:func:`phonglab.exr.atomic_paths`).  The set is the image, its
+  standard error, the preview and, for an adaptive render, the spp map ``x.spp.exr`` and its
+  preview ``x.spp.png`` (:func:`spp_paths`).  A member this render does not produce is
+  removed once the new set is in place (an old ``x.stderr.exr`` beside a one-pass render, an
+  old spp map beside a uniform one), so no file of another render is left beside the new
+  image; every EXR of the set carries the same ``render_id`` in its header, so a file left
+  by another render is recognised (``phonglab compare`` refuses it).
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 import stat
 import tempfile
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -63,18 +66,31 @@ def check_folder(path: Path, what: str = "output") -> None:
                             f"writable folder for the {what}") from None
 
 
+def spp_paths(out: str | Path) -> tuple[Path, Path]:
+    """The spp map beside an output EXR: ``x.spp.exr`` (channel Y) and ``x.spp.png``."""
+    out = Path(out)
+    return out.with_name(out.stem + ".spp.exr"), out.with_name(out.stem + ".spp.png")
+
+
+#: A member of a set written by a render's own code: (path, temporary suffix, write(tmp, meta)).
+Extra = tuple[Path, str, Callable[[str, dict[str, Any]], Any]]
+
+
 @dataclass(frozen=True)
 class RenderOutputs:
-    """The file set of one render: image, standard error, preview."""
+    """The file set of one render: image, standard error, preview, spp map and its preview."""
 
     image: Path
     stderr: Path
     png: Path | None
+    spp_map: Path
+    spp_png: Path
 
     @classmethod
     def beside(cls, out: str | Path, png: bool = True) -> "RenderOutputs":
         out = Path(out)
-        return cls(out, exr.stderr_path(out), out.with_suffix(".png") if png else None)
+        return cls(out, exr.stderr_path(out), out.with_suffix(".png") if png else None,
+                   *spp_paths(out))
 
     def check(self) -> None:
         """Every file of the set can be written (see the module docstring)."""
@@ -82,22 +98,31 @@ class RenderOutputs:
         check_file(self.stderr, "standard-error image")
         if self.png is not None:
             check_file(self.png, "PNG preview")
-        check_folder(self.image, "output image")     # the three files share one folder
+        check_file(self.spp_map, "spp map")
+        check_file(self.spp_png, "spp map preview")
+        check_folder(self.image, "output image")     # the files share one folder
 
     def write(self, image: np.ndarray, stderr: np.ndarray | None, metadata: dict[str, Any],
-              exposure: float = 0.0) -> str:
-        """Write the set (temporaries first, then the renames); returns its render id."""
+              exposure: float = 0.0, extras: list[Extra] = ()) -> str:
+        """Write the set (temporaries first, then the renames); returns its render id.
+
+        ``extras`` are further members (the spp map), written with the same header.
+        """
         render_id = uuid.uuid4().hex
         meta = dict(metadata, render_id=render_id)
         self.image.parent.mkdir(parents=True, exist_ok=True)
-        with contextlib.ExitStack() as stack:
-            exr.write_file(stack.enter_context(exr.atomic_path(self.image, ".tmp")), image, meta)
-            if stderr is not None:
-                exr.write_file(stack.enter_context(exr.atomic_path(self.stderr, ".tmp")),
-                               stderr, meta)
-            if self.png is not None:
-                preview_png(stack.enter_context(exr.atomic_path(self.png, ".png")), image,
-                            exposure=exposure, channels=meta.get("channels"))
-        if stderr is None and self.stderr.exists():
-            os.unlink(self.stderr)          # a stale standard error of an earlier render
+        members: list[Extra] = [(self.image, ".tmp", lambda t, m: exr.write_file(t, image, m))]
+        if stderr is not None:
+            members.append((self.stderr, ".tmp", lambda t, m: exr.write_file(t, stderr, m)))
+        if self.png is not None:
+            members.append((self.png, ".png", lambda t, m: preview_png(
+                t, image, exposure=exposure, channels=m.get("channels"))))
+        members += list(extras)
+        with exr.atomic_paths([(path, suffix) for path, suffix, _ in members]) as temps:
+            for (_, _, write), tmp in zip(members, temps):
+                write(tmp, meta)
+        written = {Path(path) for path, _, _ in members}
+        for stale in (self.stderr, self.spp_map, self.spp_png):
+            if stale not in written and stale.exists():
+                os.unlink(stale)            # left by an earlier render of another kind
         return render_id

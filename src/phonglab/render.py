@@ -34,7 +34,7 @@ from tqdm import tqdm
 
 from . import __version__, exr
 from .errors import PhonglabError, SceneError, user_errors
-from .outputs import RenderOutputs, check_file
+from .outputs import RenderOutputs
 from .runtime import quiet_mitsuba
 from .scenes import (SceneInfo, file_hash, inspect_scene, integrator_with_depth, load_scene,
                      scene_defaults, scene_path, sensor_with_sampler)
@@ -322,9 +322,6 @@ class UniformPasses:
         if self.spp is not None:
             check_spp(self.spp)
 
-    def extra_outputs(self, out: Path) -> list[tuple[Path, str]]:
-        return []
-
     def render(self, sf: SceneFile, seed: int) -> tuple[RenderResult, dict[str, Any]]:
         """The render and its header fields (spp, passes, seed, sampler, integrator, depth,
         and the film's channel names where they are not R, G, B / Y / R, G, B, A)."""
@@ -342,8 +339,9 @@ class UniformPasses:
                         "sampler": sensor.sampler().class_name(), "integrator": name,
                         "max_depth": _max_depth(integrator), **named}
 
-    def write_extra(self, out: Path, result) -> None:
-        pass
+    def extra_files(self, out: Path, result) -> list:
+        """Files beyond the image set (none)."""
+        return []
 
 
 def film_channels(sensor, integrator, path: str | Path = "the scene") -> list[str]:
@@ -378,22 +376,20 @@ def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
 
     ``sampling`` is :class:`UniformPasses` (the default) or
     :class:`phonglab.adaptive.AdaptiveSampling`: its ``check()`` (arguments),
-    ``extra_outputs(out)`` (files it writes beside the set), ``settings()`` (``<default>``
-    entries it sets), ``render(scene_file, seed) -> (result, header fields)`` and
-    ``write_extra(out, result)``.  Everything that can be checked is checked before the
-    render starts: the output files (:class:`phonglab.outputs.RenderOutputs` and the
-    sampling's own), the arguments, the scene (:func:`preflight`).  The scene is opened by
-    :func:`open_scene_file` (``variant``, ``max_depth``, ``params``, ``integrator``,
-    ``loaded``, ``info``).  ``extra_metadata`` is added to the EXR header (the planner
-    records its plan there); with ``png`` a preview is written at the auto exposure
-    (darken only).  The image, standard-error and preview files are replaced as one set.
+    ``settings()`` (``<default>`` entries it sets), ``render(scene_file, seed) -> (result,
+    header fields)`` and ``extra_files(out, result)`` (members it adds to the file set: the
+    spp map).  Everything that can be checked is checked before the render starts: every
+    file of the set (:class:`phonglab.outputs.RenderOutputs`), the arguments, the scene
+    (:func:`preflight`).  The scene is opened by :func:`open_scene_file` (``variant``,
+    ``max_depth``, ``params``, ``integrator``, ``loaded``, ``info``).  ``extra_metadata`` is
+    added to the EXR header (the planner records its plan there); with ``png`` a preview is
+    written at the auto exposure (darken only).  The image, standard error, preview and spp
+    map are replaced as one set, and members this render does not produce are removed.
     """
     sampling = sampling or UniformPasses()
     outputs = RenderOutputs.beside(out, png)
     outputs.check()
     sampling.check()
-    for extra, what in sampling.extra_outputs(Path(out)):
-        check_file(extra, what)
     sf = open_scene_file(scene, variant=sampling.variant(variant), max_depth=max_depth,
                          params=params, settings=sampling.settings(), integrator=integrator,
                          loaded=loaded, info=info, quiet=sampling.quiet_load)
@@ -404,8 +400,8 @@ def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
     if png:
         result.metadata["preview_exposure_ev"] = round(ev, 2)
     result.metadata["render_id"] = outputs.write(result.image, result.stderr, result.metadata,
-                                                 exposure=ev)
-    sampling.write_extra(Path(out), result)
+                                                 exposure=ev,
+                                                 extras=sampling.extra_files(Path(out), result))
     return result
 
 

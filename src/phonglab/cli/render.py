@@ -79,8 +79,8 @@ def run(args) -> int:
 def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan (:func:`phonglab.planner.execute.render_plan`),
     report predicted and achieved error and time."""
-    from .. import adaptive, planner
-    from ..outputs import RenderOutputs
+    from .. import planner
+    from ..outputs import RenderOutputs, spp_paths
     from ..planner import execute
 
     RenderOutputs.beside(out).check()       # before the pilot, not only before the render
@@ -103,7 +103,7 @@ def run_planned(args, path: Path, out: Path) -> int:
                   f"the samples, depth bias {plan.predicted_bias:.3g} from the pilot); "
                   f"target {plan.target_error:g}")
         _print_files(out, result)
-        print(f"  spp map: {', '.join(str(p) for p in adaptive.spp_paths(out))}")
+        print(f"  spp map: {', '.join(str(p) for p in spp_paths(out))}")
         return 0
     times = result.pass_seconds
     # Steady state: the first pass may include JIT compilation; count it as a median pass.
@@ -140,6 +140,7 @@ def run_adaptive(args, path: Path, out: Path) -> int:
         raise PhonglabError("--adaptive chooses the samples per pixel itself; drop --spp (cap "
                             "them with --max-spp N)")
     from .. import adaptive   # lazy: imports Mitsuba
+    from ..outputs import spp_paths
     with runtime.quiet_mitsuba():
         result = adaptive.render_file_adaptive(
             path, out, args.target_error, variant=args.variant, seed=args.seed,
@@ -153,7 +154,7 @@ def run_adaptive(args, path: Path, out: Path) -> int:
           f"{result.seconds:.3g} s; estimated relative RMSE {result.estimated_error:.4g} "
           f"(target {args.target_error:g}); stopped: {why[result.stopped]}")
     _print_files(out, result)
-    spp_exr, spp_png = adaptive.spp_paths(out)
+    spp_exr, spp_png = spp_paths(out)
     print(f"  spp map: {spp_exr} (channel Y), {spp_png}")
     return 0
 
