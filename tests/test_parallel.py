@@ -366,3 +366,14 @@ def test_ctrl_c_of_a_workers_run_is_one_line_and_leaves_no_worker(tmp_path):
     time.sleep(1)
     assert not [p for p in workers if psutil.pid_exists(p)
                 and psutil.Process(p).status() != psutil.STATUS_ZOMBIE], "workers left running"
+
+
+def test_local_worker_counts_are_bounded_before_any_process_starts():
+    """--workers 1000 on 2 cores started 1000 processes (each ~200 MB of Mitsuba)."""
+    with pytest.raises(PhonglabError, match=r"--workers 1000 starts more than 4 processes per "
+                                            r"core on this \d+-core machine"):
+        Runner(workers=1000)
+    with pytest.raises(PhonglabError, match=r"--workers 8 would need about 2.0 GiB"):
+        parallel.check_local_workers(8, cores=4, memory=1 << 30)
+    parallel.check_local_workers(2, cores=2, memory=1 << 30)
+    Runner(workers=1000, scheduler="tcp://127.0.0.1:1")     # a cluster's size is its own

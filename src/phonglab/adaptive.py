@@ -82,9 +82,8 @@ from . import exr
 from .errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import spp_paths
-from .render import (MAX_SPP, available_memory, film_channels, pass_seed, preflight,
-                     render_scene_file)
-from .runtime import default_variant
+from .render import MAX_SPP, film_channels, pass_seed, preflight, render_scene_file
+from .runtime import available_memory, default_variant
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
 #: Samples every pixel gets in the pilot pass (the first guard).

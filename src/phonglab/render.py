@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import contextlib
 import re
-import resource
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,7 +34,7 @@ from tqdm import tqdm
 from . import __version__, exr
 from .errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs
-from .runtime import quiet_mitsuba
+from .runtime import available_memory, quiet_mitsuba
 from .scenes import (SceneInfo, file_hash, inspect_scene, integrator_with_depth, load_scene,
                      scene_defaults, scene_path, sensor_with_sampler)
 from .tonemap import auto_exposure
@@ -431,22 +430,6 @@ def render_file(scene: str | Path, out: str | Path, spp: int | None = None,
 BYTES_PER_PIXEL = 160
 #: Fixed cost of a render process (Python, Mitsuba, Dr.Jit, kernels): measured ~200 MB.
 BASE_BYTES = 256 << 20
-
-
-def available_memory() -> int | None:
-    """Bytes this process may still allocate: MemAvailable, capped by RLIMIT_AS (None if unknown)."""
-    limits = []
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    limits.append(int(line.split()[1]) * 1024)
-    except OSError:
-        pass
-    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
-    if soft != resource.RLIM_INFINITY:
-        limits.append(soft)
-    return min(limits) if limits else None
 
 
 def preflight(scene, path: str | Path, sensor: int | mi.Sensor = 0):

@@ -1,4 +1,6 @@
-"""The runtime: a libLLVM Dr.Jit 1.5 can use, the best JIT backend, and the Mitsuba variant.
+"""The runtime: a libLLVM Dr.Jit 1.5 can use, the best JIT backend, the Mitsuba variant, and
+the memory this process may still allocate (:func:`available_memory`, which bounds films,
+check sizes and worker counts before they are allocated).
 
 Dr.Jit's LLVM backend loads ``libLLVM`` lazily, the first time an ``llvm_*``
 variant is used, from ``DRJIT_LIBLLVM_PATH`` or from the system's default
@@ -30,6 +32,7 @@ import contextlib
 import glob
 import os
 import re
+import resource
 import signal
 import threading
 import warnings
@@ -319,3 +322,19 @@ def quiet_mitsuba():
         yield
     finally:
         logger.set_log_level(old)
+
+
+def available_memory() -> int | None:
+    """Bytes this process may still allocate: MemAvailable, capped by RLIMIT_AS (None if unknown)."""
+    limits = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    limits.append(int(line.split()[1]) * 1024)
+    except OSError:
+        pass
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        limits.append(soft)
+    return min(limits) if limits else None

@@ -18,7 +18,8 @@ import numpy as np
 
 from .. import stats
 from ..errors import PhonglabError
-from ..render import RenderResult, available_memory, check_spp, render_scene
+from ..render import RenderResult, check_spp, render_scene
+from ..runtime import available_memory
 from ..scenes import load_scene
 from ..verdict import Row
 

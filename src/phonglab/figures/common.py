@@ -13,6 +13,7 @@ import mitsuba as mi
 from matplotlib.figure import Figure
 
 from .. import registration
+from ..settings import load_plugin
 
 
 def figure(width: float, height: float, **kw) -> Figure:
@@ -29,6 +30,8 @@ def save(fig: Figure, path: str | Path, dpi: int = 80) -> Path:
 
 
 def load_bsdf(kind: str, **params):
-    """A BSDF plugin instance, ``load_bsdf("phong", exponent=10)`` (registers phonglab first)."""
+    """A BSDF plugin instance, ``load_bsdf("phong", exponent=10)`` (registers phonglab first;
+    loaded by :func:`phonglab.settings.load_plugin`, the one loader, so a bad name or value is
+    one sentence)."""
     registration.register()
-    return mi.load_dict({"type": kind, **params})
+    return load_plugin(kind, params, kind=mi.BSDF, word="BSDF").plugin

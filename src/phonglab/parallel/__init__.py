@@ -42,11 +42,17 @@ from tqdm import tqdm
 
 from ..errors import PhonglabError
 from ..registration import register
+from ..runtime import available_memory
 
 #: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
 CONNECT_TIMEOUT = 5.0
 #: Re-runs of a job whose function raised (a lost worker is rescheduled regardless).
 RETRIES = 2
+#: Local worker processes per core a LocalCluster may start (more only queue for the cores).
+WORKERS_PER_CORE = 4
+#: Memory of one worker process (Python, Mitsuba, Dr.Jit and kernels; a render process is
+#: ~200 MB, phonglab.render.BASE_BYTES), rounded up.
+WORKER_BYTES = 256 << 20
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
@@ -104,6 +110,25 @@ def check_sendable(job: Job) -> None:
                             f"dict, not a loaded mi.Scene) and load it inside the job") from None
 
 
+def check_local_workers(workers: int, cores: int | None = None,
+                        memory: int | None = None) -> None:
+    """One sentence unless ``workers`` local processes fit this machine: at most
+    :data:`WORKERS_PER_CORE` per core, and :data:`WORKER_BYTES` each within the memory this
+    process may allocate (checked before any process starts)."""
+    cores = cores or os.cpu_count() or 1
+    if workers > WORKERS_PER_CORE * cores:
+        raise PhonglabError(f"--workers {workers} starts more than {WORKERS_PER_CORE} processes "
+                            f"per core on this {cores}-core machine; give at most "
+                            f"{WORKERS_PER_CORE * cores} (--workers {cores} uses every core), or "
+                            f"spread them over machines with --scheduler")
+    memory = available_memory() if memory is None else memory
+    if memory is not None and workers * WORKER_BYTES > memory:
+        raise PhonglabError(f"--workers {workers} would need about "
+                            f"{workers * WORKER_BYTES / 2**30:.1f} GiB ({WORKER_BYTES >> 20} MiB "
+                            f"per worker process) but {memory / 2**30:.1f} GiB is available; "
+                            f"give at most {max(1, memory // WORKER_BYTES)}")
+
+
 def check_address(address: str) -> str:
     """``address`` when it looks like a Dask scheduler address, else one sentence."""
     if not _ADDRESS.match(address or ""):
@@ -131,6 +156,8 @@ class Runner:
     def __post_init__(self):
         if int(self.workers) < 1:
             raise PhonglabError(f"--workers must be at least 1, got {self.workers}")
+        if self.scheduler is None and int(self.workers) > 1:
+            check_local_workers(int(self.workers))
         if self.scheduler is not None:
             check_address(self.scheduler)
 
