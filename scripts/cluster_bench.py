@@ -45,6 +45,7 @@ from pathlib import Path
 
 from phonglab.bench.timing import ChildFailed, run_child, spread
 from phonglab.parallel import Job, Runner
+from phonglab.outputs import write_json
 
 #: Machines the expected time is computed for.
 N_VALUES = (1, 2, 4, 8, 16, 64)
@@ -237,7 +238,7 @@ def main() -> None:
                            for name, modes in cmds.items()},
               **{name: summarize(name, p, o) for name, p in pairs.items()}}
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.out, result, indent=2, end="\n")
     print(f"wrote {args.out}")
 
 

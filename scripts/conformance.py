@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 from phonglab.validate import batch, builtins
+from phonglab.outputs import write_json
 
 
 def main(argv=None) -> int:
@@ -48,7 +49,7 @@ def main(argv=None) -> int:
         data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         data = builtins.without_plot_data(data)
-        args.json.write_text(json.dumps(data, separators=(",", ":")) + "\n")
+        write_json(args.json, data, indent=None, separators=(",", ":"), end="\n")
         print(f"wrote {args.json} ({data['meta']['seconds']} s)")
     args.markdown.parent.mkdir(parents=True, exist_ok=True)
     args.markdown.write_text(builtins.render_markdown(data))

@@ -46,6 +46,7 @@ import numpy as np
 from phonglab import exr, metrics, planner, references, render, runtime, scenes
 from phonglab.bench import timing
 from phonglab.planner import benchmark
+from phonglab.outputs import write_json
 
 #: The default configuration: ``phonglab render``'s default variant, path at max_depth 8.
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -241,7 +242,7 @@ def main(argv=None) -> int:
                 print(json.dumps({k: rows[-1][k] for k in ("scene", "res", "speedup")}),
                       flush=True)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(rows, indent=2))
+    write_json(args.out, rows, indent=2)
     print(planner.benchmark_table(rows))
     for r in rows:
         print(f"\n{r['scene']}: plan reasons:")

@@ -14,10 +14,10 @@ median and the range of ``--repeats`` runs printed as a Markdown table.  Targets
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from phonglab.bench.timing import PHONGLAB, run_child, spread
+from phonglab.outputs import write_json
 
 DEFAULT_BSDFS = ["diffuse", "lambert", "phong", "roughplastic"]
 
@@ -46,7 +46,7 @@ def main() -> int:
                      **{f"{m}_seconds": v for m, v in times.items()}})
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+        write_json(args.json, rows, indent=1)
     return 0
 
 

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phonglab import cli, exr, planner
+from phonglab import cli, exr, planner, stats
 from phonglab.errors import SceneError
 from phonglab.render import render_scene
 from phonglab.scenes import load_scene
@@ -547,3 +547,41 @@ def test_a_failing_member_leaves_the_whole_previous_set(tmp_path, capsys, monkey
                                     "0.2", "-D", "res=16", "--seed", "4", "-o", str(out)],
                            "No space left on device")
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+CROP = ('<integer name="crop_offset_x" value="4"/><integer name="crop_offset_y" value="2"/>'
+        '<integer name="crop_width" value="6"/><integer name="crop_height" value="5"/>'
+        '<rfilter type="box"/>')
+
+
+def _region_pass_means(result, region=(slice(None), slice(None))) -> np.ndarray:
+    return result.passes[:, region[0], region[1]].mean(axis=(1, 2))
+
+
+def test_a_crop_window_renders_its_part_of_the_film(variant_llvm_rgb, tmp_path):
+    """A film's crop window (offset 4, 2; 6 x 5 of 12 x 10): the uniform and the adaptive
+    render are the crop's size and see, in expectation, what the full film sees there.
+    Two-sample t-tests of the region's mean, per channel (8 passes against 8 passes, and 6
+    adaptive seeds against the full film's passes), Šidák over the 6 tests."""
+    from phonglab import adaptive, scenes
+    from phonglab.render import render_scene
+
+    text = CONTENT.format(integrator=PATH, fmt="rgb").replace(
+        '<string name="pixel_format" value="rgb"/>', '<string name="pixel_format" value="rgb"/>'
+        + CROP)
+    crop = scenes.load_scene(_write(tmp_path, "crop.xml", text))
+    full_box = scenes.load_scene(_write(tmp_path, "box.xml", text.replace(CROP, '<rfilter '
+                                                                          'type="box"/>')))
+    region = (slice(2, 7), slice(4, 10))
+    a = _region_pass_means(render_scene(full_box, 256, seed=1, passes=8, keep_passes=True),
+                           region)
+    b_result = render_scene(crop, 256, seed=2, passes=8, keep_passes=True)
+    assert b_result.image.shape == (5, 6, 3)
+    b = _region_pass_means(b_result)
+    c = np.array([adaptive.render_adaptive(crop, 0.03, seed=s).image.mean(axis=(0, 1))
+                  for s in range(6)])
+    z = stats.t_critical(5, stats.ALPHA, 6)      # the smaller sample: 6 seeds, 5 dof
+    for x in (b, c):
+        se = np.sqrt(a.var(axis=0, ddof=1) / len(a) + x.var(axis=0, ddof=1) / len(x))
+        t = np.abs(a.mean(axis=0) - x.mean(axis=0)) / se
+        assert np.all(t <= z), (a.mean(axis=0), x.mean(axis=0), t)

@@ -355,6 +355,19 @@ def allocation(err2: np.ndarray, n: np.ndarray, target_error: float,
     return root * root.mean() / (target_error * target_error)
 
 
+def fit_time(counts: np.ndarray, seconds_left: float, seconds_per_sample: float) -> np.ndarray:
+    """``counts`` scaled down so that the pass fits ``seconds_left`` at the last pass's
+    measured cost per sample (all zero when no time is left): ``--max-seconds`` is honoured
+    within one pass, where a pass of GROWTH times the samples used to run past it (an
+    unreachable target ran three times past the limit)."""
+    if seconds_left <= 0:
+        return np.zeros_like(counts)
+    need = float(counts.sum()) * seconds_per_sample
+    if need <= seconds_left:
+        return counts
+    return np.floor(counts * (seconds_left / need)).astype(counts.dtype)
+
+
 def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: float | None = None,
                     max_spp: int | None = None, min_spp: int = MIN_SPP, integrator=None,
                     sensor: int = 0, neighbourhood: bool = True,
@@ -364,7 +377,8 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     The pilot gives every pixel ``min_spp`` samples; each further pass traces only the
     pixels below their allocation N_p* (module docstring), until the estimated error meets
     the target, no pixel needs more, a pixel would pass ``max_spp`` (those stop there), or
-    ``max_seconds`` of wall time have passed (checked between passes).
+    ``max_seconds`` of wall time have passed (each pass after the pilot is sized to fit the
+    time left at the measured cost per sample: :func:`fit_time`).
     """
     _check(target_error, max_seconds, max_spp, min_spp)
     cap = max_spp or MAX_SPP
@@ -386,8 +400,10 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
         k += 1
         if estimate <= target_error and np.all(np.isfinite(err2)):
             break
-        want = np.ceil(allocation(err2, wf.n.reshape(shape), target_error,
-                                  neighbourhood)).astype(np.int64).ravel()
+        # In floating point up to the cap + 1 before the cast: an unreachable target asks for
+        # more samples than int64 holds ("invalid value encountered in cast").
+        want = np.ceil(np.minimum(allocation(err2, wf.n.reshape(shape), target_error,
+                                             neighbourhood), cap + 1.0)).astype(np.int64).ravel()
         # At least a quarter more samples per pass: re-estimates creep, launches cost.
         step = np.maximum(want - wf.n, -(-wf.n // 4))
         counts = np.where(want > wf.n, np.minimum(step, (GROWTH - 1) * wf.n), 0)
@@ -395,9 +411,12 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
         if not counts.any():
             stopped = "max_spp" if np.any(want > wf.n) else "target"
             break
-        if max_seconds is not None and time.perf_counter() - t0 >= max_seconds:
-            stopped = "max_seconds"
-            break
+        if max_seconds is not None:
+            counts = fit_time(counts, max_seconds - (time.perf_counter() - t0),
+                              passes[-1]["seconds"] / max(traced, 1))
+            if not counts.any():
+                stopped = "max_seconds"
+                break
     seconds = time.perf_counter() - t0
     stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
     return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),

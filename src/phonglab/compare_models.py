@@ -29,6 +29,7 @@ from matplotlib.figure import Figure
 
 from . import exr
 from .errors import PhonglabError
+from .outputs import write_text
 from .metrics import luminance
 from .render import render_scene
 from .scenes import file_hash, load_scene, scene_defaults, scene_path
@@ -215,7 +216,7 @@ def write_outputs(c: ModelComparison, out_dir: Path, scene: Path, counts: dict[s
     files.append(out_dir / "figure.png")
     fig.savefig(files[-1], dpi=110)
     files.append(out_dir / "table.txt")
-    files[-1].write_text(format_table(c.stats) + "\n")
+    write_text(files[-1], format_table(c.stats) + "\n")
     return files
 
 

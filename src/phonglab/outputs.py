@@ -21,6 +21,8 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import stat
 import tempfile
@@ -126,3 +128,39 @@ class RenderOutputs:
             if stale not in written and stale.exists():
                 os.unlink(stale)            # left by an earlier render of another kind
         return render_id
+
+# ----------------------------------------------------------------------------- JSON files
+
+def jsonable(x):
+    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
+    if hasattr(x, "tolist"):
+        x = x.tolist()
+    if isinstance(x, float):
+        return x if math.isfinite(x) else str(x)
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, Path):
+        return str(x)
+    return x
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """``text`` at ``path`` (UTF-8, folders created), written to the end or not at all
+    (:func:`phonglab.exr.atomic_path`: the previous file untouched on any failure)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with exr.atomic_path(path, path.suffix or ".txt") as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+    return path
+
+
+def write_json(path: str | Path, data: Any, *, indent: int | None = 1,
+               separators: tuple[str, str] | None = None, end: str = "") -> Path:
+    """``data`` as strict JSON at ``path`` (folders created): :func:`jsonable` first, never a
+    bare NaN (``allow_nan=False``), written to the end or not at all
+    (:func:`phonglab.exr.atomic_path`, the previous file untouched on any failure).  ``indent``,
+    ``separators`` and ``end`` (a trailing newline) as each file has always been written."""
+    return write_text(path, json.dumps(jsonable(data), indent=indent, separators=separators,
+                                       allow_nan=False) + end)

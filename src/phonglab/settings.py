@@ -55,6 +55,21 @@ class PluginError(PhonglabError):
     """A plugin (type name, dictionary, XML file or object) that cannot be loaded as asked."""
 
 
+#: Seeds phonglab takes: Mitsuba's 32-bit unsigned seed.  A render's pass k uses
+#: (seed·1_000_003 + k) mod 2³² (:func:`phonglab.render.pass_seed`), a bijection of the seeds
+#: in this range for each k (1_000_003 is odd); seeds outside it used to alias silently
+#: (-1 and 2³² − 1 rendered the same image while the headers recorded different seeds).
+SEED_MAX = (1 << 32) - 1
+
+
+def check_seed(seed) -> int:
+    """``seed`` as an int in [0, :data:`SEED_MAX`], else :class:`ParameterError`."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
+        raise ParameterError(f"the seed must lie in 0..{SEED_MAX} (Mitsuba's 32-bit seed), "
+                             f"got {seed!r}")
+    return seed
+
+
 def split(text: str) -> tuple[str, str] | None:
     """``NAME=VALUE`` -> (NAME, VALUE) as written (split at the first ``=``); None when there
     is no ``=`` or no name before it."""

@@ -2,12 +2,15 @@
 
 ::
 
-    # test_mybsdf.py
-    import mitsuba as mi
+    # test_mybsdf.py, beside mybsdf.py
+    from pathlib import Path
+
     from phonglab.testing import assert_bsdf_valid
 
+    HERE = Path(__file__).parent      # the plugin file whatever the working directory
+
     def test_mybsdf_is_physical():
-        assert_bsdf_valid("mybsdf", plugins=["mybsdf.py"], quick=True)
+        assert_bsdf_valid("mybsdf", plugins=[HERE / "mybsdf.py"], quick=True)
 
 The options are those of :func:`phonglab.validate.validate_bsdf` (variant, params, topics,
 seed, quick, known, plugins).  On failure the AssertionError's message is the table of the

@@ -33,32 +33,16 @@ No Mitsuba import here: reports are built, merged and printed in processes that 
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .exr import atomic_path
+from .outputs import jsonable, write_json
 
 #: The possible values of :attr:`Row.status`.
 STATUSES = ("pass", "fail", "KNOWN", "skipped")
 
 #: How ``details["relation"]`` shows on the expected value of a table row.
 RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
-
-
-def jsonable(x):
-    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
-    if hasattr(x, "tolist"):
-        x = x.tolist()
-    if isinstance(x, float):
-        return x if math.isfinite(x) else str(x)
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, Path):
-        return str(x)
-    return x
 
 
 @dataclass
@@ -128,17 +112,6 @@ def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool 
         if reasons and r.reason:
             lines.append(" " * (widths[0] + 2) + r.reason)
     return "\n".join(lines)
-
-
-def write_json(path: str | Path, data: dict) -> Path:
-    """JSON-able ``data`` (a report's :meth:`Report.to_dict`, or several) at ``path``, indent 1,
-    creating its folder; strict JSON, written atomically (:func:`phonglab.exr.atomic_path`)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(jsonable(data), indent=1, allow_nan=False)   # strict JSON, never NaN
-    with atomic_path(path, ".json") as tmp:           # complete and checked, or not at all
-        Path(tmp).write_text(text)
-    return path
 
 
 @dataclass

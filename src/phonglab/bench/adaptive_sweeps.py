@@ -43,6 +43,7 @@ from ..planner import execute
 from ..runtime import quiet_mitsuba, set_variant
 from .analysis import pareto_front
 from .config import VARIANT, Config
+from ..outputs import write_json
 
 #: The scene whose variance is the same in every pixel (the overhead measurement).
 UNIFORM_SCENE = "check_furnace_enclosure"
@@ -216,7 +217,7 @@ def sweep_adaptive(out: Path, cfg: Config, progress: bool = False) -> dict[str, 
     data["overhead"] = {"scene": UNIFORM_SCENE, "cost_vs_uniform": 1.0 / over,
                         "target": OVERHEAD_TARGET, "met": bool(1.0 / over <= OVERHEAD_TARGET)}
     data["charts"] = [str(chart(data, out)), str(sppmap_figure(cfg, out, target))]
-    (out / "adaptive.json").write_text(json.dumps(data, indent=2) + "\n")
+    write_json(out / "adaptive.json", data, indent=2, end="\n")
     return data
 
 

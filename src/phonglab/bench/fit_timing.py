@@ -17,6 +17,7 @@ import statistics
 from pathlib import Path
 
 from .timing import PHONGLAB, run_repeated, spread
+from ..outputs import write_json
 
 #: The command the issue times, and its limit in seconds.
 COMMAND = ["fit", "roughconductor", "--set", "alpha=0.2"]
@@ -44,7 +45,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     record = time_command(args.repeats)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
+    write_json(args.out, record, indent=1, end="\n")
     print(json.dumps(record))
     return 0
 

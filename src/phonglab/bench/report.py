@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..outputs import write_text
 from ..physics.estimators import METHODS
 from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table
@@ -589,7 +590,7 @@ def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> P
     out, md_path = Path(out), Path(md_path)
     data = RunData.read(out, md_path, quick_run)
     lines = [line for section in SECTIONS for line in section(data)]
-    md_path.write_text("\n".join(lines) + "\n")
+    write_text(md_path, "\n".join(lines) + "\n")
     return md_path
 
 

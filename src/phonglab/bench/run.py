@@ -35,6 +35,7 @@ from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
 from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants, sweep_whitted_units
 from .report import write_markdown
+from ..outputs import write_json
 
 
 def machine_info() -> dict[str, Any]:
@@ -161,7 +162,7 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
     previous = out / "run.json"
     if previous.is_file() and not fresh and set(parts) != set(PARTS):
         _continue_record(record, json.loads(previous.read_text()))
-    previous.write_text(json.dumps(record, indent=2) + "\n")
+    write_json(previous, record, indent=2, end="\n")
     if markdown:
         write_markdown(out, Path(markdown), quick_run)
         log(f"bench: wrote {markdown}")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..errors import PhonglabError
@@ -42,7 +41,7 @@ def run(args) -> int:
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
-    from ..outputs import check_file, check_folder
+    from ..outputs import check_file, check_folder, write_json, write_text
 
     for path, what in ((args.json, "JSON file"), (args.report, "report")):
         if path:
@@ -62,10 +61,9 @@ def run(args) -> int:
     text = format_result(result)
     # Files first: a closed stdout (`| head`) must not lose them.
     if args.report:
-        Path(args.report).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.report).write_text(text + "\n")
+        write_text(args.report, text + "\n")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(result.as_dict(), indent=1) + "\n")
+        write_json(args.json, result.as_dict(), indent=1, end="\n")
     print(text)
     return 0

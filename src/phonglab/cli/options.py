@@ -4,26 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from ..settings import split
-
-
-#: Seeds a command takes: Mitsuba's 32-bit unsigned seed.  ``render``'s pass k uses
-#: (seed·1_000_003 + k) mod 2³² (:func:`phonglab.render.pass_seed`), a bijection of the seeds
-#: in this range for each k (1_000_003 is odd); seeds outside it used to alias silently
-#: (-1 and 2³² − 1 rendered the same image while the headers recorded different seeds).
-SEED_MAX = (1 << 32) - 1
+from ..settings import SEED_MAX, ParameterError, check_seed, split
 
 
 def seed(text: str) -> int:
-    """``--seed`` as an int in [0, :data:`SEED_MAX`], else one sentence."""
+    """``--seed`` as an int in [0, :data:`phonglab.settings.SEED_MAX`], else one sentence."""
     try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"the seed must be a whole number, got {text!r}") from None
-    if not 0 <= value <= SEED_MAX:
-        raise argparse.ArgumentTypeError(f"the seed must lie in 0..{SEED_MAX} (Mitsuba's 32-bit "
-                                         f"seed), got {value}")
-    return value
+        return check_seed(int(text))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc) if isinstance(exc, ParameterError) else
+                                         f"the seed must be a whole number, got {text!r}") from None
 
 
 def add_seed(p: argparse.ArgumentParser) -> None:

@@ -14,7 +14,8 @@ from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate.bsdf.topics import TOPICS
 from ..validate.inputs import ValidateError, check_topics
-from ..verdict import Report, write_json
+from ..outputs import write_json
+from ..verdict import Report
 from .options import add_seed
 
 EPILOG = """examples:

@@ -12,12 +12,12 @@ the page comes from that run (the table from the JSON's rows, and the example re
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from .. import registration
 from ..physics.roughness import blinn_phong_exponent, phong_exponent
 from .optimize import GRAZING_DEG, fit, format_result
+from ..outputs import write_json
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)
 #: (target plugin, distribution)
@@ -69,7 +69,7 @@ def main(argv=None) -> int:
     registration.register()
     table = rows()
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(table, indent=1) + "\n")
+    write_json(args.json, table, indent=1, end="\n")
     if args.markdown:
         example = format_result(fit(*EXAMPLE))
         replace_table(Path(args.markdown), markdown_table(table))

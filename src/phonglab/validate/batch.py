@@ -18,7 +18,8 @@ import traceback
 from pathlib import Path
 
 from ..parallel import Job, Runner
-from ..verdict import Report, jsonable
+from ..outputs import jsonable
+from ..verdict import Report
 from . import builtins
 from .bsdf.kind import validate_bsdf
 from .bsdf.topics import TOPICS, Row

@@ -19,6 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..outputs import write_text  # noqa: E402
 from ..verdict import Report, cells, header  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}
@@ -123,5 +124,5 @@ def render(report: Report) -> str:
 
 def write(report: Report, path) -> Path:
     path = Path(path)
-    path.write_text(render(report), encoding="utf-8")
+    write_text(path, render(report))
     return path
