@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-from .. import __version__
+from .. import __version__, runtime
 from ..errors import user_errors
 
 #: Modules ``phonglab.cli.<name>``, in the order ``--help`` lists them.
@@ -68,7 +68,11 @@ def interrupted(exc: BaseException) -> bool:
 def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
-        parser = build_parser()          # imports every subcommand: Ctrl-C may land here too
+        # Importing the subcommands loads Dr.Jit and Mitsuba: a Ctrl-C inside those C++
+        # imports leaves them half initialised and the interpreter aborts at exit (exit -6,
+        # "PyThreadState_Get: ... finalizing"), so it is held until they are loaded.
+        with runtime.deferred_interrupt():
+            parser = build_parser()
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             parser.print_help()
