@@ -22,7 +22,6 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
 from __future__ import annotations
 
 import json
-import math
 import os
 import stat
 import tempfile
@@ -36,6 +35,7 @@ import numpy as np
 from . import exr
 from .errors import PhonglabError
 from .tonemap import preview_png
+from .verdict import jsonable
 
 
 def check_file(path: Path, what: str = "output") -> None:
@@ -130,21 +130,6 @@ class RenderOutputs:
         return render_id
 
 # ----------------------------------------------------------------------------- JSON files
-
-def jsonable(x):
-    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
-    if hasattr(x, "tolist"):
-        x = x.tolist()
-    if isinstance(x, float):
-        return x if math.isfinite(x) else str(x)
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, Path):
-        return str(x)
-    return x
-
 
 def write_text(path: str | Path, text: str) -> Path:
     """``text`` at ``path`` (UTF-8, folders created), written to the end or not at all

@@ -33,16 +33,31 @@ No Mitsuba import here: reports are built, merged and printed in processes that 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .outputs import jsonable, write_json
 
 #: The possible values of :attr:`Row.status`.
 STATUSES = ("pass", "fail", "KNOWN", "skipped")
 
 #: How ``details["relation"]`` shows on the expected value of a table row.
 RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
+
+
+def jsonable(x):
+    """``x`` made strict-JSON-safe: numpy to Python, paths to str, NaN/Inf to "nan"/"inf"."""
+    if hasattr(x, "tolist"):
+        x = x.tolist()
+    if isinstance(x, float):
+        return x if math.isfinite(x) else str(x)
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, Path):
+        return str(x)
+    return x
 
 
 @dataclass
@@ -137,7 +152,12 @@ class Report:
         return json.dumps(self.to_dict(), indent=indent)
 
     def write_json(self, path: str | Path) -> Path:
-        """:meth:`to_dict` as JSON at ``path`` (:func:`write_json`)."""
+        """:meth:`to_dict` as strict JSON at ``path``, written atomically
+        (:func:`phonglab.outputs.write_json`)."""
+        # Imported here: outputs loads numpy, OpenEXR and Pillow, which the command line's
+        # --help and a report that is only printed do not need.
+        from .outputs import write_json
+
         return write_json(path, self.to_dict())
 
     @classmethod

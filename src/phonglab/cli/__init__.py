@@ -79,6 +79,8 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         debug = args.debug
         return int(args.func(args) or 0)
+    except SystemExit:                   # argparse's --help and usage errors, sys.exit
+        raise
     except BaseException as exc:
         # A Ctrl-C first, whatever wraps it: user_errors() imports Dr.Jit, which must not
         # start after an import the interrupt broke off (it aborts the process).

@@ -14,7 +14,6 @@ from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate.bsdf.topics import TOPICS
 from ..validate.inputs import ValidateError, check_topics
-from ..outputs import write_json
 from ..verdict import Report
 from .options import add_seed
 
@@ -87,6 +86,7 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
 
 
 def _all_builtins(args) -> int:
+    from ..outputs import write_json   # lazy: numpy, OpenEXR and Pillow, not for --help
     from ..validate import batch
 
     def progress(d):
