@@ -328,3 +328,36 @@ def test_a_bad_seed_is_bad_input_not_failing_topics(variant_llvm_rgb, seed):
     each); the CLI refuses it at the option (tests/test_hardening.py)."""
     with pytest.raises(ValidateError, match="the seed must be a whole number >= 0"):
         validate_bsdf("diffuse", seed=seed, quick=True, topics=["finite"])
+
+
+@pytest.mark.parametrize("spec, params", [
+    ("diffuse", {"reflectance": 0.0}), ("lambert", {"reflectance": 0.0}),
+    ("phong", {"diffuse_reflectance": 0.0, "specular_reflectance": 0.0}),
+    ("roughconductor", {"specular_reflectance": 0.0, "alpha": 0.3}),
+], ids=["diffuse", "lambert", "phong", "roughconductor"])
+def test_a_black_bsdf_passes_on_what_is_defined(variant_llvm_rgb, spec, params):
+    """A black BSDF (every weight 0) failed χ² (the histogram of non-zero weights was empty
+    against ∫pdf = 1) and its weight/pdf rows were 'nothing to compare for a purely delta
+    BSDF'; its directions are now histogrammed as drawn, and the rows say it is black."""
+    report = validate_bsdf(spec, params=params, quick=True,
+                           topics=["finite", "weight", "pdf", "chi2"])
+    assert report.passed, report.table(report.failing)
+    (chi2,) = [r for r in report.rows if r.topic == "chi2"]
+    assert chi2.status == "pass" and all(c.get("black") for c in chi2.details["cells"])
+    for r in report.rows:
+        if r.topic in ("weight", "pdf"):
+            assert r.status == "skipped" and "a black BSDF" in r.reason and "delta" not in \
+                r.reason.split(":")[-1], r.reason
+
+
+def test_weights_of_zero_where_eval_is_not_fail_the_weight_topic(variant_llvm_rgb, tmp_path):
+    """The black-BSDF handling must not excuse a sampler whose weights are all 0 while eval is
+    not: those lanes are compared (weight 0 against eval/pdf = ρ), and χ² keeps failing on
+    the empty histogram."""
+    plugin = tmp_path / "zero_weight.py"
+    plugin.write_text((DEFECTS / "weight_noise.py").read_text()
+                      .replace("value * 2.0 * sample1", "value * 0.0")
+                      .replace("defect_weight_noise", "defect_zero_weight"))
+    report = validate_bsdf("defect_zero_weight", plugins=[plugin], quick=True,
+                           topics=["weight", "chi2"])
+    assert {r.topic for r in report.failing} == {"weight", "chi2"}, report.table()

@@ -109,11 +109,21 @@ def _samples(bsdf, opts):
 
 def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
     wi, s, sens_w, sens_p = _samples(bsdf, opts)
-    live = np.any(s.weight != 0, axis=1) & (s.pdf > 0) & ~lanes.delta_mask(s.sampled_type)
+    drawn = (s.pdf > 0) & ~lanes.delta_mask(s.sampled_type) & np.all(np.isfinite(s.wo), axis=1)
+    live = np.any(s.weight != 0, axis=1) & drawn
     n_delta = int(np.sum(lanes.delta_mask(s.sampled_type) & np.any(s.weight != 0, axis=1)))
     rows = []
+    if not live.any() and drawn.any():
+        # Every non-delta sample has weight 0, Mitsuba's mark of a rejected sample: a black
+        # BSDF (eval 0 wherever it samples) has nothing to compare; one whose eval is not 0
+        # there returns weights that are wrong, and those lanes are compared.
+        black = not np.any(probe.eval(bsdf, wi[drawn], s.wo[drawn]))
+        if not black:
+            live = drawn
     if not live.any():
-        why = (f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
+        why = ("every non-delta sample has weight 0 and eval is 0 wherever sample() points: "
+               "a black BSDF, nothing to compare" if drawn.any() else
+               f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
                f"nothing to compare for a purely delta BSDF")
         return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta})
                 for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))

@@ -13,8 +13,10 @@ of a delta lobe get weight 0 -- ``pdf`` has no density for them; a mixture such 
 is histogrammed on its non-delta part only, whose ∫pdf is then < 1 in step with the histogram.
 
 Guards: a cell whose histogram is empty while ∫pdf > 0 fails (``mi.chi2`` would accept an
-empty histogram vacuously); a cell where both are empty (e.g. the BSDF is black at that
-incidence) is not tested.  ``mi.chi2`` writes ``chi2_data.py`` into the working directory on failure
+empty histogram vacuously) -- unless the BSDF is black there (``eval`` 0 at every direction
+``sample`` draws and at random ones: :func:`black_at`), where every weight is 0 and the
+histogram is of the directions ``sample`` drew (``bs.pdf > 0``) instead; a cell where both
+are empty (nothing sampled, zero pdf) is not tested.  ``mi.chi2`` writes ``chi2_data.py`` into the working directory on failure
 only when not ``quiet`` (mitsuba/python/chi2.py, ``run``: ``if not quiet: ... _dump_tables()``);
 the test runs quietly, so it writes nothing and the process's directory is left alone.
 
@@ -40,11 +42,14 @@ from .topics import Row
 DIRECTION_TOL = 1e-4
 
 
-def _adapters(bsdf, wi: np.ndarray):
+def _adapters(bsdf, wi: np.ndarray, black: bool = False):
     """sample_func, pdf_func for ``mi.chi2.ChiSquareTest`` at incidence wi (3,).
 
     wi reaches the kernel as an array (probe.interaction), not a literal: one kernel for all
-    cells.
+    cells.  A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so), or,
+    with ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
+    (``pdf(wo) > 0``; a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet
+    it draws its directions from its density.
     """
     delta = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
 
@@ -52,7 +57,11 @@ def _adapters(bsdf, wi: np.ndarray):
         si = probe.interaction(wi[None], n=dr.width(sample))
         bs, weight = bsdf.sample(probe.context(), si, sample[0], mi.Point2f(sample[1], sample[2]))
         value = mi.unpolarized_spectrum(weight) if mi.is_polarized else weight
-        keep = dr.any(value != 0) & ((mi.UInt32(bs.sampled_type) & delta) == 0)
+        if black:      # drawn, and inside the support (a rejected wo below the horizon is not)
+            drawn = (bs.pdf > 0) & (bsdf.pdf(probe.context(), si, bs.wo) > 0)
+        else:
+            drawn = dr.any(value != 0)
+        keep = drawn & ((mi.UInt32(bs.sampled_type) & delta) == 0)
         return bs.wo, dr.select(keep, mi.Float(1.0), mi.Float(0.0))
 
     def pdf_func(wo):
@@ -61,16 +70,30 @@ def _adapters(bsdf, wi: np.ndarray):
     return sample_func, pdf_func
 
 
+def black_at(bsdf, wi: np.ndarray, opts) -> bool:
+    """Whether ``eval`` is 0 at incidence wi for every direction sample() draws there and for
+    random directions over the sphere (a black BSDF), from ``opts.n_finite`` lanes each."""
+    r = np.random.default_rng([opts.seed, 7])
+    n = opts.n_finite
+    wis = np.repeat(np.asarray(wi, dtype=np.float64)[None], n, axis=0)
+    s = probe.sample(bsdf, wis, r.random(n), r.random((n, 2)))
+    d = r.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    ok = np.all(np.isfinite(s.wo), axis=1)
+    return not (np.any(probe.eval(bsdf, wis[ok], s.wo[ok])) or np.any(probe.eval(bsdf, wis, d)))
+
+
 def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, seed: int) -> dict:
-    """One χ² test at incidence wi; returns the cell's record (p-value, sums, verdict)."""
-    sample_func, pdf_func = _adapters(bsdf, np.asarray(wi, dtype=np.float64))
-    test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
-                                 pdf_func=pdf_func, sample_dim=3, sample_count=opts.chi2_samples,
-                                 res=opts.chi2_res, ires=opts.chi2_ires, seed=seed)
-    test.tabulate_histogram()
-    test.tabulate_pdf()
-    hist_sum = float(dr.sum(test.histogram)[0]) if dr.width(test.histogram) else 0.0
-    pdf_sum = float(test.pdf_sum[0])
+    """One χ² test at incidence wi; returns the cell's record (p-value, sums, verdict).
+
+    A histogram of non-zero weights that is empty while ∫pdf > 0 is tested again on the
+    drawn directions when the BSDF is black there (:func:`black_at`); else the cell fails.
+    """
+    wi = np.asarray(wi, dtype=np.float64)
+    test, hist_sum, pdf_sum = _tabulate(bsdf, wi, opts, seed, black=False)
+    black = hist_sum == 0 and pdf_sum >= 1e-6 and black_at(bsdf, wi, opts)
+    if black:
+        test, hist_sum, pdf_sum = _tabulate(bsdf, wi, opts, seed, black=True)
     if hist_sum == 0 and pdf_sum < 1e-6:
         return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
     ok = hist_sum > 0 and test.run(significance_level=level, test_count=1, quiet=True)
@@ -78,11 +101,25 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, seed: int) -> dict:
     cell = {"wi": wi.tolist(), "p_value": p if math.isfinite(p) else 0.0,
             "hist_sum": hist_sum / opts.chi2_samples, "pdf_sum": pdf_sum,
             "status": "pass" if ok else "fail", "messages": test.messages[-400:]}
+    if black:
+        cell["black"] = True
     if not ok:
         shape = (int(test.res.y), int(test.res.x))
         cell["histogram"] = np.array(test.histogram).reshape(shape).tolist()
         cell["expected"] = np.array(test.pdf).reshape(shape).tolist()
     return cell
+
+
+def _tabulate(bsdf, wi: np.ndarray, opts, seed: int, black: bool):
+    """The χ² test at wi with its histogram and pdf tabulated: (test, Σ histogram, Σ pdf)."""
+    sample_func, pdf_func = _adapters(bsdf, wi, black)
+    test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
+                                 pdf_func=pdf_func, sample_dim=3, sample_count=opts.chi2_samples,
+                                 res=opts.chi2_res, ires=opts.chi2_ires, seed=seed)
+    test.tabulate_histogram()
+    test.tabulate_pdf()
+    hist_sum = float(dr.sum(test.histogram)[0]) if dr.width(test.histogram) else 0.0
+    return test, hist_sum, float(test.pdf_sum[0])
 
 
 def chi2(bsdf, opts, m_tests: int) -> list[Row]:
