@@ -24,7 +24,8 @@ Faults: a job whose worker dies (killed, out of memory) is rescheduled on anothe
 the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
 a job whose function raises is re-run up to :data:`RETRIES` times, then its exception is
 raised here.  A job that cannot be pickled (a loaded ``mi.Scene`` as an argument) is one
-sentence before any job of the batch is sent (:func:`check_sendable`).  A scheduler that cannot be reached within :data:`CONNECT_TIMEOUT` seconds is one
+sentence before any job of the batch is sent (:func:`check_sendable`).  A scheduler that
+cannot be reached within :data:`CONNECT_TIMEOUT` seconds is one
 :class:`~phonglab.errors.PhonglabError` sentence.
 """
 
