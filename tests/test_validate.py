@@ -361,3 +361,23 @@ def test_weights_of_zero_where_eval_is_not_fail_the_weight_topic(variant_llvm_rg
     report = validate_bsdf("defect_zero_weight", plugins=[plugin], quick=True,
                            topics=["weight", "chi2"])
     assert {r.topic for r in report.failing} == {"weight", "chi2"}, report.table()
+
+
+def test_a_failing_row_shows_its_worst_lane_in_plain_numbers(variant_llvm_rgb):
+    """'measured 1023, tolerance 1' told the author nothing to act on; the table and the
+    assert_bsdf_valid message now give the worst lane's wi, wo and both sides (#26)."""
+    with pytest.raises(AssertionError) as info:
+        assert_bsdf_valid("defect_weight_noise", plugins=[DEFECTS / "weight_noise.py"],
+                          quick=True, topics=["weight"])
+    line = [ln for ln in str(info.value).splitlines() if "worst lane:" in ln]
+    assert line and "wi = (" in line[0] and "weight = " in line[0], str(info.value)
+    assert "eval_over_pdf = 0.5" in line[0] and "held to a relative tolerance of" in line[0]
+
+
+def test_the_html_report_shows_the_worst_lane(variant_llvm_rgb, tmp_path):
+    from phonglab.validate import html
+
+    report = validate_bsdf("defect_weight_noise", plugins=[DEFECTS / "weight_noise.py"],
+                           quick=True, topics=["weight"])
+    page = html.write(report, tmp_path / "r.html").read_text()
+    assert "worst lane: wi = (" in page and "eval_over_pdf = 0.5" in page

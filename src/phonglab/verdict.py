@@ -126,7 +126,30 @@ def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool 
         lines.append("  ".join(str(x).ljust(w) for x, w in zip(line, widths)).rstrip())
         if reasons and r.reason:
             lines.append(" " * (widths[0] + 2) + r.reason)
+        if reasons and r.status == "fail" and evidence(r):
+            lines.append(" " * (widths[0] + 2) + evidence(r))
     return "\n".join(lines)
+
+
+def evidence(row: Row) -> str:
+    """The worst lane of a failing per-lane row in plain numbers (its directions and the
+    values the identity compares there, from ``details``), or "" for rows without one."""
+    d = row.details or {}
+    if "worst_wi" not in d:
+        return ""
+
+    def vec(v) -> str:
+        return "(" + ", ".join(f"{float(x):.6g}" for x in v) + ")"
+
+    parts = [f"wi = {vec(d['worst_wi'])}", f"wo = {vec(d['worst_wo'])}"]
+    parts += [f"{k} = {float(v):.6g}" for k, v in d.items()
+              if isinstance(v, (int, float)) and not isinstance(v, bool)
+              and k not in ("lanes", "nonfinite_dropped") and not k.startswith("box_")]
+    rel = d.get("rel_diff")
+    if isinstance(rel, (int, float)) and isinstance(row.measured, (int, float)) and row.measured:
+        # measured is rel_diff / the lane's tolerance (round-off + sensitivity)
+        parts.append(f"held to a relative tolerance of {rel / row.measured:.3g} there")
+    return "worst lane: " + ", ".join(parts)
 
 
 @dataclass

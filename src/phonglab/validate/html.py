@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..outputs import write_text  # noqa: E402
-from ..verdict import Report, cells, header  # noqa: E402
+from ..verdict import Report, cells, evidence, header  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}
 STYLE = ("body{font-family:sans-serif;margin:1.5em;max-width:1100px}"
@@ -45,7 +45,9 @@ def _table(report: Report) -> str:
     for r in report.rows:
         rows.append(f'<tr style="background:{COLOURS.get(r.status, "#fff")}">'
                     + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells(r))
-                    + f'<td class="reason">{html.escape(r.reason)}</td></tr>')
+                    + f'<td class="reason">{html.escape(r.reason)}'
+                    + (f"<br><b>{html.escape(evidence(r))}</b>" if r.status == "fail"
+                       and evidence(r) else "") + "</td></tr>")
     return "<table>" + "".join(rows) + "</table>"
 
 
