@@ -304,9 +304,10 @@ def _nan_min_max(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 # ----------------------------------------------------------------------------- range checks
 
 def check_range(plugin: str, name: str, lo, hi, finite: bool = True, denormal=None,
-                upper: float = 1.0) -> None:
+                upper: float = 1.0, slack: float = TOLERANCE) -> None:
     """Raise :class:`MaterialError` unless the values are finite, not denormal and in
-    [0, upper] in every channel (``upper`` 1: a reflectance, else an intensity)."""
+    [0, upper·(1 + slack)] in every channel (``upper`` 1: a reflectance, else an intensity;
+    ``slack`` the float32 headroom of evaluated textures, 0 for a value the scene wrote)."""
     reflectance = upper == 1.0
     what = "a reflectance in [0, 1]" if reflectance else f"an intensity in [0, {upper:g}]"
     if not finite:
@@ -315,7 +316,7 @@ def check_range(plugin: str, name: str, lo, hi, finite: bool = True, denormal=No
     if denormal is not None:
         raise _denormal_error(plugin, name, denormal)
     # No slack below 0: a value of -1e-30 already darkens a pixel below 0.
-    if np.any(np.asarray(lo) < 0) or np.any(np.asarray(hi) > upper * (1 + TOLERANCE)):
+    if np.any(np.asarray(lo) < 0) or np.any(np.asarray(hi) > upper * (1 + slack)):
         if reflectance:
             rule = ("must lie in [0, 1] in every channel (a reflectance is the fraction of "
                     "light reflected)")
@@ -394,8 +395,12 @@ def load_textures(plugin: str, props, names_defaults, energy: bool = False,
         if values is not None:
             lo, hi = _nan_min_max(values)
             bad = values[_denormal(values)]
+            # No slack for a reflectance the scene wrote: Mitsuba's own colour texture then
+            # refuses anything above 1 with its RuntimeError ("Invalid RGB reflectance value
+            # [0, 0, 1.0001]"), not phonglab's one sentence.
             check_range(plugin, name, lo, hi, bool(np.all(_finite32(values))),
-                        float(bad[0]) if bad.size else None, upper)
+                        float(bad[0]) if bad.size else None, upper,
+                        slack=0.0 if upper == 1.0 else TOLERANCE)
     get = props.get_unbounded_texture if unbounded else props.get_texture
     textures = [get(name, default) for name, default in names_defaults]
     if all(d is not None for d in declared):
