@@ -5,7 +5,9 @@
     python scripts/conformance.py --from-json docs/conformance.json   # markdown only
 
 The cases, the findings and the markdown renderer live in phonglab.validate.builtins; this
-driver only runs them and writes the two files.
+driver only runs them and writes the two files.  Each finished case is kept in
+``<json>.partial.jsonl`` at once (phonglab.validate.batch.CaseLog): an interrupted run loses
+none, and the same command resumes from them.
 """
 
 from __future__ import annotations
@@ -44,12 +46,17 @@ def main(argv=None) -> int:
             print(f"{d['meta']['case']:42s} {d['meta']['wall_seconds']:6.1f} s  "
                   f"{', '.join(bad) or 'ok'}", flush=True)
         chosen = [c for c in builtins.cases() if not args.only or c.label in args.only]
+        options = {"seed": args.seed, "quick": args.quick}
+        log = batch.CaseLog(args.json, options)     # an interrupted run resumes from it
+        if log.done:
+            print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
         t0 = time.perf_counter()
-        data = batch.run_all(chosen, {"seed": args.seed, "quick": args.quick}, progress)
+        data = batch.run_all(chosen, options, progress, log=log)
         data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         data = builtins.without_plot_data(data)
         write_json(args.json, data, indent=None, separators=(",", ":"), end="\n")
+        log.remove()
         print(f"wrote {args.json} ({data['meta']['seconds']} s)")
     args.markdown.parent.mkdir(parents=True, exist_ok=True)
     args.markdown.write_text(builtins.render_markdown(data))
