@@ -1,12 +1,13 @@
-"""Mitsuba 3.9.1 GGX visible-normal sampling: NaN direction and pdf for sample2.x = 0 (or 1).
+"""Mitsuba 3.9.1 GGX visible-normal sampling: NaN direction and pdf for sample2 = (0, 0.5).
 
-include/mitsuba/render/microfacet.h:407 maps the sample to the unit disk; for sample.x = 0 or
-1 the point lies ON the circle (p = (-1, 0) or (1, 0)), so p.y and z = safe_sqrt(1 - |p|^2)
+include/mitsuba/render/microfacet.h:407 maps the sample to the unit disk; sample2 = (0, 0.5)
+becomes p = (-1, 0), ON the circle with p.y = 0, so p.y and z = safe_sqrt(1 - |p|^2)
 (lines 410-414) are both 0 and line 418 ``norm = dr::rcp(sin_theta_i * y + cos_theta_i * z)``
-is 1/0: the slope is (0 * inf, ...) = NaN, hence m, wo and bs.pdf are NaN.  roughconductor
-masks its weight to 0 but returns bs.pdf = NaN; blendbsdf then mixes that NaN into the weight
-it returns (src/bsdfs/blendbsdf.cpp:149-151: eval_pdf of bsdf_0 at the NaN wo), so a render
-gets a NaN sample weight whenever a sampler yields exactly 0 in that dimension.  Beckmann
+is 1/0: the slope is (0 * inf, ...) = NaN, hence m, wo and bs.pdf are NaN (other samples with
+sample2.x = 0 also lie on the circle but keep p.y != 0).  roughconductor masks its weight to 0
+but returns bs.pdf = NaN; blendbsdf then forms ``weight * result1 * bs1.pdf`` with result1 = 0
+(src/bsdfs/blendbsdf.cpp:151; ``result0 * bs0.pdf`` at line 139), and 0 x NaN = NaN, so a
+render gets a NaN sample weight whenever a sampler yields exactly that point.  Beckmann
 visible sampling likewise returns an infinite normal for wi below the horizon (line 375:
 tan_theta_i < 0), so a one-sided roughconductor returns wo = bs.pdf = NaN there
 (src/bsdfs/roughconductor.cpp:250 keeps them; only the weight is masked).

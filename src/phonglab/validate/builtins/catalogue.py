@@ -2,7 +2,7 @@ r"""The catalogue of Mitsuba 3.9.1's built-in BSDFs (and phonglab's own) that ``
 --all-builtins`` checks.
 
 :func:`cases` lists every BSDF plugin of Mitsuba 3.9.1 (``src/bsdfs/*.cpp`` at tag v3.9.1,
-commit a8c3ffd763c8) that can be built standalone, each at two or more parameter settings, plus
+commit 478e193a183c) that can be built standalone, each at two or more parameter settings, plus
 phonglab's ``lambert`` and ``phong``.  A :class:`Case` holds a ``mi.load_dict`` spec, the variant
 it needs (polarized plugins need a ``*_polarized`` variant) and the rows that are KNOWN to fail
 with their documented cause (from :mod:`.findings`: the Mitsuba source line and one sentence).

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"
-MITSUBA_COMMIT = "a8c3ffd763c8e097a57e4fdb69befb78d5da2f2d"
+#: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
+#: ``a8c3ffd763c8…``, quoted here before, is the tag object itself).
+MITSUBA_COMMIT = "478e193a183c21723f4a8251afc3ad29a8da4c5e"
 SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
 
 
@@ -150,9 +152,10 @@ FINDINGS: tuple[Finding, ...] = (
             "tests/repro/mask_restricted_context.py"),
     Finding("microfacet-sample-nan", "finite", _MICROFACET_NAN,
             "include/mitsuba/render/microfacet.h:418",
-            "GGX visible-normal sampling divides by 0 for sample2.x = 0 (the concentric disk "
-            "point lies on the circle: `norm = rcp(sin_theta_i * y + cos_theta_i * z)` with "
-            "y = z = 0), and Beckmann visible sampling (line 375) returns an infinite normal "
+            "GGX visible-normal sampling divides by 0 for sample2 = (0, 0.5): the concentric "
+            "disk maps it to (-1, 0), so y = z = 0 and `norm = rcp(sin_theta_i * y + "
+            "cos_theta_i * z)` is 1/0 (other points with sample2.x = 0 lie on the circle too "
+            "but keep y != 0), and Beckmann visible sampling (line 375) returns an infinite normal "
             "for wi below the horizon; roughconductor.cpp:250 and the other callers keep the "
             "NaN wo and bs.pdf (only the weight is masked to 0)",
             "wo = NaN and bs.pdf = NaN (weight 0) for sample2 = (0, 0.5), or for any sample "
@@ -162,10 +165,10 @@ FINDINGS: tuple[Finding, ...] = (
             "tests/repro/microfacet_sample_nan.py"),
     Finding("blendbsdf-nan-weight", "finite",
             ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
-            "src/bsdfs/blendbsdf.cpp:149",
-            "sample() evaluates the other BSDF (eval_pdf at bs.wo, lines 137 and 149) and mixes "
-            "it into the weight even when the nested sample is invalid, so a NaN wo from the "
-            "nested sampler becomes a NaN sample weight",
+            "src/bsdfs/blendbsdf.cpp:151",
+            "sample() forms `weight * result1 * bs1.pdf` (line 151; `result0 * bs0.pdf` at "
+            "line 139): the nested sampler marks an invalid sample with weight 0 but keeps "
+            "bs.pdf = NaN, and 0 x NaN = NaN, so the blend's sample weight is NaN",
             "weight = NaN for sample1 = 0, sample2 = (0, 0.5) (GGX) or wi below the horizon",
             "weight 0 for an invalid sample",
             "tests/repro/microfacet_sample_nan.py"),
