@@ -73,12 +73,11 @@ def _adapters(bsdf, wi: np.ndarray, black: bool = False):
 def black_at(bsdf, wi: np.ndarray, opts) -> bool:
     """Whether ``eval`` is 0 at incidence wi for every direction sample() draws there and for
     random directions over the sphere (a black BSDF), from ``opts.n_finite`` lanes each."""
-    r = np.random.default_rng([opts.seed, 7])
+    r = lanes.rng(opts.seed, "chi2")
     n = opts.n_finite
     wis = np.repeat(np.asarray(wi, dtype=np.float64)[None], n, axis=0)
     s = probe.sample(bsdf, wis, r.random(n), r.random((n, 2)))
-    d = r.normal(size=(n, 3))
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = lanes.sphere(r, n)
     ok = np.all(np.isfinite(s.wo), axis=1)
     return not (np.any(probe.eval(bsdf, wis[ok], s.wo[ok])) or np.any(probe.eval(bsdf, wis, d)))
 
