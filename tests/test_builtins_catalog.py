@@ -39,9 +39,11 @@ def test_every_3_9_1_plugin_is_covered_or_left_out():
 def test_every_known_entry_names_a_source_line():
     assert any(c.known for c in CASES)
     for case in CASES:
-        for topic, cause in case.known.items():
+        for topic, causes in case.known.items():
             assert topic in TOPICS, (case.label, topic)
-            assert SOURCE_LINE.match(cause), (case.label, cause)
+            for k in causes:
+                assert SOURCE_LINE.match(k.cause), (case.label, k.cause)
+                assert k.rows, (case.label, k.key)      # a signature names its rows
 
 
 def test_findings_name_existing_cases_and_reproducers():
@@ -73,7 +75,8 @@ def test_markdown_renders_a_given_json():
     rows = [_row("finite", "pass"), _row("chi2", "KNOWN", "45 deg"), _row("energy", "fail"),
             _row("gradient", "skipped")]
     report = Report({"case": label, "variant": "llvm_ad_rgb", "note": case.note,
-                     "spec": {"type": "roughplastic", "alpha": 0.25}, "known": case.known},
+                     "spec": {"type": "roughplastic", "alpha": 0.25},
+                     "known": {t: [k.describe() for k in v] for t, v in case.known.items()}},
                     rows).to_dict()
     data = {"meta": {"options": {"quick": True, "seed": 3}, "seconds": 12.5},
             "reports": [report]}

@@ -74,6 +74,12 @@ class Row:
     reason: str
     details: dict = field(default_factory=dict)
 
+    #: The inputs of the row's failing lanes (name -> array with one entry per failing lane, or
+    #: a list of failing cells' records), set by the harness that made the row, so that a
+    #: documented cause can be matched against what fails (its signature) rather than against
+    #: the topic.  Not a field: it is not part of the JSON, the equality or the table.
+    failing_lanes = None
+
     def __post_init__(self):
         if self.status not in STATUSES:
             raise ValueError(f"unknown status {self.status!r}; choose one of {', '.join(STATUSES)}")

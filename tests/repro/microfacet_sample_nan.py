@@ -12,6 +12,13 @@ visible sampling likewise returns an infinite normal for wi below the horizon (l
 tan_theta_i < 0), so a one-sided roughconductor returns wo = bs.pdf = NaN there
 (src/bsdfs/roughconductor.cpp:250 keeps them; only the weight is masked).
 
+At normal incidence (sin_theta_i = 0, s = 1) norm = 1 / z, so EVERY sample on an edge of
+[0, 1]^2 (mapped onto the circle) is 1/0, e.g. sample2 = (0, 0).  At exactly grazing wi
+(cos_theta_i = 0) next to a valid lane, the deactivated lane is still sampled and the
+visible-normal pdf (line 223) divides by cos_theta(wi) = 0.  All three inputs have measure
+zero: a renderer meets them only with a sampler that yields exact edge values or a ray that
+meets a surface exactly edge-on.
+
 Run: python tests/repro/microfacet_sample_nan.py  -> exit 1 while the bug is present.
 """
 import math
@@ -45,4 +52,24 @@ bs, weight = beckmann.sample(mi.BSDFContext(), si, mi.Float(0.3), mi.Point2f(0.3
 print(f"roughconductor (Beckmann), wi below the horizon -> wo = {bs.wo}, pdf = {bs.pdf[0]}, "
       f"weight = {weight.x[0]}")
 bad |= math.isnan(float(bs.pdf[0]))
+# Normal incidence: sin_theta_i = 0 and s = 1, so norm = 1 / z, and EVERY point of the sample
+# square's edge maps onto the circle (z = 0): sample2 = (0, 0) is 1/0 as well.
+si.wi = mi.Vector3f(0, 0, 1)
+blend_bsdf = mi.load_dict(blend)
+bs, weight = blend_bsdf.sample(mi.BSDFContext(), si, mi.Float(0.0), mi.Point2f(0.0, 0.0))
+print(f"blendbsdf(diffuse, roughconductor), wi = (0, 0, 1), sample1 = 0, sample2 = (0, 0) -> "
+      f"pdf = {bs.pdf[0]}, weight = {weight.x[0]}")
+bad |= math.isnan(float(weight.x[0]))
+# Exactly grazing wi (cos_theta_i = 0, a measure-zero input) next to a valid lane: the nested
+# roughconductor deactivates the grazing lane (roughconductor.cpp:236) but, as another lane is
+# active, still samples it, and the visible-normal pdf divides by cos_theta(wi) = 0
+# (microfacet.h:223); bs.pdf keeps that NaN, and blendbsdf's 0 x NaN makes the weight NaN.
+# (Alone in its call the lane returns early with zeros: roughconductor.cpp:238.)
+si2 = dr.zeros(mi.SurfaceInteraction3f, 2)
+si2.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+si2.wi = mi.Vector3f([1.0, 0.6], [0.0, 0.0], [0.0, 0.8])
+bs, weight = blend_bsdf.sample(mi.BSDFContext(), si2, mi.Float(0.1), mi.Point2f(0.3, 0.6))
+print(f"blendbsdf, lanes wi = (1, 0, 0) and (0.6, 0, 0.8), sample1 = 0.1, sample2 = (0.3, 0.6) "
+      f"-> pdf = {bs.pdf}, weight = {weight.x}")
+bad |= math.isnan(float(weight.x[0]))
 sys.exit(1 if bad else 0)

@@ -12,8 +12,11 @@ run makes and the table topic -> runner.  What is the same for every kind lives 
   failing row of that topic, so the other topics still report) and timed.  The statistical rows
   share one family-wise level: each of the m tests the kind counts runs at the Šidák level
   1 − (1 − α)^(1/m) (:func:`phonglab.stats.sidak`, α = :data:`phonglab.stats.ALPHA`), so a correct
-  plugin fails by chance with probability α.  A failing row of a topic in ``known`` (a
-  documented cause) becomes KNOWN with the same tolerance.  Rows come in table order; the meta
+  plugin fails by chance with probability α.  A failing row becomes KNOWN (same tolerance)
+  only when every one of its failing lanes lies in the *signature* of a documented cause in
+  ``known`` -- the rows the cause names and the region of inputs it explains (:class:`Known`,
+  :func:`mark_known`); a lane outside every signature keeps the row a fail, so a finding
+  never hides a new failure of its topic.  Rows come in table order; the meta
   records the plugin, variant, seed, sizes, m, α and the timings;
 * :func:`validate`: the topics checked, then both.
 """
@@ -28,6 +31,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import mitsuba as mi
+import numpy as np
 
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
@@ -148,11 +152,92 @@ def _guarded(topic: str, runner) -> list[Row]:
                     {"traceback": traceback.format_exc()[-3000:]})]
 
 
+@dataclass(frozen=True)
+class Known:
+    """A documented cause of failing rows, matched by its signature, never by topic alone.
+
+    ``rows``: the names of the rows it explains (() -- every row of its topic); ``region``: the
+    failing lanes it explains (an object with ``covers(row)`` -> one boolean per failing lane
+    or None, and ``text``; :mod:`phonglab.validate.bsdf.signatures`), None for all of them.
+    A plain string in ``known`` is a cause with neither: what a user writes by hand for a
+    topic they have judged as a whole.
+    """
+
+    cause: str
+    rows: tuple[str, ...] = ()
+    region: Any = None
+    key: str = ""                  #: the finding's id, if it is one
+
+    def names(self, row: Row) -> bool:
+        """Whether the cause names ``row`` (a parameter row ``nested.eta.value`` matches
+        ``eta.value``: the same parameter of a nested plugin)."""
+        return not self.rows or any(row.name == n or row.name.endswith("." + n)
+                                    for n in self.rows)
+
+    def describe(self) -> str:
+        """One line for the report's meta: the cause, and the signature when it has one."""
+        where = []
+        if self.rows:
+            where.append("rows " + ", ".join(repr(r) for r in self.rows))
+        if self.region is not None:
+            where.append(self.region.text)
+        return self.cause + (f" [signature: {'; '.join(where)}]" if where else "")
+
+
+def known_entries(value) -> tuple[Known, ...]:
+    """A ``known`` value (a cause string, a :class:`Known`, or a sequence of them) as Knowns."""
+    if value is None:
+        return ()
+    if isinstance(value, (str, Known)):
+        value = (value,)
+    return tuple(Known(v) if isinstance(v, str) else v for v in value)
+
+
+def _failing_count(row: Row) -> int:
+    lanes = row.failing_lanes
+    return len(next(iter(lanes.values()))) if lanes else 1
+
+
 def mark_known(rows: list[Row], known) -> None:
-    """A failing row of a topic in ``known`` becomes KNOWN, its reason prefixed by the cause."""
+    """A failing row whose every failing lane lies in the signature of a documented cause that
+    names it becomes KNOWN, its reason prefixed by the cause(s); a failing lane outside every
+    such signature keeps the row a fail, and its reason and details say how many lanes lie
+    outside and where the first one is (a new failure hides behind no old finding)."""
     for r in rows:
-        if r.status == "fail" and known and r.topic in known:
-            r.status, r.reason = "KNOWN", f"{known[r.topic]} ({r.reason})"
+        causes = [k for k in known_entries((known or {}).get(r.topic)) if k.names(r)]
+        if r.status != "fail" or not causes:
+            continue
+        n = _failing_count(r)
+        covered = np.zeros(n, bool)
+        used = []
+        for k in causes:
+            mask = np.ones(n, bool) if k.region is None else k.region.covers(r)
+            if mask is None or len(mask) != n or not np.any(mask):
+                continue
+            covered |= np.asarray(mask, bool)
+            used.append(k)
+        if covered.all():
+            r.status = "KNOWN"
+            r.reason = f"{'; '.join(k.cause for k in used)} ({r.reason})"
+            keys = [k.key for k in used if k.key]
+            if keys:
+                r.details["known_by"] = keys
+            continue
+        outside = int(n - covered.sum())
+        texts = "; ".join(dict.fromkeys(k.region.text for k in causes if k.region is not None))
+        r.reason += (f"; {outside} of {n} failing lanes lie outside every documented signature "
+                     f"({texts})")
+        first = int(np.flatnonzero(~covered)[0])
+        r.details["outside_signature"] = {
+            "lanes": outside, "of": n, "findings": [k.key or k.cause[:80] for k in causes],
+            "first": {k: _lane_value(v, first) for k, v in (r.failing_lanes or {}).items()}}
+
+
+def _lane_value(values, i):
+    v = values[i]
+    if isinstance(v, dict):          # a χ² cell's record: its incidence only
+        return {k: v[k] for k in ("theta_deg", "phi", "p_value") if k in v}
+    return np.asarray(v).tolist()
 
 
 def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, family=1,
@@ -183,7 +268,8 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     meta = {kind.name: target.label, "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
-            "known": dict(known or {})}
+            "known": {t: [k.describe() for k in known_entries(v)]
+                      for t, v in (known or {}).items()}}
     if family != 1:
         meta["family"] = family
     if sizes:

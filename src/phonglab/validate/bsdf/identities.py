@@ -60,6 +60,9 @@ def finite(bsdf, opts) -> list[Row]:
     rows = []
     for name, bad in checks.items():
         w_in, w_out = (wi, s.wo) if name == "sample" else (wi_all, wo)
+        inputs = {"wi": w_in, "wo": w_out}
+        if name == "sample":
+            inputs.update(sample1=u1, sample2=u2)
         details = {"lanes": int(bad.size), "bad": int(bad.sum())}
         if name == "sample":
             details["rejected_samples_with_nan"] = rejected_nan
@@ -71,7 +74,7 @@ def finite(bsdf, opts) -> list[Row]:
                          f"count of lanes with a NaN, Inf or negative {name} result over "
                          f"random, mirror, grazing and below-horizon directions"
                          + (SAMPLE_NOTE.format(rejected_nan) if name == "sample" else ""),
-                         details))
+                         details, lanes=(bad.astype(float), inputs)))
     return rows
 
 
@@ -86,10 +89,12 @@ def eval_pdf(bsdf, opts) -> list[Row]:
     return [
         bounded_row("eval_pdf", "eval_pdf value = eval", max_finite(rel_e), REL_TOL,
              f"max relative |eval_pdf[0] − eval| over random wo; {ROUND_OFF}",
-             worst_lane(rel_e, wi, wo, {"eval": ev[:, 0], "eval_pdf": ev2[:, 0]})),
+             worst_lane(rel_e, wi, wo, {"eval": ev[:, 0], "eval_pdf": ev2[:, 0]}),
+             lanes=(rel_e, {"wi": wi, "wo": wo})),
         bounded_row("eval_pdf", "eval_pdf pdf = pdf", max_finite(rel_p), REL_TOL,
              f"max relative |eval_pdf[1] − pdf| over random wo; {ROUND_OFF}",
-             worst_lane(rel_p, wi, wo, {"pdf": pd, "eval_pdf": pd2})),
+             worst_lane(rel_p, wi, wo, {"pdf": pd, "eval_pdf": pd2}),
+             lanes=(rel_p, {"wi": wi, "wo": wo})),
     ]
 
 
@@ -146,7 +151,8 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         rows.append(bounded_row("weight", "weight = eval/pdf per sample", max_finite(ex), 1.0,
                          f"relative |weight − eval/pdf(bs.wo)| per sample; {note}; {BOXED}",
                          {**worst_lane(ex, wi, wo, {"weight": w[:, 0], "eval_over_pdf": ratio[:, 0],
-                                                "rel_diff": rel}), **box}))
+                                                "rel_diff": rel}), **box},
+                         lanes=(ex, {"wi": wi, "wo": wo})))
     if "pdf" in topics:
         rel = rel_diff(bpdf, pd)
         def pdf_of(a, b):
@@ -156,7 +162,7 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         rows.append(bounded_row("pdf", "bs.pdf = pdf(bs.wo)", max_finite(ex), 1.0,
                          f"relative |bs.pdf − pdf(wi, bs.wo)| per sample; {note}; {BOXED}",
                          {**worst_lane(ex, wi, wo, {"bs_pdf": bpdf, "pdf": pd, "rel_diff": rel}),
-                          **box}))
+                          **box}, lanes=(ex, {"wi": wi, "wo": wo})))
     return rows
 
 
@@ -178,27 +184,34 @@ def component(bsdf, opts) -> list[Row]:
                  f"components: {k_count}",
                  {"flags": flags, "bad": int(bad.sum()),
                   "examples": [{"component": int(c), "type": int(t)}
-                               for c, t in zip(comp[bad][:5], stype[bad][:5])]})]
+                               for c, t in zip(comp[bad][:5], stype[bad][:5])]},
+                 lanes=(bad.astype(float), {"wi": wi[live], "component": comp, "type": stype}))]
     if k_count < 2:
         return rows
     r = lanes.rng(opts.seed, "component")
     wo = lanes.sphere(r, len(wi))
     full = probe.eval(bsdf, wi, wo)
     total = np.zeros_like(full)
-    wrong = 0
+    wrong, inputs = [], {"wi": [], "requested": [], "component": [], "type": []}
     for k in range(k_count):
         ctx = probe.context(component=k)
         total += probe.eval(bsdf, wi, wo, ctx)
         sk = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 7 * k + 1, ctx=ctx)
         lk = np.any(sk.weight != 0, axis=1)
-        wrong += int(np.sum(lk & (sk.sampled_component != k)))
+        wrong.append(lk & (sk.sampled_component != k))
+        for name, v in (("wi", wi), ("requested", np.full(len(wi), k)),
+                        ("component", sk.sampled_component), ("type", sk.sampled_type)):
+            inputs[name].append(v)
+    wrong = np.concatenate(wrong)
     rows.append(bounded_row("component", "restricted context samples only its component",
-                     float(wrong), 0.0,
+                     float(wrong.sum()), 0.0,
                      f"count of samples from a context restricted to component k that "
-                     f"report another component, over k = 0..{k_count - 1}", {"bad": wrong}))
+                     f"report another component, over k = 0..{k_count - 1}",
+                     {"bad": int(wrong.sum()), "flags": flags},
+                     lanes=(wrong.astype(float), {n: np.concatenate(v) for n, v in inputs.items()})))
     rel = np.max(rel_diff(total, full), axis=1)
     rows.append(bounded_row("component", "Σ_k eval(component k) = eval", max_finite(rel), REL_TOL,
                      f"max relative |Σ_k eval_k − eval| over random wo; {ROUND_OFF}",
-                     worst_lane(rel, wi, wo)))
+                     worst_lane(rel, wi, wo), lanes=(rel, {"wi": wi, "wo": wo})))
     return rows
 

@@ -63,7 +63,9 @@ def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick
 
     ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
     ``<bsdf>``, or a loaded ``mi.BSDF``; ``params`` are added to a name's or dict's parameters.
-    ``known``: topic -> documented cause (a failing row of that topic is KNOWN); ``plugins``:
+    ``known``: topic -> documented causes (:class:`~phonglab.validate.core.Known` with a
+    signature, or a plain string judging the whole topic): a failing row is KNOWN when every
+    failing lane lies in the signature of a cause that names it; ``plugins``:
     Python files that call ``mi.register_bsdf``, run after the variant is set.  ``family``,
     ``sizes``: see :func:`phonglab.validate.core.run`.  Bad input raises
     :class:`~phonglab.validate.inputs.ValidateError` with one sentence.

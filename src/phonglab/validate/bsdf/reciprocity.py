@@ -58,7 +58,8 @@ def reciprocity(bsdf, opts) -> list[Row]:
     rows = [bounded_row("reciprocity", "f(wi, wo) = f(wo, wi), reflection", max_finite(ex), 1.0,
                  f"relative |f(wi,wo) − f(wo,wi)| over random and grid pairs on the upper "
                  f"hemisphere; {CONDITIONED}",
-                 worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_wo_wi": bwd[:, 0]}))]
+                 worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_wo_wi": bwd[:, 0]}),
+                 lanes=(ex, {"wi": wi, "wo": wo}))]
     if lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission) and not lanes.delta_only(bsdf):
         wi, wo = _pairs(opts, False)
         ex, fwd, bwd = _compare(bsdf, wi, wo, r, probe.context(mode=mi.TransportMode.Importance))
@@ -66,5 +67,6 @@ def reciprocity(bsdf, opts) -> list[Row]:
                          max_finite(ex), 1.0,
                          f"relative |f_Radiance(wi,wo) − f_Importance(wo,wi)| over random "
                          f"transmission pairs (the adjoint = η² form); {CONDITIONED}",
-                         worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_adj_wo_wi": bwd[:, 0]})))
+                         worst_lane(ex, wi, wo, {"f_wi_wo": fwd[:, 0], "f_adj_wo_wi": bwd[:, 0]}),
+                         lanes=(ex, {"wi": wi, "wo": wo})))
     return rows

@@ -25,11 +25,22 @@ BOXED = (CONDITIONED[:-1] + "; a lane that fails gets the evaluated side's sensi
          "every float32 wo within 8 ulps per component, config.refine)")
 
 
-def bounded_row(topic, name, measured, tol, reason, details, expected=0.0) -> Row:
-    """A row that passes when ``measured`` is finite and ≤ ``tol``."""
+def bounded_row(topic, name, measured, tol, reason, details, expected=0.0, lanes=None) -> Row:
+    """A row that passes when ``measured`` is finite and ≤ ``tol``.
+
+    ``lanes``: (per-lane values, {input name: per-lane array}) -- the row then carries the
+    inputs of its failing lanes (finite values > ``tol``) as ``failing_lanes``, which a
+    documented cause's signature is matched against (:mod:`.signatures`).
+    """
     ok = measured is not None and np.isfinite(measured) and measured <= tol
-    return Row(topic, name, float(measured), expected, None, tol, "pass" if ok else "fail",
-               reason, details)
+    row = Row(topic, name, float(measured), expected, None, tol, "pass" if ok else "fail",
+              reason, details)
+    if lanes is not None and not ok:
+        values, inputs = lanes
+        values = np.asarray(values, np.float64)
+        bad = np.isfinite(values) & (values > tol)
+        row.failing_lanes = {k: np.asarray(v)[bad] for k, v in inputs.items()}
+    return row
 
 
 def worst_lane(rel: np.ndarray, wi: np.ndarray, wo: np.ndarray, extra: dict | None = None) -> dict:

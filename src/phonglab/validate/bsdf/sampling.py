@@ -143,8 +143,10 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
         return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped",
                     "the BSDF sampled nothing and has zero pdf at every tested incidence",
                     {"cells": records})]
-    return [Row("chi2", "sampling matches pdf (min p-value)", p_min, level, None, level,
-                "fail" if failed else "pass", reason, {"cells": records, "level": level})]
+    row = Row("chi2", "sampling matches pdf (min p-value)", p_min, level, None, level,
+              "fail" if failed else "pass", reason, {"cells": records, "level": level})
+    row.failing_lanes = {"cell": failed} if failed else None
+    return [row]
 
 
 def delta_directions(bsdf, opts) -> Row:

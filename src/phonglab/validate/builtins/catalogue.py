@@ -34,8 +34,9 @@ class Case:
     label: str                       #: unique, e.g. ``roughplastic/beckmann-a0.25``
     spec: dict[str, Any]             #: the ``mi.load_dict`` dictionary
     variant: str | None = None       #: None: phonglab's default (``llvm_ad_rgb``)
-    #: topic -> "src/.../file.cpp:LINE: why" for rows known to fail in Mitsuba 3.9.1
-    known: dict[str, str] = field(default_factory=dict)
+    #: topic -> the documented causes (``Known``, each "src/.../file.cpp:LINE: why" with its
+    #: signature) of rows known to fail in Mitsuba 3.9.1
+    known: dict[str, tuple] = field(default_factory=dict)
     #: every lobe is a Dirac delta (no density to histogram): directions and energy only
     delta: bool = False
     note: str = ""                   #: what the setting exercises, for the table

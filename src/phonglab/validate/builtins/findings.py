@@ -13,6 +13,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
+                               Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence, Region,
+                               SampleEdgeAtNormalIncidence, SamplePoint, Union)
+from ..core import Known
+
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"
 #: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
@@ -34,10 +39,18 @@ class Finding:
     expected: str            #: what a correct plugin gives
     reproducer: str          #: tests/repro/<script>.py: exits 1 while the behaviour is present
     bug: bool = True         #: False: intended behaviour of the model, documented as KNOWN
+    #: the names of the rows it explains (a parameter name also matches ``nested.<name>``)
+    rows: tuple[str, ...] = ()
+    #: the failing lanes it explains (:mod:`phonglab.validate.bsdf.signatures`); None: all
+    region: Region | None = None
 
     def known_text(self) -> str:
         """The ``known`` entry of a case: ``file:line: cause``."""
         return f"{self.source}: {self.cause}"
+
+    def known(self) -> Known:
+        """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
+        return Known(self.known_text(), self.rows, self.region, self.key)
 
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
@@ -50,6 +63,16 @@ _MICROFACET_NAN = ("roughconductor/beckmann-a0.2", "roughconductor/ggx-a0.3-Cu",
                    "principledthin/all-lobes", "twosided/diffuse|roughconductor",
                    "bumpmap/roughconductor", "normalmap/roughconductor",
                    "mask/roughconductor-0.8", "pplastic/rough-ggx")
+
+#: Row names the findings' signatures refer to (as the topics name them).
+CHI2_ROW = "sampling matches pdf (min p-value)"
+SAMPLE_ROW = "sample: NaN/Inf/negative values"
+NAN_ROWS = ("pdf: NaN/Inf/negative values", "eval_pdf: NaN/Inf/negative values")
+AGREE_ROW = "sampled_component/sampled_type agree with the flags"
+RESTRICTED_ROW = "restricted context samples only its component"
+SUM_ROW = "Σ_k eval(component k) = eval"
+REFLECTION_ROW = "f(wi, wo) = f(wo, wi), reflection"
+TRANSMISSION_ROW = "f(wi, wo) = f*(wo, wi), transmission (η² form)"
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
 FINDINGS: tuple[Finding, ...] = (
@@ -64,7 +87,8 @@ FINDINGS: tuple[Finding, ...] = (
             "while 99.8 % of samples are valid; chi2 p = 0 at 45-87 deg (and at 0 deg for GGX)",
             "pdf = 0 below the horizon (scalar_rgb gives 0); chi2 passes when the pdf is masked "
             "to wo.z > 0 (p = 0.09-0.78 at 0-85 deg, both distributions)",
-            "tests/repro/roughplastic_pdf_below_horizon.py"),
+            "tests/repro/roughplastic_pdf_below_horizon.py",
+            rows=(CHI2_ROW,), region=Chi2Outside("below_horizon")),
     Finding("roughplastic-pdf-nan-grazing", "finite",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
@@ -74,7 +98,8 @@ FINDINGS: tuple[Finding, ...] = (
             "(eval_pdf() likewise, line 501)",
             "pdf = NaN for wi = (1, 0, 0) in a call with other, valid lanes",
             "pdf = 0 for an inactive lane",
-            "tests/repro/roughplastic_pdf_below_horizon.py"),
+            "tests/repro/roughplastic_pdf_below_horizon.py",
+            rows=NAN_ROWS, region=GrazingIncidence()),
     Finding("roughplastic-gradient-detached", "gradient",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
@@ -86,7 +111,8 @@ FINDINGS: tuple[Finding, ...] = (
             "d eval/d alpha: AD 0.0633 vs central difference -0.0250; d/d eta: AD -0.108 vs "
             "0.0265 (alpha 0.25, one lane off the specular peak)",
             "AD equal to the central difference within its error",
-            "tests/repro/roughplastic_gradient_detached.py"),
+            "tests/repro/roughplastic_gradient_detached.py",
+            rows=("alpha", "eta")),
     Finding("principledthin-pdf-nan-grazing", "finite", ("principledthin/all-lobes",),
             "src/bsdfs/principledthin.cpp:704",
             "pdf() sets `active &= cos_theta_i != 0` (line 606) but returns `pdf` unmasked, so a "
@@ -94,7 +120,8 @@ FINDINGS: tuple[Finding, ...] = (
             "divide by cos_theta_i) whenever another lane is active -- roughplastic's pattern",
             "pdf = NaN for wi = (1, 0, 0) next to a valid lane",
             "pdf = 0 for an inactive lane",
-            "tests/repro/principledthin_pdf_nan_grazing.py"),
+            "tests/repro/principledthin_pdf_nan_grazing.py",
+            rows=NAN_ROWS, region=GrazingIncidence()),
     Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
             "src/bsdfs/hair.cpp:267",
             "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
@@ -104,7 +131,8 @@ FINDINGS: tuple[Finding, ...] = (
             "3.5 % of samples have wo.y == 0 exactly (blond, 85 deg); chi2 p = 0 at 70-87 deg "
             "(res 201, ires 16)",
             "P(wo.y == 0) ~ 1e-7 for a continuous density; sampling consistent with pdf",
-            "tests/repro/hair_residual_lobe_sampling.py"),
+            "tests/repro/hair_residual_lobe_sampling.py",
+            rows=(CHI2_ROW,), region=Chi2Excess("normal_plane")),
     Finding("principled-component-ids", "component",
             ("principled/default", "principled/metal"),
             "src/bsdfs/principled.cpp:423",
@@ -113,7 +141,8 @@ FINDINGS: tuple[Finding, ...] = (
             "the lobes that are on",
             "sampled_component 3 with component_count() = 2",
             "sampled_component < component_count() and flags(i) containing sampled_type",
-            "tests/repro/principled_component_ids.py"),
+            "tests/repro/principled_component_ids.py",
+            rows=(AGREE_ROW,), region=ComponentOutOfRange()),
     Finding("principled-ignores-component", "component",
             ("principled/default", "principled/all-lobes", "principled/metal",
              "principledthin/default", "principledthin/all-lobes"),
@@ -123,7 +152,8 @@ FINDINGS: tuple[Finding, ...] = (
             "restricted to one component still samples and evaluates every lobe",
             "BSDFContext(component=0) samples components [0, 1, 2, 3]",
             "only component 0",
-            "tests/repro/principled_ignores_component.py"),
+            "tests/repro/principled_ignores_component.py",
+            rows=(RESTRICTED_ROW, SUM_ROW)),
     Finding("blendbsdf-component-ids", "component",
             ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
             "src/bsdfs/blendbsdf.cpp:154",
@@ -132,7 +162,8 @@ FINDINGS: tuple[Finding, ...] = (
             "GlossyReflection samples of bsdf_1 report component 0 (flags(0) = "
             "DiffuseReflection)",
             "component 1",
-            "tests/repro/blendbsdf_component_ids.py"),
+            "tests/repro/blendbsdf_component_ids.py",
+            rows=(AGREE_ROW, RESTRICTED_ROW), region=ComponentOfAnotherLobe()),
     Finding("pplastic-component-ids", "component", ("pplastic/default", "pplastic/rough-ggx"),
             "src/bsdfs/pplastic.cpp:210",
             "one component (Glossy|Diffuse) is declared but sample() reports components 0 and 1 "
@@ -140,7 +171,8 @@ FINDINGS: tuple[Finding, ...] = (
             "(lines 251-252)",
             "sampled_component 1 with component_count() = 1",
             "sampled_component < component_count()",
-            "tests/repro/pplastic_component_ids.py"),
+            "tests/repro/pplastic_component_ids.py",
+            rows=(AGREE_ROW,), region=ComponentOutOfRange()),
     Finding("mask-restricted-context", "component",
             ("mask/diffuse-0.5", "mask/roughconductor-0.8"),
             "src/bsdfs/mask.cpp:140",
@@ -149,29 +181,42 @@ FINDINGS: tuple[Finding, ...] = (
             "only pass-through samples, one with only the Null lobe samples the nested BSDF",
             "context = DiffuseReflection: 100 % of the samples are Null (wo = -wi)",
             "0 % Null samples (pdf() at line 177 already treats the context the right way)",
-            "tests/repro/mask_restricted_context.py"),
+            "tests/repro/mask_restricted_context.py",
+            rows=(RESTRICTED_ROW,)),
     Finding("microfacet-sample-nan", "finite", _MICROFACET_NAN,
             "include/mitsuba/render/microfacet.h:418",
-            "GGX visible-normal sampling divides by 0 for sample2 = (0, 0.5): the concentric "
-            "disk maps it to (-1, 0), so y = z = 0 and `norm = rcp(sin_theta_i * y + "
-            "cos_theta_i * z)` is 1/0 (other points with sample2.x = 0 lie on the circle too "
-            "but keep y != 0), and Beckmann visible sampling (line 375) returns an infinite normal "
-            "for wi below the horizon; roughconductor.cpp:250 and the other callers keep the "
-            "NaN wo and bs.pdf (only the weight is masked to 0)",
-            "wo = NaN and bs.pdf = NaN (weight 0) for sample2 = (0, 0.5), or for any sample "
-            "with wi below the horizon (Beckmann)",
+            "GGX visible-normal sampling divides by 0 on a measure-zero set of sample values: "
+            "`norm = rcp(sin_theta_i * y + cos_theta_i * z)` is 1/0 for sample2 = (0, 0.5) "
+            "(the concentric disk maps it to (-1, 0), so y = z = 0) and, at normal incidence, "
+            "for every sample2 on an edge of [0, 1]^2 (mapped onto the circle, z = 0); Beckmann "
+            "visible sampling (line 375) returns an infinite normal for wi below the horizon; "
+            "roughconductor.cpp:250 and the other callers keep the NaN wo and bs.pdf (only the "
+            "weight is masked to 0)",
+            "wo = NaN and bs.pdf = NaN (weight 0) for sample2 = (0, 0.5) at 40 deg, and for wi "
+            "below the horizon (Beckmann)",
             "finite wo and pdf for every sample in [0, 1)^2 (an invalid sample: weight 0, "
             "pdf 0)",
-            "tests/repro/microfacet_sample_nan.py"),
+            "tests/repro/microfacet_sample_nan.py",
+            rows=(SAMPLE_ROW,),
+            region=Union((SamplePoint((0.0, 0.5)), SampleEdgeAtNormalIncidence(),
+                          BelowHorizon()))),
     Finding("blendbsdf-nan-weight", "finite",
             ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
             "src/bsdfs/blendbsdf.cpp:151",
             "sample() forms `weight * result1 * bs1.pdf` (line 151; `result0 * bs0.pdf` at "
-            "line 139): the nested sampler marks an invalid sample with weight 0 but keeps "
-            "bs.pdf = NaN, and 0 x NaN = NaN, so the blend's sample weight is NaN",
-            "weight = NaN for sample1 = 0, sample2 = (0, 0.5) (GGX) or wi below the horizon",
+            "line 139): the nested microfacet sampler marks an invalid sample with weight 0 but "
+            "keeps bs.pdf = NaN, and 0 x NaN = NaN, so the blend's sample weight is NaN; the "
+            "NaN pdf comes from measure-zero inputs only: exactly grazing wi (cos theta_i = 0) "
+            "in a call with other active lanes, where the visible-normal pdf divides by "
+            "cos_theta(wi) (microfacet.h:223), and the sample values of microfacet.h:418 "
+            "(sample2 = (0, 0.5); an edge of [0, 1]^2 at normal incidence)",
+            "weight = NaN for wi = (1, 0, 0) next to a valid lane (sample1 = 0.1), for "
+            "sample2 = (0, 0.5) at 40 deg and for sample2 = (0, 0) at normal incidence",
             "weight 0 for an invalid sample",
-            "tests/repro/microfacet_sample_nan.py"),
+            "tests/repro/microfacet_sample_nan.py",
+            rows=(SAMPLE_ROW,),
+            region=Union((GrazingIncidence(), SamplePoint((0.0, 0.5)),
+                          SampleEdgeAtNormalIncidence(), BelowHorizon()))),
     Finding("conductor-eta0-gradient", "gradient",
             ("roughconductor/beckmann-a0.2", "roughconductor/beckmann-novisible",
              "blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric",
@@ -185,7 +230,8 @@ FINDINGS: tuple[Finding, ...] = (
             "d eval/d eta by AD: 0 at eta = 0, -1.955 at eta = 1e-3, -1.970 at 2e-3 (one "
             "lane)",
             "a continuous derivative (about -1.95 at eta = 0)",
-            "tests/repro/conductor_eta0_gradient.py"),
+            "tests/repro/conductor_eta0_gradient.py",
+            rows=("eta.value",)),
     Finding("principled-gradient-lobe-masks", "gradient",
             ("principled/default", "principled/metal", "principledthin/default"),
             "src/bsdfs/principled.cpp:559",
@@ -198,7 +244,9 @@ FINDINGS: tuple[Finding, ...] = (
             "d/d clearcoat at 0: AD 0 vs right-hand difference 0.614; d/d metallic at 1: AD "
             "20.54 (= right-hand, outside the range) vs left-hand 1.42 (256 lanes)",
             "the one-sided derivative from inside [0, 1]",
-            "tests/repro/principled_gradient_lobe_masks.py"),
+            "tests/repro/principled_gradient_lobe_masks.py",
+            rows=("clearcoat.value", "sheen.value", "spec_trans.value", "metallic.value",
+                  "diff_trans.value")),
     Finding("principledthin-transmission-reciprocity", "reciprocity",
             ("principledthin/all-lobes",),
             "src/bsdfs/principledthin.cpp:463",
@@ -209,7 +257,8 @@ FINDINGS: tuple[Finding, ...] = (
             "f(a, b) = 0 vs f(b, a) = 10.67 for a = (-0.49, 0.85, 0.2), b = (0.49, -0.87, "
             "-0.0216)",
             "f(a, b) = f(b, a) (a thin sheet transmits with eta = 1)",
-            "tests/repro/principledthin_transmission_reciprocity.py"),
+            "tests/repro/principledthin_transmission_reciprocity.py",
+            rows=(TRANSMISSION_ROW,)),
     Finding("pplastic-polarized-grazing", "reciprocity", ("pplastic/default", "pplastic/rough-ggx"),
             "src/bsdfs/pplastic.cpp:377",
             "the polarized diffuse term evaluates the second Fresnel transmission from the "
@@ -219,7 +268,8 @@ FINDINGS: tuple[Finding, ...] = (
             "f(a, b) = 0.0011334 vs f(b, a) = 0.0011194 (1.3 %) at cos = 0.0019; the spectral "
             "(unpolarized) variant agrees to 1.5e-8",
             "f(a, b) = f(b, a) to float32 precision",
-            "tests/repro/pplastic_polarized_grazing.py"),
+            "tests/repro/pplastic_polarized_grazing.py",
+            rows=(REFLECTION_ROW,), region=Grazing(0.01)),
     Finding("shading-normal-reciprocity", "reciprocity",
             ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
              "bumpmap/roughconductor"),
@@ -233,14 +283,16 @@ FINDINGS: tuple[Finding, ...] = (
             "normal), 0.1450 vs 0.0277 (bumpmap, height h = u); 12 % of random pairs are 0 one "
             "way only",
             "f(a, b) = f(b, a) for a reciprocal BRDF",
-            "tests/repro/shading_normal_reciprocity.py", bug=False),
+            "tests/repro/shading_normal_reciprocity.py", bug=False,
+            rows=(REFLECTION_ROW,)),
     Finding("hair-reciprocity", "reciprocity", ("hair/default", "hair/blond-rough"),
             "src/bsdfs/hair.cpp:349",
             "by design: eval() takes the fiber offset h = sin(gamma_i) from wi alone "
             "(near-field model at the offset where the ray hit), so swapping wi and wo changes h",
             "f(a, b) and f(b, a) differ for > 99 % of random pairs",
             "f(a, b) = f(b, a) for a reciprocal BSDF",
-            "tests/repro/hair_reciprocity.py", bug=False),
+            "tests/repro/hair_reciprocity.py", bug=False,
+            rows=(REFLECTION_ROW, TRANSMISSION_ROW)),
 )
 
 
@@ -387,11 +439,11 @@ def validator_issues() -> dict[tuple[str, str], ValidatorIssue]:
     return {(label, v.topic): v for v in VALIDATOR_ISSUES if not v.fixed for label in v.labels}
 
 
-def known_causes() -> dict[str, dict[str, str]]:
-    """label -> {topic: cause} from :data:`FINDINGS` (several causes of one row joined)."""
-    out: dict[str, dict[str, str]] = {}
+def known_causes() -> dict[str, dict[str, tuple[Known, ...]]]:
+    """label -> {topic: (Known, ...)} from :data:`FINDINGS`, each with its signature."""
+    out: dict[str, dict[str, tuple[Known, ...]]] = {}
     for f in FINDINGS:
         for label in f.labels:
             topics = out.setdefault(label, {})
-            topics[f.topic] = "; ".join(filter(None, (topics.get(f.topic), f.known_text())))
+            topics[f.topic] = topics.get(f.topic, ()) + (f.known(),)
     return out

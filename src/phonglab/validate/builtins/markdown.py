@@ -123,8 +123,11 @@ def _findings_section(data: dict) -> list[str]:
            "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
            f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
            "while the behaviour is present (`pytest -m slow tests/test_builtins_catalog.py` runs "
-           "them all).  Rows they cause are reported as KNOWN.  The *measured* lines are what "
-           "the reproducer (or the named mi.chi2 run) prints; the rows above are the JSON's.", ""]
+           "them all).  A finding explains a *signature*: the rows it names and the region of "
+           "inputs it says fails.  A failing row is KNOWN only when every one of its failing "
+           "lanes (or χ² cells) lies in the signature of a finding; a lane outside keeps it a "
+           "fail.  The *measured* lines are what the reproducer (or the named mi.chi2 run) "
+           "prints; the rows above are the JSON's.", ""]
     for f in findings.FINDINGS:
         labels = [label for label in f.labels if label in seen]
         if not labels:
@@ -134,8 +137,15 @@ def _findings_section(data: dict) -> list[str]:
                 f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
                 f"* measured: {f.measured}", f"* expected: {f.expected}",
                 f"* reproducer: `{f.reproducer}`",
+                f"* signature: {_signature(f)}",
                 f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
     return out
+
+
+def _signature(f) -> str:
+    rows = ", ".join(f"`{r}`" for r in f.rows)
+    return f"{f.topic} rows {rows}; " + (f.region.text if f.region is not None
+                                         else "every failing lane of those rows")
 
 
 def _validator_section(data: dict) -> list[str]:

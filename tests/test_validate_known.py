@@ -1,0 +1,145 @@
+"""KNOWN by signature: a documented cause explains the failing lanes it names, never a topic.
+
+A failing row becomes KNOWN only when every failing lane lies in the signature (rows and input
+region) of a cause that names it; a lane outside keeps the row a fail, with the count and the
+first such lane in its details.  The planted defects of tests/defects give failures whose
+lanes are known exactly (NaN at cos θ_i = 0; a sampler off in the upper hemisphere; swapped
+component indices), so each signature can be held against lanes inside and outside it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+from phonglab.validate import validate_bsdf
+from phonglab.validate.builtins import FINDINGS
+from phonglab.validate.bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
+                                               ComponentOutOfRange, GrazingIncidence, SamplePoint,
+                                               bin_mask, pearson_p)
+from phonglab.validate.core import Known, mark_known
+from phonglab.verdict import Row
+
+DEFECTS = Path(__file__).parent / "defects"
+CAUSE = "src/x.cpp:1: a documented cause"
+NAN_ROWS = ("eval: NaN/Inf/negative values", "eval_pdf: NaN/Inf/negative values")
+
+
+def _failing_row(wi):
+    row = Row("finite", "eval: NaN/Inf/negative values", 2.0, 0.0, None, 0.0, "fail", "why", {})
+    row.failing_lanes = {"wi": np.asarray(wi, float), "wo": np.zeros((len(wi), 3))}
+    return row
+
+
+def test_a_lane_outside_the_signature_keeps_the_row_a_fail():
+    row = _failing_row([[1.0, 0.0, 0.0], [0.6, 0.0, 0.8]])         # grazing, and not
+    mark_known([row], {"finite": Known(CAUSE, NAN_ROWS[:1], GrazingIncidence(), "k")})
+    assert row.status == "fail"
+    assert row.details["outside_signature"]["lanes"] == 1
+    assert row.details["outside_signature"]["first"]["wi"] == [0.6, 0.0, 0.8]
+    assert "1 of 2 failing lanes lie outside every documented signature" in row.reason
+
+
+def test_every_lane_inside_makes_it_known_and_names_the_finding():
+    row = _failing_row([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    mark_known([row], {"finite": Known(CAUSE, NAN_ROWS[:1], GrazingIncidence(), "k")})
+    assert row.status == "KNOWN" and row.reason.startswith(CAUSE)
+    assert row.details["known_by"] == ["k"]
+
+
+def test_a_cause_explains_only_the_rows_it_names():
+    row = _failing_row([[1.0, 0.0, 0.0]])
+    mark_known([row], {"finite": Known(CAUSE, ("pdf: NaN/Inf/negative values",),
+                                       GrazingIncidence())})
+    assert row.status == "fail"
+
+
+def test_a_region_the_row_cannot_be_checked_against_covers_nothing():
+    row = _failing_row([[1.0, 0.0, 0.0]])                # no sample2 recorded
+    mark_known([row], {"finite": Known(CAUSE, NAN_ROWS[:1], SamplePoint((0.0, 0.5)))})
+    assert row.status == "fail"
+
+
+def test_a_plain_string_is_a_whole_topic_judgement_as_before():
+    row = _failing_row([[0.6, 0.0, 0.8]])
+    mark_known([row], {"finite": CAUSE})
+    assert row.status == "KNOWN"
+
+
+def test_pearson_p_judges_a_cell_as_mitsuba_does(variant_llvm_rgb):
+    rng = np.random.default_rng(3)
+    exp = rng.gamma(0.7, 8.0, 600)
+    exp[:20] = 0.0
+    obs = rng.poisson(exp * np.where(np.arange(600) % 7 == 0, 1.3, 1.0)).astype(float)
+    order = np.argsort(exp, kind="stable")
+    stat, dof, _, _ = mi.math.chi2(mi.Float64(obs[order]), mi.Float64(exp[order]), 5)
+    from scipy import stats
+    assert pearson_p(obs, exp) == pytest.approx(stats.chi2.sf(stat, dof), rel=1e-9)
+    obs[0] = 1.0                                         # a sample where the pdf is 0
+    assert pearson_p(obs, exp) == 0.0
+
+
+def test_chi2_outside_confines_the_discrepancy_to_its_bins():
+    shape = (101, 50)
+    exp = np.full(shape, 200.0)
+    below = bin_mask("below_horizon", shape)
+    assert below[-1].all() and not below[0].any()       # row 0 is the normal direction
+    rng = np.random.default_rng(0)
+    obs = rng.poisson(exp).astype(float)
+    obs[below] = 0.0                                      # samples never go below the horizon
+    cell = {"histogram": obs.tolist(), "expected": exp.tolist()}
+    row = Row("chi2", "sampling matches pdf (min p-value)", 0.0, 1e-3, None, 1e-3, "fail", "",
+              {"level": 1e-3})
+    row.failing_lanes = {"cell": [cell]}
+    assert Chi2Outside("below_horizon").covers(row).tolist() == [True]
+    obs[3, 7] += 500.0                                    # and a defect above the horizon
+    cell["histogram"] = obs.tolist()
+    assert Chi2Outside("below_horizon").covers(row).tolist() == [False]
+
+
+def test_nan_at_exact_grazing_is_known_only_under_the_grazing_signature(variant_llvm_rgb):
+    plugin = [DEFECTS / "nan_grazing.py"]
+    known = {"finite": Known(CAUSE, NAN_ROWS, GrazingIncidence(), "grazing")}
+    report = validate_bsdf("defect_nan_grazing", plugins=plugin, quick=True, topics=["finite"],
+                           known=known)
+    assert not report.failing and any(r.status == "KNOWN" for r in report.rows)
+    report = validate_bsdf("defect_nan_grazing", plugins=plugin, quick=True, topics=["finite"],
+                           known={"finite": Known(CAUSE, NAN_ROWS, BelowHorizon())})
+    assert not report.failing                            # cos θ_i = 0 is at the horizon
+    report = validate_bsdf("defect_nan_grazing", plugins=plugin, quick=True, topics=["finite"],
+                           known={"finite": Known(CAUSE, NAN_ROWS[1:], GrazingIncidence())})
+    assert [r.name for r in report.failing] == [NAN_ROWS[0]]
+
+
+def test_a_sampler_wrong_above_the_horizon_hides_behind_no_below_horizon_finding(
+        variant_llvm_rgb):
+    known = {"chi2": Known(CAUSE, ("sampling matches pdf (min p-value)",),
+                           Chi2Outside("below_horizon"), "below")}
+    report = validate_bsdf("defect_pdf_mismatch", plugins=[DEFECTS / "pdf_mismatch.py"],
+                           quick=True, topics=["chi2"], known=known)
+    (row,) = report.failing
+    assert row.details["outside_signature"]["findings"] == ["below"]
+
+
+def test_swapped_component_ids_match_the_numbering_signature_only(variant_llvm_rgb):
+    plugin = [DEFECTS / "swapped_components.py"]
+    rows = ("sampled_component/sampled_type agree with the flags",
+            "restricted context samples only its component")
+    report = validate_bsdf("defect_swapped_components", plugins=plugin, quick=True,
+                           topics=["component"],
+                           known={"component": Known(CAUSE, rows, ComponentOfAnotherLobe())})
+    assert {r.name for r in report.rows if r.status == "KNOWN"} >= set(rows[:1])
+    report = validate_bsdf("defect_swapped_components", plugins=plugin, quick=True,
+                           topics=["component"],
+                           known={"component": Known(CAUSE, rows, ComponentOutOfRange())})
+    assert rows[0] in {r.name for r in report.failing}
+
+
+def test_every_finding_has_a_signature():
+    for f in FINDINGS:
+        assert f.rows, f.key
+        k = f.known()
+        assert k.key == f.key and k.cause.startswith(f.source)
