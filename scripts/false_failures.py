@@ -1,45 +1,109 @@
-"""False-failure rate of ``phonglab validate``: correct BSDFs over many seeds.
+"""False failures and false passes of ``phonglab validate`` over many seeds.
 
-Runs the validator on the correct plugins ``diffuse``, ``lambert`` and ``phong`` with seeds
-0..N-1 (default sizes, or ``--quick``) and prints, per BSDF, the seeds whose run failed and
-which topics failed.  Expected: each run fails by chance with probability ≤ ALPHA = 0.01
-(Šidák over its statistical tests; the deterministic topics never fail a correct plugin), so
-about 3 · N · 0.01 failing runs in all (0.6 for N = 20), and P(≥ 3 failures) ≈ 2 % for N = 20.
-``diffuse`` and ``lambert`` sample the same cosine density from the same random numbers at
-one seed, so their χ² outcomes coincide: a chance failure of one is usually one of both.
+False failures: correct BSDFs -- ``diffuse``, ``lambert``, ``phong`` at their defaults, the
+narrow lobes that the χ² integration must resolve (``roughconductor`` α = 0.01 and 0.03, a
+pure Phong lobe at exponents 3000 and 10⁴) and black BSDFs (zero albedo) -- with seeds
+0..N−1.  Expected: each run fails by chance with probability ≤ ALPHA = 0.01 (Šidák over its
+statistical tests; the deterministic topics never fail a correct plugin), so about
+cases · N · 0.01 failing runs in all; the script prints P(≥ that many | ALPHA).  ``diffuse``
+and ``lambert`` sample the same cosine density from the same random numbers at one seed, so
+their χ² outcomes coincide.
 
-    python scripts/false_failures.py [--seeds 20] [--quick] [--bsdf diffuse ...]
+False passes: the planted-defect plugins of ``tests/defects`` (each with one defect a
+correct run must catch), the same seeds: a run that passes is a false pass.
+
+The runs are ``phonglab.validate.batch.false_failures`` (``validate_bsdf`` over seeds, every
+topic but ``cost``).
+
+    python scripts/false_failures.py [--seeds 20] [--sizes default quick] [--only LABEL ...]
+        [--defect-seeds 10] [--json out.json]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from pathlib import Path
 
 from scipy import stats as scipy_stats
 
 from phonglab import stats
 from phonglab.validate.batch import false_failures
 
+ROOT = Path(__file__).resolve().parent.parent
+DEFECTS = ROOT / "tests" / "defects"
+GLOSSY = {"diffuse_reflectance": 0.0, "specular_reflectance": 0.8}
+
+#: label -> (plugin, params): correct BSDFs; every failing run is a false failure.
+CORRECT = {
+    "diffuse": ("diffuse", {}),
+    "lambert": ("lambert", {}),
+    "phong": ("phong", {}),
+    "roughconductor a=0.01": ("roughconductor", {"alpha": 0.01, "material": "Au"}),
+    "roughconductor a=0.03": ("roughconductor", {"alpha": 0.03, "material": "Au"}),
+    "phong p=3000": ("phong", {"exponent": 3000.0, **GLOSSY}),
+    "phong p=1e4": ("phong", {"exponent": 1e4, **GLOSSY}),
+    "diffuse black": ("diffuse", {"reflectance": 0.0}),
+    "lambert black": ("lambert", {"reflectance": 0.0}),
+    "phong black": ("phong", {"diffuse_reflectance": 0.0, "specular_reflectance": 0.0}),
+}
+
+
+def run(spec, params, seeds, quick, plugins=()) -> list[dict]:
+    """One record per seed: the failing topics."""
+    ((_, runs),) = false_failures({"case": (spec, params)}, seeds, quick, plugins).items()
+    return [{"seed": seed, "failing": failing} for seed, failing in runs]
+
+
+def tail_p(failures: int, runs: int) -> float:
+    """P(≥ failures failing runs of ``runs``) when each fails with probability ALPHA."""
+    return float(scipy_stats.binom.sf(failures - 1, runs, stats.ALPHA)) if failures else 1.0
+
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--bsdf", action="append", default=None)
+    ap.add_argument("--defect-seeds", type=int, default=10)
+    ap.add_argument("--sizes", nargs="+", choices=("default", "quick"),
+                    default=["default", "quick"])
+    ap.add_argument("--only", nargs="+", metavar="LABEL",
+                    help=f"correct cases ({', '.join(CORRECT)}) or defect file stems")
+    ap.add_argument("--no-defects", action="store_true")
+    ap.add_argument("--json", type=Path)
     args = ap.parse_args()
-    bsdfs = args.bsdf or ["diffuse", "lambert", "phong"]
-    t0 = time.perf_counter()
-    result = false_failures(bsdfs, args.seeds, args.quick)
-    for name, bad in result.items():
-        print(f"{name}: {len(bad)} failing runs of {args.seeds}" + (f" {bad}" if bad else ""))
-    failures = sum(len(b) for b in result.values())
-    runs = len(bsdfs) * args.seeds
-    expected = runs * stats.ALPHA
-    p_tail = float(scipy_stats.binom.sf(failures - 1, runs, stats.ALPHA)) if failures else 1.0
-    print(f"total: {failures} failing runs of {runs} ({'quick' if args.quick else 'default'} "
-          f"sizes); expected ≤ {expected:.2f} at ALPHA = {stats.ALPHA}; "
-          f"P(≥ {failures} | ALPHA) = {p_tail:.3f}; {time.perf_counter() - t0:.0f} s")
+    chosen = {k: v for k, v in CORRECT.items() if not args.only or k in args.only}
+    defects = [] if args.no_defects else sorted(
+        p for p in DEFECTS.glob("*.py") if not args.only or p.stem in args.only)
+    result = {"alpha": stats.ALPHA, "seeds": args.seeds, "defect_seeds": args.defect_seeds,
+              "correct": {}, "defects": {}}
+    t_all = time.perf_counter()
+    for size in args.sizes:
+        quick = size == "quick"
+        failures = runs = 0
+        for label, (spec, params) in chosen.items():
+            recs = run(spec, params, args.seeds, quick)
+            result["correct"].setdefault(label, {})[size] = recs
+            bad = [(r["seed"], r["failing"]) for r in recs if r["failing"]]
+            failures, runs = failures + len(bad), runs + len(recs)
+            print(f"[{size}] {label}: {len(bad)} failing runs of {len(recs)}"
+                  + (f" {bad}" if bad else ""), flush=True)
+        if chosen:
+            print(f"[{size}] total: {failures} failing runs of {runs}; expected ≤ "
+                  f"{runs * stats.ALPHA:.2f} at ALPHA = {stats.ALPHA}; "
+                  f"P(≥ {failures} | ALPHA) = {tail_p(failures, runs):.3f}", flush=True)
+        for path in defects:
+            recs = run(f"defect_{path.stem}", None, args.defect_seeds, quick, [path])
+            result["defects"].setdefault(path.stem, {})[size] = recs
+            missed = [r["seed"] for r in recs if not r["failing"]]
+            topics = sorted({t for r in recs for t in r["failing"]})
+            print(f"[{size}] defect {path.stem}: passed (missed) {len(missed)} of {len(recs)}; "
+                  f"failing topics {topics}", flush=True)
+    result["seconds"] = round(time.perf_counter() - t_all, 1)
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
+    print(f"{result['seconds']:.0f} s")
     return 0
 
 

@@ -136,18 +136,23 @@ def run_all(cases=None, options: dict | None = None, progress=None,
             "reports": reports}
 
 
-def false_failures(bsdfs, seeds: int, quick: bool = False) -> dict:
-    """Run correct BSDFs over seeds 0..seeds−1: {bsdf: [(seed, failing topics), ...]}.
+def false_failures(cases, seeds: int, quick: bool = False, plugins=()) -> dict:
+    """Run each case over seeds 0..seeds−1: {label: [(seed, failing topics), ...]}, one pair
+    per seed (an empty list: the run passed).
 
-    ``cost`` is left out (informational, it never fails).  For correct plugins every failing
-    run is a false failure; each run fails with probability ≤ ALPHA by construction.
+    ``cases``: plugin names, or {label: (spec, params)}; ``plugins``: files that register
+    them.  ``cost`` is left out (informational, it never fails).  For a correct plugin every
+    failing run is a false failure and each run fails with probability ≤ ALPHA by
+    construction; for a planted defect every passing run (no failing topic) is a false pass.
     """
     topics = [t for t in TOPICS if t != "cost"]
+    if not isinstance(cases, dict):
+        cases = {name: (name, None) for name in cases}
     out = {}
-    for name in bsdfs:
-        out[name] = []
+    for label, (spec, params) in cases.items():
+        out[label] = []
         for seed in range(seeds):
-            report = validate_bsdf(name, seed=seed, quick=quick, topics=topics)
-            if not report.passed:
-                out[name].append((seed, sorted({r.topic for r in report.failing})))
+            report = validate_bsdf(spec, params=params or None, seed=seed, quick=quick,
+                                   topics=topics, plugins=list(plugins))
+            out[label].append((seed, sorted({r.topic for r in report.failing})))
     return out
