@@ -126,10 +126,15 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         if not black:
             live = drawn
     if not live.any():
-        why = ("every non-delta sample has weight 0 and eval is 0 wherever sample() points: "
-               "a black BSDF, nothing to compare" if drawn.any() else
-               f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
-               f"nothing to compare for a purely delta BSDF")
+        if drawn.any():
+            why = ("every non-delta sample has weight 0 and eval is 0 wherever sample() points: "
+                   "a black BSDF, nothing to compare")
+        elif n_delta:
+            why = (f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
+                   f"nothing to compare for a purely delta BSDF")
+        else:
+            why = ("sample() returned no usable sample: every weight is 0 and no bs.pdf is "
+                   "finite and > 0 (a non-finite pdf is the finite topic's)")
         return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta})
                 for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))
                 if t in topics]

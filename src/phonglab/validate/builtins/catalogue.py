@@ -88,6 +88,8 @@ def _smooth_and_diffuse() -> list[Case]:
              note="coloured"),
         Case("diffuse/white", {"type": "diffuse", "reflectance": 1.0},
              note="albedo exactly 1"),
+        Case("diffuse/black", {"type": "diffuse", "reflectance": 0.0},
+             note="black: albedo 0"),
         Case("plastic/default", {"type": "plastic"}, note="delta coat + diffuse base"),
         Case("plastic/nonlinear-ior1.9", {"type": "plastic", "int_ior": 1.9, "nonlinear": True,
                                           "diffuse_reflectance": _rgb(0.8, 0.3, 0.1)},
@@ -115,6 +117,9 @@ def _rough() -> list[Case]:
         Case("roughplastic/ggx-a0.5-nonlinear",
              {"type": "roughplastic", "distribution": "ggx", "alpha": 0.5, "nonlinear": True,
               "diffuse_reflectance": _rgb(0.7, 0.4, 0.2)}, note="rough, nonlinear"),
+        Case("roughplastic/black", {"type": "roughplastic", "diffuse_reflectance": 0.0,
+                                    "specular_reflectance": 0.0},
+             note="black: both reflectances 0"),
         Case("roughconductor/beckmann-a0.2", {"type": "roughconductor",
                                               "distribution": "beckmann", "alpha": 0.2},
              note="Beckmann, perfect conductor"),
@@ -123,6 +128,9 @@ def _rough() -> list[Case]:
         Case("roughconductor/ggx-aniso", {"type": "roughconductor", "distribution": "ggx",
                                           "alpha_u": 0.05, "alpha_v": 0.4, "material": "Al"},
              note="anisotropic"),
+        Case("roughconductor/ggx-a0.01-Au", {"type": "roughconductor", "distribution": "ggx",
+                                             "alpha": 0.01, "material": "Au"},
+             note="narrow lobe"),
         Case("roughconductor/beckmann-novisible",
              {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
               "sample_visible": False}, note="full-distribution sampling"),
@@ -228,6 +236,9 @@ def _phonglab() -> list[Case]:
         Case("phong/glossy", {"type": "phong", "diffuse_reflectance": 0.2,
                               "specular_reflectance": 0.7, "exponent": 200.0},
              note="phonglab, p = 200"),
+        Case("phong/narrow", {"type": "phong", "diffuse_reflectance": 0.0,
+                              "specular_reflectance": 0.8, "exponent": 1e4},
+             note="phonglab, p = 10^4"),
     ]
 
 

@@ -101,6 +101,23 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = 0 for an inactive lane",
             "tests/repro/roughplastic_pdf_below_horizon.py",
             rows=NAN_ROWS, region=GrazingIncidence()),
+    Finding("roughplastic-black-nan-pdf", "finite", ("roughplastic/black",),
+            "src/bsdfs/roughplastic.cpp:229",
+            "`m_specular_sampling_weight = s_mean / (d_mean + s_mean)` is 0/0 = NaN when both "
+            "reflectances are 0, so prob_specular and prob_diffuse (lines 400-401, 446-447) and "
+            "with them pdf() and eval_pdf() are NaN for every direction; Mitsuba's path tracer "
+            "is unaffected (its MIS weight drops non-finite values, path.cpp:363), an "
+            "integrator that uses the pdf directly is not",
+            "pdf = nan at 40 deg (eval = 0)",
+            "a finite pdf (e.g. the diffuse lobe's, or 0)",
+            "tests/repro/roughplastic_black_nan.py", rows=NAN_ROWS),
+    Finding("roughplastic-black-nan-chi2", "chi2", ("roughplastic/black",),
+            "src/bsdfs/roughplastic.cpp:229",
+            "the same 0/0 sampling weight: the pdf that the drawn directions of a black "
+            "roughplastic are tested against is NaN in every bin",
+            "pdf = nan at 40 deg (eval = 0)",
+            "a finite pdf consistent with the drawn directions",
+            "tests/repro/roughplastic_black_nan.py", rows=(CHI2_ROW,)),
     Finding("roughplastic-gradient-detached", "gradient",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
