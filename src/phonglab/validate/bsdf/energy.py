@@ -34,10 +34,6 @@ from ... import probe, stats
 from . import lanes, lobes
 from .topics import Row
 
-#: Float32 floor of the band: an eval summed over ~10⁴ nodes is good to ~1e-5 relative.
-FLOOR = 1e-5
-
-
 def _delta_part(bsdf, thetas, opts, ctx):
     """(mean, standard error) per cell of weight · 1{delta sample}."""
     n = opts.energy_samples
@@ -93,7 +89,7 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     if has_delta:
         mean, se = _delta_part(bsdf, thetas, opts, ctx)
         a += mean
-    band = z * se + qerr + FLOOR * np.maximum(1.0, a)
+    band = z * se + qerr + lobes.FLOOR * np.maximum(1.0, a)
     over = a > 1.0 + band
     k = int(np.argmax(a - band))
     method = ("mean delta-sample weight (R + T for a smooth dielectric)" if only_delta else

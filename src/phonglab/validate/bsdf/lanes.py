@@ -18,7 +18,9 @@ ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 #: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
 SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
-                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19}
+                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19,
+                "normalization": 20, "eval_null_transmission": 21,
+                "eval_diffuse_reflectance": 22}
 
 
 def rng(seed: int, topic: str) -> np.random.Generator:
@@ -76,6 +78,20 @@ def delta_mask(sampled_type: np.ndarray) -> np.ndarray:
     """True where a sample's lobe is a delta (Dirac in 2D or 1D)."""
     bits = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
     return (sampled_type & bits) != 0
+
+
+def counted(s: probe.Sample, pdf_at_wo: np.ndarray | None = None) -> np.ndarray:
+    """The samples that carry a density (χ²'s histogram and the normalization count): weight
+    ≠ 0 in some channel (Mitsuba marks a rejected sample with weight 0) and not a delta lobe.
+
+    With ``pdf_at_wo`` (pdf(wi, s.wo), for a black BSDF, whose weights are all 0): the samples
+    that drew a direction (``bs.pdf > 0``) inside the support (``pdf_at_wo > 0``) instead.
+    """
+    if pdf_at_wo is None:
+        drawn = np.any(s.weight != 0, axis=1)
+    else:
+        drawn = (s.pdf > 0) & (pdf_at_wo > 0)
+    return drawn & ~delta_mask(s.sampled_type)
 
 
 def bsdf_has(bsdf, flags) -> bool:

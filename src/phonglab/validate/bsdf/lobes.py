@@ -32,6 +32,9 @@ LAYOUT_SAMPLES = 2048
 #: Width of a lobe whose samples are too few to measure (a hemisphere-wide lobe).
 FALLBACK_WIDTH = 0.5
 
+#: Float32 floor of a quadrature's band: a value summed over ~10⁴ nodes is good to ~1e-5 relative.
+FLOOR = 1e-5
+
 #: (polar angle of the centre, its azimuth, angular width) of one lobe, upper-hemisphere frame.
 Lobe = tuple
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 from ... import verdict
 
 #: The validator's BSDF topics, in the order the table lists them.
-TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "energy", "reciprocity", "component",
-          "gradient", "cost")
+TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energy",
+          "reciprocity", "component", "gradient", "cost")
 
 
 class Row(verdict.Row):

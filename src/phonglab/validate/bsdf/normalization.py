@@ -1,0 +1,117 @@
+r"""The ``normalization`` topic: does ``pdf`` integrate to the probability that ``sample``
+returns a direction it has a density for?
+
+For a sampler whose ``wo`` has the density ``pdf`` (solid angle) wherever it returns a
+usable non-delta direction,
+
+    Q(ω_i) = ∫_{S²} pdf(ω_i, ω_o) dω_o  =  P(ω_i) = Pr[sample(ω_i) is counted],
+
+where a sample is counted by the χ² topic's rule (:func:`.lanes.counted`): weight ≠ 0
+(Mitsuba's mark of a rejected sample is weight 0) and not a delta lobe -- ``pdf`` has no
+density for a mirror or a glass interface, so a mixture such as ``plastic`` is held to its
+non-delta part, whose Q and P are then both below 1.  In a black cell (every weight 0 and
+``eval`` 0 at the drawn and at random directions: :func:`.sampling.black_at`) a sample is
+counted when it drew a direction (``bs.pdf > 0``) inside the support (``pdf(wo) > 0``), the
+rule χ² uses there.
+
+Why a topic of its own.  A pdf scaled by a constant c ≠ 1 everywhere, with ``sample`` exact
+and weight = eval / pdf (so the ``weight`` and ``pdf`` identities hold, and every render is
+darker by 1/c), is seen by χ² only through its normalization, where at 10⁵–10⁶ samples it has
+no power for c = 1.01 (issue #26).  Here Q = c·P against P: a deterministic quadrature and a
+count, which see 1 % at once.
+
+Estimators.  Q by :mod:`.lobes` (``lobe_quadrature`` centred on the sampled lobe, the same rule
+as ``energy``, over BOTH hemispheres for every BSDF: the pdf of a reflection-only BSDF must
+vanish below the horizon, or it reports density where nothing is counted), error |Q(n) − Q(n/2)|.
+P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
+Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
+(k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
+(k = N, p̂(1 − p̂) = 0: the counting error of a sampler without rejection is 0) still allows
+≈ z²/(√2 N) for a rejection not yet seen, and the tolerance there is essentially the
+quadrature's.  Band: z·σ + |Q(n) − Q(n/2)| + :data:`.lobes.FLOOR`·max(1, Q), z the Šidák
+critical value over the BSDF's statistical tests (each cell here is one of them:
+:func:`.kind.statistical_tests`).  Fail when |Q − k/N| > band at any cell.
+
+Cells: cos θ_i of :attr:`~.config.Options.energy_cos` at the azimuths of the grid (an
+anisotropic BSDF differs between them), down to 1e-4 and 0, where Q and P both vanish for a
+BSDF that rejects grazing light.  A BSDF whose every lobe is a delta has no density: skipped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ... import probe, stats
+from . import lanes, lobes
+from .sampling import black_at
+from .topics import Row
+
+
+def _counts(bsdf, cells: np.ndarray, n: int, opts, integral) -> tuple:
+    """Per cell: (counted samples k, whether the cell was counted as black); one cell per
+    call (n lanes each), the sample values from the topic's own stream (lanes.rng)."""
+    r = lanes.rng(opts.seed, "normalization")
+    ks, blacks = [], []
+    for j, (theta, phi) in enumerate(cells):
+        wi = lanes.exact(probe.direction(theta, phi))
+        s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
+        k = int(lanes.counted(s).sum())
+        black = k == 0 and integral[j] >= 1e-6 and black_at(bsdf, wi, opts)
+        if black:
+            ok = np.all(np.isfinite(s.wo), axis=1)
+            at_wo = np.zeros(n)
+            at_wo[ok] = probe.pdf(bsdf, wi, s.wo[ok])
+            k = int(lanes.counted(s, at_wo).sum())
+        ks.append(k)
+        blacks.append(bool(black))
+    return np.array(ks), blacks
+
+
+def counting_error(k: np.ndarray, n: int, z: float) -> np.ndarray:
+    """Binomial standard error of k/n with p the Agresti–Coull centre (k + z²/2)/(n + z²)."""
+    p = (k + 0.5 * z * z) / (n + z * z)
+    return np.sqrt(p * (1.0 - p) / (n + z * z))
+
+
+def normalization(bsdf, opts, m_tests: int) -> list[Row]:
+    name = "∫ pdf dω_o = P(sample counted)"
+    if lanes.delta_only(bsdf):
+        return [Row("normalization", name, None, None, None, None, "skipped",
+                    "every lobe is a delta: pdf has no density to integrate", {})]
+    cells = opts.cells(opts.energy_cos)
+    layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
+                          whole_sphere=True)
+
+    def density(wi, wo):
+        return probe.pdf(bsdf, wi, wo)
+
+    q = lobes.integrate(density, cells, layout, opts.energy_nodes)
+    q_half = lobes.integrate(density, cells, layout, opts.energy_nodes // 2)
+    integral = np.array([v for v, _ in q])
+    qerr = np.abs(integral - np.array([v for v, _ in q_half]))
+    n = opts.normalization_samples
+    k, blacks = _counts(bsdf, cells, n, opts, integral)
+    z = stats.z_critical(stats.ALPHA, m_tests)
+    p_hat = k / n
+    sigma = counting_error(k, n, z)
+    band = z * sigma + qerr + lobes.FLOOR * np.maximum(1.0, integral)
+    dev = np.abs(integral - p_hat)
+    bad = dev > band
+    j = int(np.argmax(dev / band))
+    theta_deg = np.degrees(cells[:, 0])
+    where = ", ".join(f"θ_i = {theta_deg[i]:.1f}° φ = {cells[i, 1]:.2f} (∫pdf {integral[i]:.5g}"
+                      f" vs {p_hat[i]:.5g})" for i in np.flatnonzero(bad))
+    reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({opts.energy_nodes} "
+              f"nodes/panel, error |Q{opts.energy_nodes} − Q{opts.energy_nodes // 2}|) against "
+              f"the fraction of {n} samples with weight ≠ 0 and not delta; band z·σ + "
+              f"quadrature error, σ binomial (Agresti–Coull), z = {z:.3f} (Šidák over "
+              f"{m_tests} tests) at {len(cells)} incidence cells"
+              + (f"; NOT NORMALIZED at {where}" if bad.any() else ""))
+    details = {"theta_deg": theta_deg.tolist(), "phi": cells[:, 1].tolist(),
+               "integral": integral.tolist(), "counted": p_hat.tolist(),
+               "samples": n, "sigma": sigma.tolist(), "quadrature_error": qerr.tolist(),
+               "band": band.tolist(), "black_cells": int(sum(blacks)),
+               "nonfinite_nodes": sum(c for _, c in q)}
+    return [Row("normalization", name, float(integral[j]), float(p_hat[j]), float(sigma[j]),
+                float(band[j]), "fail" if bad.any() else "pass", reason, details)]
+
