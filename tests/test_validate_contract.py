@@ -81,3 +81,96 @@ def test_a_sampler_that_rejects_what_its_pdf_covers_fails(variant_llvm_rgb, tmp_
     assert row.status == "fail"
     assert row.measured == pytest.approx(1.0, abs=1e-4)
     assert row.expected == pytest.approx(0.5, abs=0.01)
+
+
+# ----------------------------------------------------------------------------- contract topics
+def _cutout(tmp_path) -> Path:
+    """The correct cut-out Lambertian: tests/defects/null_transmission_wrong.py with its
+    eval_null_transmission fixed to 1 − opacity."""
+    src = (Path(__file__).parent / "defects" / "null_transmission_wrong.py").read_text()
+    fixed = src.replace("return mi.Spectrum(self.opacity)  ", "return mi.Spectrum(1.0 - self.opacity)  ")
+    assert fixed != src
+    plugin = tmp_path / "cutout.py"
+    plugin.write_text(fixed.replace("defect_null_transmission_wrong", "cutout"))
+    return plugin
+
+
+def test_a_correct_cutout_passes_every_topic(variant_llvm_rgb, tmp_path):
+    """Opacity 0.3: the Null lobe passes 1 − 0.3 = 0.7 along −wi, which sample() (Null-only
+    context: weight 0.7, pdf 1) and eval_null_transmission agree on; its diffuse part is
+    Lambertian, and the inherited eval_diffuse_reflectance π·eval(wi, n) = 0.3·ρ is exact."""
+    report = validate_bsdf("cutout", plugins=[_cutout(tmp_path)], quick=True)
+    assert report.passed, report.table(report.failing)
+    (null, direction) = [r for r in report.rows if r.topic == "eval_null_transmission"]
+    assert null.measured == pytest.approx(0.7, rel=1e-6)
+    assert np.allclose(null.details["sampled"], 0.7, rtol=1e-6)
+    assert direction.status == "pass"
+    edr = _row(report, "eval_diffuse_reflectance")
+    assert edr.status == "pass" and edr.measured == pytest.approx(0.15, rel=1e-6)
+
+
+@pytest.mark.parametrize("spec, expected", [
+    ({"type": "thindielectric"}, None),
+    ({"type": "null"}, 1.0),
+    ({"type": "mask", "opacity": 0.3, "bsdf": {"type": "diffuse"}}, 0.7),
+    ({"type": "blendbsdf", "weight": 0.3, "bsdf_0": {"type": "null"},
+      "bsdf_1": {"type": "diffuse"}}, 0.7),
+], ids=["thindielectric", "null", "mask", "blendbsdf"])
+def test_builtin_null_lobes_agree_with_their_samples(variant_llvm_rgb, spec, expected):
+    """thindielectric: 1 − r' with r' = 2r/(1 + r), the same value as its Null-only sample's
+    weight (thindielectric.cpp:164-173, :203-217); null: 1; mask: 1 − opacity; blendbsdf of
+    null and diffuse at weight 0.3: 0.7 (the tolerance: z·stderr of a Bernoulli mean)."""
+    report = validate_bsdf(spec, quick=True, topics=["eval_null_transmission"])
+    assert report.passed, report.table(report.failing)
+    row = report.rows[0]
+    if expected is not None:
+        assert row.measured == pytest.approx(expected, rel=1e-6)
+
+
+def test_bsdfs_without_a_null_lobe_return_zero(variant_llvm_rgb):
+    for spec in ("diffuse", "roughplastic", "conductor"):
+        row = _row(validate_bsdf(spec, quick=True, topics=["eval_null_transmission"]),
+                   "eval_null_transmission")
+        assert row.status == "pass" and row.measured == 0.0, (spec, row.reason)
+
+
+def test_lambertian_diffuse_reflectance_is_its_albedo(variant_llvm_rgb):
+    """diffuse, lambert, twosided(diffuse): ρ = ∫ ρ/π cos θ_o dω_o = 0.5 at every lit cell."""
+    for spec in ("diffuse", "lambert", {"type": "twosided", "bsdf": {"type": "diffuse"}}):
+        row = _row(validate_bsdf(spec, quick=True, topics=["eval_diffuse_reflectance"]),
+                   "eval_diffuse_reflectance")
+        assert row.status == "pass", row.reason
+        assert np.allclose(row.details["diffuse_albedo"], 0.5, atol=1e-6)
+
+
+def test_fresnel_weighted_diffuse_lobes_are_not_held_to_it(variant_llvm_rgb):
+    """plastic and roughplastic return their diffuse_reflectance parameter for a lobe that
+    reflects ρ t_i t_o / (η²(1 − ρ F_dr)) / π: not Lambertian, Mitsuba documents an
+    approximation (bsdf.h:566-575), so the row is skipped with the ratio."""
+    for spec in ("plastic", "roughplastic"):
+        row = _row(validate_bsdf(spec, quick=True, topics=["eval_diffuse_reflectance"]),
+                   "eval_diffuse_reflectance")
+        assert row.status == "skipped" and "not Lambertian" in row.reason, row.reason
+        assert not any(row.details["lambertian"])
+
+
+def test_the_inherited_default_approximation_passes_with_a_note(variant_llvm_rgb):
+    """blendbsdf(diffuse 0.7, roughconductor 0.3) blends roughconductor's inherited default
+    π·eval(wi, n) (bsdf.cpp:38-43): 7.85 at normal incidence, where the mirror peak lies at n,
+    for a diffuse albedo of 0.35. It is Mitsuba's documented approximation: a note, no fail."""
+    spec = {"type": "blendbsdf", "weight": 0.3, "bsdf_0": {"type": "diffuse"},
+            "bsdf_1": {"type": "roughconductor"}}
+    row = _row(validate_bsdf(spec, quick=True, topics=["eval_diffuse_reflectance"]),
+               "eval_diffuse_reflectance")
+    assert row.status == "pass" and "documented approximation" in row.reason, row.reason
+    assert max(row.details["value"]) > 7.0
+
+
+def test_mask_reports_its_nested_reflectance_without_the_opacity(variant_llvm_rgb):
+    """A Mitsuba 3.9.1 finding: mask.cpp:229-231 returns the nested BSDF's diffuse
+    reflectance (0.5) while its eval scales the nested eval by the opacity (albedo 0.25 at
+    opacity 0.5), and π·eval(wi, n) is 0.25 too: neither the albedo nor the default."""
+    row = _row(validate_bsdf({"type": "mask", "bsdf": {"type": "diffuse"}}, quick=True,
+                             topics=["eval_diffuse_reflectance"]), "eval_diffuse_reflectance")
+    assert row.status == "fail"
+    assert row.measured == pytest.approx(0.5) and row.expected == pytest.approx(0.25, rel=1e-6)

@@ -31,6 +31,9 @@ PLANTED = {
     "wrong_gradient": "gradient",
     "pdf_scaled_1pct": "normalization",
     "pdf_scaled_2pct": "normalization",
+    "null_transmission_without_lobe": "eval_null_transmission",
+    "null_transmission_wrong": "eval_null_transmission",
+    "diffuse_reflectance_no_pi": "eval_diffuse_reflectance",
 }
 
 #: defect file -> topics that may fail besides its own at DEFAULT sizes, and why.  A pdf scaled

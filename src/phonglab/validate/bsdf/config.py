@@ -81,6 +81,7 @@ class Options:
     #: samples per cell counted by the normalization topic (its cells are energy_cos × phi_grid,
     #: its quadrature energy_nodes); binomial error ≤ 0.5/√N, 7e-4 here
     normalization_samples: int = 1 << 19
+    null_samples: int = 1 << 16       #: samples per cell of the Null lobe (eval_null_transmission)
     gradient_lanes: int = 4096
     cost_lanes: int = 1 << 18
     cost_repeats: int = 5
@@ -108,7 +109,8 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
                    chi2_cos=(0.8, 0.5, 0.2), chi2_phi=(0.0,), chi2_samples=200_000,
                    chi2_res=61, chi2_ires=24,
                    energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
-                   energy_samples=20_000, normalization_samples=1 << 17, gradient_lanes=1024, cost_lanes=1 << 16,
+                   energy_samples=20_000, normalization_samples=1 << 17,
+                   null_samples=1 << 14, gradient_lanes=1024, cost_lanes=1 << 16,
                    cost_repeats=3)
 
 

@@ -11,7 +11,8 @@ from ... import verdict
 
 #: The validator's BSDF topics, in the order the table lists them.
 TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energy",
-          "reciprocity", "component", "gradient", "cost")
+          "reciprocity", "component", "eval_null_transmission", "eval_diffuse_reflectance",
+          "gradient", "cost")
 
 
 class Row(verdict.Row):
