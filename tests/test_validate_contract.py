@@ -174,3 +174,63 @@ def test_mask_reports_its_nested_reflectance_without_the_opacity(variant_llvm_rg
                              topics=["eval_diffuse_reflectance"]), "eval_diffuse_reflectance")
     assert row.status == "fail"
     assert row.measured == pytest.approx(0.5) and row.expected == pytest.approx(0.25, rel=1e-6)
+
+
+# ----------------------------------------------------------------------------- component lies
+def _variant_of(tmp_path, defect: str, name: str, *edits) -> Path:
+    """tests/defects/<defect>.py with the text edits applied, registered as ``name``."""
+    src = (Path(__file__).parent / "defects" / f"{defect}.py").read_text()
+    out = src
+    for old, new in edits:
+        assert old in out, old
+        out = out.replace(old, new)
+    plugin = tmp_path / f"{name}.py"
+    plugin.write_text(out.replace(f"defect_{defect}", name))
+    return plugin
+
+
+def _failing_component_rows(name, plugin):
+    report = validate_bsdf(name, plugins=[plugin], quick=True, topics=["component"])
+    return {r.name for r in report.rows if r.status == "fail"}
+
+
+def test_a_glossy_lobe_outside_the_declared_flags_is_caught(variant_llvm_rgb, tmp_path):
+    """component_count() = 1 and flags DiffuseReflection, but glossy samples reported as
+    GlossyReflection of component 0: a sampled_type outside flags(0)."""
+    plugin = _variant_of(tmp_path, "undeclared_lobe", "glossy_outside_flags",
+                         ("mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.GlossyReflection\n"
+                          "                             | mi.BSDFFlags.FrontSide",
+                          "mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide"))
+    assert _failing_component_rows("glossy_outside_flags", plugin) == {
+        "sampled_component/sampled_type agree with the flags", "one sampled_type per component"}
+
+
+def test_flags_that_are_not_the_union_of_the_components_are_caught(variant_llvm_rgb, tmp_path):
+    """A Lambertian whose flags() says DeltaReflection (path.cpp:238 would then never sample
+    emitters for it) while its one component is DiffuseReflection."""
+    plugin = _variant_of(tmp_path, "pdf_scaled_1pct", "flags_lie",
+                         ("SCALE = 1.01", "SCALE = 1.0"),
+                         ("self.m_flags = self.m_components[0]",
+                          "self.m_flags = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide"))
+    assert _failing_component_rows("flags_lie", plugin) == {"flags() = union of flags(k)"}
+
+
+def test_a_delta_lobe_labelled_diffuse_is_an_atom(variant_llvm_rgb, tmp_path):
+    """A Lambertian that sends 30 % of its samples exactly to reflect(wi), labelled
+    DiffuseReflection: ~30 % of each lit cell's samples share one direction, which a density
+    draws with probability 0 (χ² and normalization see it too; this row names it)."""
+    plugin = _variant_of(tmp_path, "pdf_scaled_1pct", "delta_as_diffuse",
+                         ("SCALE = 1.01", "SCALE = 1.0"),
+                         ("bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)",
+                          "bs.wo = dr.select(sample1 < 0.3, mi.reflect(si.wi),\n"
+                          "                          mi.warp.square_to_cosine_hemisphere(sample2))"))
+    assert _failing_component_rows("delta_as_diffuse", plugin) == {
+        "non-delta samples have a density (no atom)"}
+
+
+def test_correct_multi_lobe_bsdfs_keep_one_type_per_component(variant_llvm_rgb):
+    """phong [diffuse, glossy], plastic [delta, diffuse], roughdielectric [R, T]: one
+    sampled_type per component, flags() the union, no atom."""
+    for spec in ("phong", "plastic", "roughdielectric"):
+        report = validate_bsdf(spec, quick=True, topics=["component"])
+        assert report.passed, report.table(report.failing)

@@ -34,6 +34,7 @@ PLANTED = {
     "null_transmission_without_lobe": "eval_null_transmission",
     "null_transmission_wrong": "eval_null_transmission",
     "diffuse_reflectance_no_pi": "eval_diffuse_reflectance",
+    "undeclared_lobe": "component",
 }
 
 #: defect file -> topics that may fail besides its own at DEFAULT sizes, and why.  A pdf scaled
