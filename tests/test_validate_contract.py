@@ -60,11 +60,14 @@ def test_delta_only_bsdf_is_skipped(variant_llvm_rgb):
 
 def test_black_bsdf_counts_the_directions_it_draws(variant_llvm_rgb):
     """diffuse with reflectance 0: every weight is 0; the drawn directions (bs.pdf > 0 inside
-    the support) are counted, P = 1 = ∫pdf."""
+    the support, where eval is 0) are counted, P = 1 = ∫pdf at every lit cell."""
     row = _row(validate_bsdf("diffuse", params={"reflectance": 0.0}, quick=True,
                              topics=["normalization"]), "normalization")
     assert row.status == "pass", row.reason
-    assert row.details["black_cells"] >= 3
+    lit = np.cos(np.radians(row.details["theta_deg"])) > 1e-6
+    n = row.details["samples"]
+    assert all(b == n for b, x in zip(row.details["black_samples"], lit) if x)
+    assert np.all(np.array(row.details["counted"])[lit] == 1.0)
 
 
 def test_a_sampler_that_rejects_what_its_pdf_covers_fails(variant_llvm_rgb, tmp_path):

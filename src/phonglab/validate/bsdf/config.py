@@ -78,9 +78,10 @@ class Options:
     energy_cos: tuple = (1.0, 0.95, 0.85, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 1e-4, 0.0)
     energy_nodes: int = 16            #: Gauss-Legendre nodes per panel (error from n vs n/2)
     energy_samples: int = 100_000     #: samples per cell for the delta lobes' albedo
-    #: samples per cell counted by the normalization topic (its cells are energy_cos × phi_grid,
-    #: its quadrature energy_nodes); binomial error ≤ 0.5/√N, 7e-4 here
+    #: samples per cell counted by the normalization topic (its cells are energy_cos × phi_grid);
+    #: binomial error ≤ 0.5/√N, 7e-4 here
     normalization_samples: int = 1 << 19
+    normalization_nodes: int = 16     #: its Gauss-Legendre nodes per panel, at both sizes
     null_samples: int = 1 << 16       #: samples per cell of the Null lobe (eval_null_transmission)
     gradient_lanes: int = 4096
     cost_lanes: int = 1 << 18

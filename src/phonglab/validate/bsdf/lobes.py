@@ -12,8 +12,12 @@ it -- and the width the 10 % quantile of the samples' angles to it.  Each rule c
 circle around its centre (``symmetric=False``), so anisotropy and azimuth φ_i ≠ 0 are covered.
 Only the panels depend on the samples: the value is Σ_k w_k g(ω_k), independent of ``sample``.
 
-Error.  :func:`integrate` returns Q(n) per cell; the topics estimate the error as
+Error.  :func:`integrate` returns Q(n) per cell; ``energy`` estimates the error as
 |Q(n) − Q(n/2)| (Gauss-Legendre converges fast, so Q(n) is far closer than that).
+:func:`integrate_with_error` takes the larger difference to TWO coarser rules, n/2 and 3n/4
+nodes per panel: one pair can agree by accident where neither has converged -- for
+``roughconductor`` (GGX, α_u = 0.05, α_v = 0.4) at cos θ_i = 0.05, φ_i = 2.1 the quick rules
+gave Q(5) = 0.992441 and Q(10) = 0.992460, while Q(8) = 0.982707 and Q(40) = 0.987551.
 """
 
 from __future__ import annotations
@@ -106,3 +110,15 @@ def integrate(fn, cells: np.ndarray, lobes: list, n: int) -> list[tuple[float, i
         ok = np.isfinite(v)
         out.append((float(np.sum(w[ok] * v[ok])), int((~ok).sum())))
     return out
+
+
+def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int) -> tuple:
+    """(Q(n) (M,), error (M,), non-finite nodes) per cell: error = max(|Q(n) − Q(n/2)|,
+    |Q(n) − Q(3n/4)|), the module docstring says why two coarser rules."""
+    q = integrate(fn, cells, lobes, n)
+    value = np.array([v for v, _ in q])
+    err = np.zeros_like(value)
+    for m in sorted({max(1, n // 2), max(1, (3 * n) // 4)} - {n}):
+        coarse = np.array([v for v, _ in integrate(fn, cells, lobes, m)])
+        err = np.maximum(err, np.abs(value - coarse))
+    return value, err, sum(c for _, c in q)

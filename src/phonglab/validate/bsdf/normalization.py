@@ -6,13 +6,16 @@ usable non-delta direction,
 
     Q(ω_i) = ∫_{S²} pdf(ω_i, ω_o) dω_o  =  P(ω_i) = Pr[sample(ω_i) is counted],
 
-where a sample is counted by the χ² topic's rule (:func:`.lanes.counted`): weight ≠ 0
-(Mitsuba's mark of a rejected sample is weight 0) and not a delta lobe -- ``pdf`` has no
-density for a mirror or a glass interface, so a mixture such as ``plastic`` is held to its
-non-delta part, whose Q and P are then both below 1.  In a black cell (every weight 0 and
-``eval`` 0 at the drawn and at random directions: :func:`.sampling.black_at`) a sample is
-counted when it drew a direction (``bs.pdf > 0``) inside the support (``pdf(wo) > 0``), the
-rule χ² uses there.
+where a sample is counted by the χ² topic's rule applied per sample (:func:`.lanes.counted`):
+not a delta lobe -- ``pdf`` has no density for a mirror or a glass interface, so a mixture
+such as ``plastic`` is held to its non-delta part, whose Q and P are then both below 1 -- and
+weight ≠ 0 (Mitsuba's mark of a rejected sample is weight 0), or weight 0 at a direction drawn
+inside the support (``bs.pdf > 0``, ``pdf(wo) > 0``) where the BSDF is black (``eval(wo)`` = 0):
+there the weight 0 is the right value, not a rejection.  In a black cell that is χ²'s
+drawn-direction rule; it also covers a cell that is black in part (``pplastic`` in a
+polarized variant at cos θ_i = 1e-4, where 89 % of the diffuse samples have eval 0), which
+the weight rule alone would count as 30 % rejected against ∫ pdf = 1.  A sampler that
+returns weight 0 where eval is not 0 still fails: those samples are not counted.
 
 Why a topic of its own.  A pdf scaled by a constant c ≠ 1 everywhere, with ``sample`` exact
 and weight = eval / pdf (so the ``weight`` and ``pdf`` identities hold, and every render is
@@ -22,13 +25,16 @@ count, which see 1 % at once.
 
 Estimators.  Q by :mod:`.lobes` (``lobe_quadrature`` centred on the sampled lobe, the same rule
 as ``energy``, over BOTH hemispheres for every BSDF: the pdf of a reflection-only BSDF must
-vanish below the horizon, or it reports density where nothing is counted), error |Q(n) − Q(n/2)|.
+vanish below the horizon, or it reports density where nothing is counted), with
+:attr:`~.config.Options.normalization_nodes` per panel at both sizes (a pdf is sharper than
+an albedo at grazing incidence) and the error max(|Q(n) − Q(n/2)|, |Q(n) − Q(3n/4)|)
+(:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident).
 P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
 Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
 (k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
 (k = N, p̂(1 − p̂) = 0: the counting error of a sampler without rejection is 0) still allows
 ≈ z²/(√2 N) for a rejection not yet seen, and the tolerance there is essentially the
-quadrature's.  Band: z·σ + |Q(n) − Q(n/2)| + :data:`.lobes.FLOOR`·max(1, Q), z the Šidák
+quadrature's.  Band: z·σ + the quadrature error + :data:`.lobes.FLOOR`·max(1, Q), z the Šidák
 critical value over the BSDF's statistical tests (each cell here is one of them:
 :func:`.kind.statistical_tests`).  Fail when |Q − k/N| > band at any cell.
 
@@ -43,27 +49,26 @@ import numpy as np
 
 from ... import probe, stats
 from . import lanes, lobes
-from .sampling import black_at
 from .topics import Row
 
 
-def _counts(bsdf, cells: np.ndarray, n: int, opts, integral) -> tuple:
-    """Per cell: (counted samples k, whether the cell was counted as black); one cell per
+def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
+    """Per cell: (counted samples k, of which drawn where the BSDF is black); one cell per
     call (n lanes each), the sample values from the topic's own stream (lanes.rng)."""
     r = lanes.rng(opts.seed, "normalization")
     ks, blacks = [], []
-    for j, (theta, phi) in enumerate(cells):
+    for theta, phi in cells:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
-        k = int(lanes.counted(s).sum())
-        black = k == 0 and integral[j] >= 1e-6 and black_at(bsdf, wi, opts)
-        if black:
-            ok = np.all(np.isfinite(s.wo), axis=1)
-            at_wo = np.zeros(n)
-            at_wo[ok] = probe.pdf(bsdf, wi, s.wo[ok])
-            k = int(lanes.counted(s, at_wo).sum())
-        ks.append(k)
-        blacks.append(bool(black))
+        zero = (~np.any(s.weight != 0, axis=1) & (s.pdf > 0)
+                & np.all(np.isfinite(s.wo), axis=1))
+        black = np.zeros(n, dtype=bool)
+        if zero.any():
+            ev, pd = probe.eval(bsdf, wi, s.wo[zero]), probe.pdf(bsdf, wi, s.wo[zero])
+            black[zero] = (pd > 0) & np.all(ev == 0, axis=1)
+        k = lanes.counted(s, black)
+        ks.append(int(k.sum()))
+        blacks.append(int((k & black).sum()))
     return np.array(ks), blacks
 
 
@@ -85,12 +90,10 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     def density(wi, wo):
         return probe.pdf(bsdf, wi, wo)
 
-    q = lobes.integrate(density, cells, layout, opts.energy_nodes)
-    q_half = lobes.integrate(density, cells, layout, opts.energy_nodes // 2)
-    integral = np.array([v for v, _ in q])
-    qerr = np.abs(integral - np.array([v for v, _ in q_half]))
+    nodes = opts.normalization_nodes
+    integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
     n = opts.normalization_samples
-    k, blacks = _counts(bsdf, cells, n, opts, integral)
+    k, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
     p_hat = k / n
     sigma = counting_error(k, n, z)
@@ -101,17 +104,18 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     theta_deg = np.degrees(cells[:, 0])
     where = ", ".join(f"θ_i = {theta_deg[i]:.1f}° φ = {cells[i, 1]:.2f} (∫pdf {integral[i]:.5g}"
                       f" vs {p_hat[i]:.5g})" for i in np.flatnonzero(bad))
-    reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({opts.energy_nodes} "
-              f"nodes/panel, error |Q{opts.energy_nodes} − Q{opts.energy_nodes // 2}|) against "
-              f"the fraction of {n} samples with weight ≠ 0 and not delta; band z·σ + "
+    reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({nodes} nodes/panel, "
+              f"error max |Q{nodes} − Q{nodes // 2}|, |Q{nodes} − Q{3 * nodes // 4}|) against "
+              f"the fraction of {n} samples with weight ≠ 0 (or 0 where eval is 0) and not "
+              f"delta; band z·σ + "
               f"quadrature error, σ binomial (Agresti–Coull), z = {z:.3f} (Šidák over "
               f"{m_tests} tests) at {len(cells)} incidence cells"
               + (f"; NOT NORMALIZED at {where}" if bad.any() else ""))
     details = {"theta_deg": theta_deg.tolist(), "phi": cells[:, 1].tolist(),
                "integral": integral.tolist(), "counted": p_hat.tolist(),
                "samples": n, "sigma": sigma.tolist(), "quadrature_error": qerr.tolist(),
-               "band": band.tolist(), "black_cells": int(sum(blacks)),
-               "nonfinite_nodes": sum(c for _, c in q)}
+               "band": band.tolist(), "black_samples": blacks,
+               "nonfinite_nodes": nonfinite}
     return [Row("normalization", name, float(integral[j]), float(p_hat[j]), float(sigma[j]),
                 float(band[j]), "fail" if bad.any() else "pass", reason, details)]
 
