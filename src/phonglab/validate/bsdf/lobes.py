@@ -56,16 +56,18 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
     return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
 
 
-def layout(bsdf, cells: np.ndarray, seed: int, whole_sphere: bool = False) -> list:
+def layout(bsdf, cells: np.ndarray, seed: int, whole_sphere: bool = False,
+           samples: int = LAYOUT_SAMPLES) -> list:
     """Per (θ_i, φ_i) cell: (reflected lobe, transmitted lobe or None).
 
     The transmitted lobe is placed for a transmitting BSDF, and with ``whole_sphere`` for every
     BSDF (then the lower hemisphere of a reflection-only BSDF gets the mirror-centred fallback:
-    whatever its integrand is there, it is integrated too).  ``seed``: of the placing samples.
+    whatever its integrand is there, it is integrated too).  ``seed``, ``samples``: of the
+    placing samples (per cell).
     """
     out = []
     transmits = lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission) or whole_sphere
-    n = LAYOUT_SAMPLES
+    n = samples
     wi, _ = lanes.incident(cells, n)
     s = probe.sample_random(bsdf, wi, len(wi), seed=seed)
     for k, (theta, phi) in enumerate(cells):
