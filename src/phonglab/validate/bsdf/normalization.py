@@ -28,7 +28,14 @@ as ``energy``, over BOTH hemispheres for every BSDF: the pdf of a reflection-onl
 vanish below the horizon, or it reports density where nothing is counted), with
 :attr:`~.config.Options.normalization_nodes` per panel at both sizes (a pdf is sharper than
 an albedo at grazing incidence) and the error max(|Q(n) − Q(n/2)|, |Q(n) − Q(3n/4)|)
-(:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident).
+(:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident), or, where it is
+larger, Q's float32 conditioning: its change when wi's norm moves by 8u
+(:data:`~.config.PERTURB`, the identities' perturbation).  A sampler builds its frame from
+wi and draws directions whatever wi's rounding, while a pdf such as cos^p α with
+cos α = ω_o · reflect(ω_i) scales by |ω_i|^p: phonglab's ``phong`` at p = 10⁴ integrates to
+0.99979 at cos θ_i = 0.05 (every sample valid), the 1e-8 by which float32 ω_i misses unit
+length raised to the 10⁴; an 8u move changes Q by ~1 % there, by 3e-5 at p = 30, and not
+at all for a pdf that does not depend on ω_i's length (Lambert).
 P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
 Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
 (k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
@@ -49,6 +56,7 @@ import numpy as np
 
 from ... import probe, stats
 from . import lanes, lobes
+from .config import PERTURB
 from .topics import Row
 
 
@@ -72,6 +80,17 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     return np.array(ks), blacks
 
 
+def _conditioning(density, cells, layout, nodes, integral) -> np.ndarray:
+    """Per cell: the largest |Q(wi·(1 ± PERTURB)) − Q(wi)| -- how far ∫pdf moves when the
+    incidence direction's float32 norm moves by 8u (the identities' perturbation)."""
+    moved = []
+    for scale in (1.0 + PERTURB, 1.0 - PERTURB):
+        def scaled(wi, wo, scale=scale):
+            return density(wi * scale, wo)
+        moved.append(np.array([v for v, _ in lobes.integrate(scaled, cells, layout, nodes)]))
+    return np.max(np.abs(np.array(moved) - integral), axis=0)
+
+
 def counting_error(k: np.ndarray, n: int, z: float) -> np.ndarray:
     """Binomial standard error of k/n with p the Agresti–Coull centre (k + z²/2)/(n + z²)."""
     p = (k + 0.5 * z * z) / (n + z * z)
@@ -92,6 +111,7 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
 
     nodes = opts.normalization_nodes
     integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
+    qerr = np.maximum(qerr, _conditioning(density, cells, layout, nodes, integral))
     n = opts.normalization_samples
     k, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
