@@ -29,7 +29,7 @@ vanish below the horizon, or it reports density where nothing is counted), with
 :attr:`~.config.Options.normalization_nodes` per panel at both sizes (a pdf is sharper than
 an albedo at grazing incidence) and the error max(|Q(n) − Q(n/2)|, |Q(n) − Q(3n/4)|)
 (:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident), or, where it is
-larger, Q's float32 conditioning: its change when wi's norm moves by 8u
+larger, Q's float32 conditioning: its change when wi's norm moves by 8u (by the n/2 rule)
 (:data:`~.config.PERTURB`, the identities' perturbation).  A sampler builds its frame from
 wi and draws directions whatever wi's rounding, while a pdf such as cos^p α with
 cos α = ω_o · reflect(ω_i) scales by |ω_i|^p: phonglab's ``phong`` at p = 10⁴ integrates to
@@ -80,9 +80,12 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     return np.array(ks), blacks
 
 
-def _conditioning(density, cells, layout, nodes, integral) -> np.ndarray:
+def _conditioning(density, cells, layout, nodes) -> np.ndarray:
     """Per cell: the largest |Q(wi·(1 ± PERTURB)) − Q(wi)| -- how far ∫pdf moves when the
-    incidence direction's float32 norm moves by 8u (the identities' perturbation)."""
+    incidence direction's float32 norm moves by 8u (the identities' perturbation) -- by the
+    rule of ``nodes`` per panel (a difference of two integrals by one rule: its own error
+    cancels to first order, so a coarse rule measures it)."""
+    integral = np.array([v for v, _ in lobes.integrate(density, cells, layout, nodes)])
     moved = []
     for scale in (1.0 + PERTURB, 1.0 - PERTURB):
         def scaled(wi, wo, scale=scale):
@@ -111,7 +114,7 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
 
     nodes = opts.normalization_nodes
     integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
-    qerr = np.maximum(qerr, _conditioning(density, cells, layout, nodes, integral))
+    qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2)))
     n = opts.normalization_samples
     k, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
