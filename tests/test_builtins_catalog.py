@@ -85,7 +85,8 @@ def test_markdown_renders_a_given_json():
     cells = [c.strip() for c in table_row.strip("|").split("|")][2:]
     assert dict(zip(TOPICS, cells)) == {
         "finite": "pass", "eval_pdf": "", "weight": "", "pdf": "", "chi2": "KNOWN",
-        "energy": "**fail**", "reciprocity": "", "component": "", "gradient": "skipped",
+        "normalization": "", "energy": "**fail**", "reciprocity": "", "component": "",
+        "eval_null_transmission": "", "eval_diffuse_reflectance": "", "gradient": "skipped",
         "cost": ""}
     assert "1 pass, 1 fail, 1 KNOWN, 1 skipped rows, 12.5 s" in md
     assert "src/bsdfs/roughplastic.cpp#L422" in md

@@ -29,7 +29,19 @@ PLANTED = {
     "eval_pdf_mismatch": "eval_pdf",
     "swapped_components": "component",
     "wrong_gradient": "gradient",
+    "pdf_scaled_1pct": "normalization",
+    "pdf_scaled_2pct": "normalization",
+    "null_transmission_without_lobe": "eval_null_transmission",
+    "null_transmission_wrong": "eval_null_transmission",
+    "diffuse_reflectance_no_pi": "eval_diffuse_reflectance",
+    "undeclared_lobe": "component",
 }
+
+#: defect file -> topics that may fail besides its own at DEFAULT sizes, and why.  A pdf scaled
+#: by 1.02 adds ≈ N·0.02² = 400 to the χ² statistic at N = 10⁶ samples, 2σ of its null
+#: distribution (σ = √(2·dof) ≈ 200): χ² may see it then; its default-size counterpart, the
+#: 1 % defect (excess 100, σ/2), fails normalization alone.
+ALSO_AT_DEFAULT = {"pdf_scaled_2pct": {"chi2"}}
 
 
 @pytest.mark.parametrize("name", sorted(PLANTED))
@@ -37,6 +49,17 @@ def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
     report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True, seed=0)
     failing = {r.topic for r in report.failing}
     assert failing == {PLANTED[name]}, report.table(report.failing)
+
+
+def test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes(variant_llvm_rgb):
+    """The defect issue #26 found passing at default sizes: ∫pdf = 1.01 against P = 1 (no
+    rejection), a band of z²/(√2 N) + the quadrature's error, ~3e-5."""
+    report = validate_bsdf("defect_pdf_scaled_1pct", plugins=[DEFECTS / "pdf_scaled_1pct.py"],
+                           seed=0)
+    assert {r.topic for r in report.failing} == {"normalization"}, report.table(report.failing)
+    (row,) = [r for r in report.rows if r.topic == "normalization"]
+    assert row.measured == pytest.approx(1.01, abs=1e-6) and row.expected == 1.0
+    assert row.tolerance < 1e-4
 
 
 def test_failing_chi2_writes_nothing_into_the_working_directory(variant_llvm_rgb, tmp_path,
@@ -64,7 +87,9 @@ def test_every_topic_but_cost_has_a_planted_defect():
 @pytest.mark.parametrize("name", sorted(PLANTED))
 def test_defect_fails_its_topic_only_default_sizes(variant_llvm_rgb, name):
     report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], seed=0)
-    assert {r.topic for r in report.failing} == {PLANTED[name]}, report.table(report.failing)
+    failing = {r.topic for r in report.failing}
+    assert PLANTED[name] in failing, report.table(report.failing)
+    assert failing <= {PLANTED[name]} | ALSO_AT_DEFAULT.get(name, set()), report.table(report.failing)
 
 
 @pytest.mark.slow

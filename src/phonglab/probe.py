@@ -57,8 +57,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["Sample", "context", "default_wavelengths", "direction", "eval", "eval_pdf",
-           "interaction", "pdf", "sample", "sample_random", "to_numpy", "to_vectors"]
+__all__ = ["Sample", "context", "default_wavelengths", "direction", "eval",
+           "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction", "pdf",
+           "sample", "sample_random", "to_numpy", "to_vectors"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -266,6 +267,20 @@ def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     ctx = context() if ctx is None else ctx
     value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, wo=(mi.Vector3f, wo, 3))
     return value, p
+
+
+def eval_null_transmission(bsdf, wi) -> np.ndarray:
+    """``bsdf.eval_null_transmission``: the un-scattered transmission (the ``Null`` lobe's
+    weight along −wi) for light arriving along wi, all channels: (N, C)."""
+    (value,) = _probe(lambda si: (bsdf.eval_null_transmission(si),), wi)
+    return value
+
+
+def eval_diffuse_reflectance(bsdf, wi) -> np.ndarray:
+    """``bsdf.eval_diffuse_reflectance``: the BSDF's diffuse reflectance at incidence wi, all
+    channels: (N, C)."""
+    (value,) = _probe(lambda si: (bsdf.eval_diffuse_reflectance(si),), wi)
+    return value
 
 
 def sample(bsdf, wi, sample1, sample2, ctx=None) -> Sample:

@@ -1,7 +1,9 @@
 """The BSDF kind of the validator: its topics, one module per topic family.
 
 ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component`` (:mod:`.identities`), ``chi2``
-(:mod:`.sampling`), ``energy`` (:mod:`.energy`), ``reciprocity`` (:mod:`.reciprocity`),
+(:mod:`.sampling`), ``normalization`` (:mod:`.normalization`), ``energy`` (:mod:`.energy`;
+both integrate with :mod:`.lobes`), ``reciprocity`` (:mod:`.reciprocity`),
+``eval_null_transmission`` and ``eval_diffuse_reflectance`` (:mod:`.contract`),
 ``gradient`` (:mod:`.gradient`), ``cost`` (:mod:`.cost`); the lanes they probe
 (:mod:`.lanes`), their sizes and round-off tolerances (:mod:`.config`), the topic list and the
 row that checks it (:mod:`.topics`), the identity rows' reduction (:mod:`.rows`), and the table that ties them to the kind-independent runner

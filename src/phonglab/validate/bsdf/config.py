@@ -78,6 +78,11 @@ class Options:
     energy_cos: tuple = (1.0, 0.95, 0.85, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 1e-4, 0.0)
     energy_nodes: int = 16            #: Gauss-Legendre nodes per panel (error from n vs n/2)
     energy_samples: int = 100_000     #: samples per cell for the delta lobes' albedo
+    #: samples per cell counted by the normalization topic (its cells are energy_cos × phi_grid);
+    #: binomial error ≤ 0.5/√N, 7e-4 here
+    normalization_samples: int = 1 << 19
+    normalization_nodes: int = 16     #: its Gauss-Legendre nodes per panel, at both sizes
+    null_samples: int = 1 << 16       #: samples per cell of the Null lobe (eval_null_transmission)
     gradient_lanes: int = 4096
     cost_lanes: int = 1 << 18
     cost_repeats: int = 5
@@ -105,7 +110,8 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
                    chi2_cos=(0.8, 0.5, 0.2), chi2_phi=(0.0,), chi2_samples=200_000,
                    chi2_res=61, chi2_ires=24,
                    energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
-                   energy_samples=20_000, gradient_lanes=1024, cost_lanes=1 << 16,
+                   energy_samples=20_000, normalization_samples=1 << 17,
+                   null_samples=1 << 14, gradient_lanes=1024, cost_lanes=1 << 16,
                    cost_repeats=3)
 
 

@@ -2,9 +2,9 @@ r"""The ``energy`` topic: directional albedo a(θ_i) = ∫ f cos θ_o dω_o ≤ 
 
 Estimators (chosen so that a sampling defect does not leak into this topic):
 
-* the non-delta part is a deterministic quadrature of ``eval`` --
+* the non-delta part is a deterministic quadrature of ``eval`` (:mod:`.lobes`:
   :func:`phonglab.physics.quadrature.lobe_quadrature` over the reflection hemisphere, and for a
-  transmitting BSDF the same rule mirrored into the lower hemisphere.  Each rule is centred on
+  transmitting BSDF the same rule mirrored into the lower hemisphere).  Each rule is centred on
   the lobe's peak (the mean direction of the 10 % most probable samples, so a normal map or a
   rotated anisotropy that moves the lobe away from the mirror direction is followed) and
   covers the whole circle around it; the BSDF's own samples only place the panels, the value
@@ -31,76 +31,8 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe, stats
-from ...physics.quadrature import lobe_quadrature
-from . import lanes
+from . import lanes, lobes
 from .topics import Row
-
-#: Float32 floor of the band: an eval summed over ~10⁴ nodes is good to ~1e-5 relative.
-FLOOR = 1e-5
-
-
-def _centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray):
-    """(polar angle, azimuth, width) of a lobe from its samples (upper-hemisphere frame).
-
-    The centre is the mean direction of the 10 % of samples with the highest density -- the
-    lobe's peak, wherever a normal map or an anisotropy puts it -- and the width the 10 %
-    quantile of the samples' angles to it.  Only the panels depend on this, not the value.
-    """
-    if len(wo) < 16:
-        c, width = fallback, 0.5
-    else:
-        top = wo[pdf >= np.quantile(pdf, 0.9)]
-        c = top.mean(axis=0)
-        c = c / np.linalg.norm(c) if np.linalg.norm(c) > 1e-6 else fallback
-        width = float(np.clip(np.quantile(np.arccos(np.clip(wo @ c, -1.0, 1.0)), 0.1), 1e-3, 1.0))
-    return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
-
-
-def _layout(bsdf, thetas, opts):
-    """Per cell: the reflected lobe's (polar, azimuth, width) and the transmitted one's or None."""
-    out = []
-    transmits = lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission)
-    n = 2048
-    wi, _ = lanes.incident(np.column_stack([thetas, np.zeros_like(thetas)]), n)
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["energy"])
-    for k, theta in enumerate(thetas):
-        sl = slice(k * n, (k + 1) * n)
-        wo, pdf = s.wo[sl], s.pdf[sl]
-        live = np.any(s.weight[sl] != 0, axis=1) & ~lanes.delta_mask(s.sampled_type[sl])
-        live &= np.all(np.isfinite(wo), axis=1) & np.isfinite(pdf)
-        mirror = probe.direction(theta, math.pi)
-        up = live & (wo[:, 2] > 0)
-        reflected = _centre(wo[up], pdf[up], mirror)
-        transmitted = None
-        if transmits:
-            down = live & (wo[:, 2] < 0)
-            transmitted = _centre(wo[down] * np.array([1.0, 1.0, -1.0]), pdf[down], mirror)
-        out.append((reflected, transmitted))
-    return out
-
-
-def _nodes(lobe_r, lobe_t, n):
-    wo, w = lobe_quadrature(lobe_r[0], lobe_r[2], n, azimuth=lobe_r[1], symmetric=False)
-    if lobe_t is not None:
-        wt, ww = lobe_quadrature(lobe_t[0], lobe_t[2], n, azimuth=lobe_t[1], symmetric=False)
-        wo, w = np.concatenate([wo, wt * np.array([1.0, 1.0, -1.0])]), np.concatenate([w, ww])
-    return wo / np.linalg.norm(wo, axis=1, keepdims=True), w
-
-
-def _quadrature(bsdf, thetas, layout, n, ctx):
-    """Q_n per cell (channel mean) and its count of non-finite nodes, in one eval call."""
-    parts = [_nodes(lobe_r, lobe_t, n) for lobe_r, lobe_t in layout]
-    wi = np.concatenate([np.repeat(lanes.exact(probe.direction(t))[None], len(p[0]), 0)
-                         for t, p in zip(thetas, parts)])
-    ev = probe.eval(bsdf, wi, np.concatenate([p[0] for p in parts]), ctx).mean(axis=1)
-    out, start = [], 0
-    for wo, w in parts:
-        e = ev[start:start + len(w)]
-        start += len(w)
-        ok = np.isfinite(e)
-        out.append((float(np.sum(w[ok] * e[ok])), int((~ok).sum())))
-    return out
-
 
 def _delta_part(bsdf, thetas, opts, ctx):
     """(mean, standard error) per cell of weight · 1{delta sample}."""
@@ -143,16 +75,21 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     a = np.zeros(len(thetas))
     qerr, se, nonfinite = np.zeros(len(thetas)), np.zeros(len(thetas)), 0
     if not only_delta:
-        layout = _layout(bsdf, thetas, opts)
-        q = _quadrature(bsdf, thetas, layout, opts.energy_nodes, ctx)
-        q_half = _quadrature(bsdf, thetas, layout, opts.energy_nodes // 2, ctx)
+        cells = np.column_stack([thetas, np.zeros_like(thetas)])
+        layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["energy"])
+
+        def albedo(wi, wo):
+            return probe.eval(bsdf, wi, wo, ctx).mean(axis=1)
+
+        q = lobes.integrate(albedo, cells, layout, opts.energy_nodes)
+        q_half = lobes.integrate(albedo, cells, layout, opts.energy_nodes // 2)
         a += np.array([v for v, _ in q])
         qerr = np.abs(a - np.array([v for v, _ in q_half]))
         nonfinite = sum(c for _, c in q)
     if has_delta:
         mean, se = _delta_part(bsdf, thetas, opts, ctx)
         a += mean
-    band = z * se + qerr + FLOOR * np.maximum(1.0, a)
+    band = z * se + qerr + lobes.FLOOR * np.maximum(1.0, a)
     over = a > 1.0 + band
     k = int(np.argmax(a - band))
     method = ("mean delta-sample weight (R + T for a smooth dielectric)" if only_delta else

@@ -13,7 +13,16 @@ round-off (:data:`phonglab.validate.bsdf.config.REL_TOL`), not statistics:
 * ``pdf``: ``bs.pdf`` equals ``pdf(wi, bs.wo)`` for non-delta samples.
 * ``component``: ``sampled_component`` indexes a component whose flags contain
   ``sampled_type``; a context restricted to component k samples only k and evaluates only k;
-  Σ_k eval_k = eval [PR#1951].
+  Σ_k eval_k = eval [PR#1951].  And the declaration, as far as it is observable from outside:
+  ``flags()`` is the union of the components' flags (lobe bits; integrators branch on it,
+  e.g. path.cpp:238 samples emitters only when ``flags()`` has a Smooth lobe); the samples of
+  one component report one ``sampled_type`` (a component is one lobe: the component index is
+  how a context isolates a lobe, and every Mitsuba 3.9.1 built-in keeps to it -- ``hair``'s
+  one glossy component reports GlossyReflection|GlossyTransmission, one type -- except
+  ``blendbsdf``, whose nested indices are the finding blendbsdf-component-ids); and a
+  non-delta sample has a density: no direction is drawn by ≥ 1 % (and ≥ 8) of a cell's
+  non-delta samples (an atom, which a continuous density draws with probability 0: a delta
+  lobe labelled diffuse or glossy; χ² and normalization see it too where they look).
 
 Non-finite values are the ``finite`` topic's alone: the other topics drop those lanes (and
 count them in ``details``), so that one defect fails one topic.
@@ -171,8 +180,57 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
     return rows
 
 
+#: An atom: a direction drawn by at least this fraction of a cell's non-delta samples ...
+ATOM_FRACTION = 0.01
+#: ... and by at least this many of them (a narrow lobe repeats a float32 direction by chance).
+ATOM_MIN = 8
+
+
+def atoms(wo: np.ndarray, cell: np.ndarray) -> tuple[int, list]:
+    """Samples whose exact direction is drawn by ≥ ATOM_FRACTION (and ≥ ATOM_MIN) of their
+    cell's samples, and up to 3 such directions as (cell, wo, count)."""
+    count, examples = 0, []
+    for c in np.unique(cell):
+        dirs, n = np.unique(wo[cell == c], axis=0, return_counts=True)
+        heavy = n >= max(ATOM_MIN, ATOM_FRACTION * n.sum())
+        count += int(n[heavy].sum())
+        examples += [(int(c), d.tolist(), int(k)) for d, k in zip(dirs[heavy], n[heavy])]
+    return count, examples[:3]
+
+
+def _declaration_rows(bsdf, flags: list, s, live, cell) -> list[Row]:
+    """flags() = ∪ flags(k); one sampled_type per component; non-delta samples have no atom."""
+    lobe_bits = int(mi.BSDFFlags.All)
+    union = 0
+    for f in flags:
+        union |= f & lobe_bits
+    declared = int(bsdf.flags()) & lobe_bits
+    comp, stype = s.sampled_component[live], s.sampled_type[live] & lobe_bits
+    types = {int(k): sorted({int(t) for t in stype[comp == k]}) for k in np.unique(comp)}
+    mixed = {k: t for k, t in types.items() if len(t) > 1}
+    # a non-unit or non-finite wo is the finite topic's (it fails there), not an atom
+    unit = np.abs(np.linalg.norm(np.nan_to_num(s.wo), axis=1) - 1.0) <= 1e-3
+    smooth = live & ~lanes.delta_mask(s.sampled_type) & np.all(np.isfinite(s.wo), axis=1) & unit
+    n_atom, examples = atoms(s.wo[smooth], cell[smooth])
+    return [
+        bounded_row("component", "flags() = union of flags(k)", float(declared != union), 0.0,
+                    f"flags() lobe bits {declared:#x} against the union of the components' "
+                    f"{union:#x} (integrators branch on flags(): path.cpp:238)",
+                    {"flags": declared, "union": union}),
+        bounded_row("component", "one sampled_type per component", float(len(mixed)), 0.0,
+                    f"count of components whose samples report more than one sampled_type "
+                    f"(lobe bits; a component is one lobe) over {int(live.sum())} samples",
+                    {"types": {str(k): t for k, t in types.items()}}),
+        bounded_row("component", "non-delta samples have a density (no atom)", float(n_atom),
+                    0.0, f"count of non-delta samples whose exact wo is drawn by ≥ "
+                    f"{ATOM_FRACTION:.0%} (and ≥ {ATOM_MIN}) of their cell's non-delta samples "
+                    f"(a delta lobe labelled non-delta), over {int(smooth.sum())} samples",
+                    {"atoms": examples}),
+    ]
+
+
 def component(bsdf, opts) -> list[Row]:
-    wi, _ = lanes.incident(opts.cells(), opts.n_identity // 2)
+    wi, cell = lanes.incident(opts.cells(), opts.n_identity // 2)
     k_count = bsdf.component_count()
     flags = [int(bsdf.flags(k)) for k in range(k_count)]
     s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["component"])
@@ -191,6 +249,7 @@ def component(bsdf, opts) -> list[Row]:
                   "examples": [{"component": int(c), "type": int(t)}
                                for c, t in zip(comp[bad][:5], stype[bad][:5])]},
                  lanes=(bad.astype(float), {"wi": wi[live], "component": comp, "type": stype}))]
+    rows += _declaration_rows(bsdf, flags, s, live, cell)
     if k_count < 2:
         return rows
     r = lanes.rng(opts.seed, "component")

@@ -1,9 +1,10 @@
 """The BSDF kind of the validator: ``mi.BSDF``, its topics table, its statistical tests, and
 :func:`validate_bsdf` (the kind-independent runner :mod:`phonglab.validate.core` does the rest).
 
-The statistical tests of a BSDF are the χ² cells (unless every lobe is a delta) and, when it
-has a delta lobe, the energy cells whose albedo is a mean of sample weights; the other topics
-are identities at float32 round-off, or informational (``cost``).
+The statistical tests of a BSDF are the χ² cells and the normalization cells (unless every lobe
+is a delta), when it has a delta lobe the energy cells whose albedo is a mean of sample
+weights, and when it has a Null lobe the eval_null_transmission cells (a mean Null-sample
+weight); the other topics are identities at float32 round-off, or informational (``cost``).
 """
 
 from __future__ import annotations
@@ -14,23 +15,30 @@ from ...verdict import Report
 from .. import core
 from . import lanes
 from .config import options
+from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost
 from .energy import energy
 from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
+from .normalization import normalization
 from .reciprocity import reciprocity
 from .sampling import chi2
 from .topics import TOPICS
 
 
 def statistical_tests(bsdf, opts, topics) -> int:
-    """m: the number of statistical tests the run makes (χ² cells, energy cells with delta lobes)."""
+    """m: the number of statistical tests the run makes (χ² and normalization cells, energy
+    cells with delta lobes, eval_null_transmission cells with a Null lobe)."""
     m = 0
     if "chi2" in topics and not lanes.delta_only(bsdf):
         m += len(opts.cells(opts.chi2_cos, opts.chi2_phi))
+    if "normalization" in topics and not lanes.delta_only(bsdf):
+        m += len(opts.cells(opts.energy_cos))
     if "energy" in topics and lanes.bsdf_has(bsdf, int(mi.BSDFFlags.Delta) |
                                              int(mi.BSDFFlags.Delta1D)):
         m += len(opts.energy_cos)
+    if "eval_null_transmission" in topics and has_null(bsdf):
+        m += len(opts.cells())
     return max(m, 1)
 
 
@@ -43,9 +51,12 @@ def runners(bsdf, opts, topics, m: int) -> dict:
         "weight": lambda: weight_and_pdf(bsdf, opts, {"weight", "pdf"} & set(topics)),
         "pdf": lambda: [] if "weight" in topics else weight_and_pdf(bsdf, opts, {"pdf"}),
         "chi2": lambda: chi2(bsdf, opts, m),
+        "normalization": lambda: normalization(bsdf, opts, m),
         "energy": lambda: energy(bsdf, opts, m),
         "reciprocity": lambda: reciprocity(bsdf, opts),
         "component": lambda: component(bsdf, opts),
+        "eval_null_transmission": lambda: eval_null_transmission(bsdf, opts, m),
+        "eval_diffuse_reflectance": lambda: eval_diffuse_reflectance(bsdf, opts),
         "gradient": lambda: gradient(bsdf, opts),
         "cost": lambda: cost(bsdf, opts),
     }

@@ -18,7 +18,9 @@ ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 #: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
 SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
-                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19}
+                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19,
+                "normalization": 20, "eval_null_transmission": 21,
+                "eval_diffuse_reflectance": 22}
 
 
 def rng(seed: int, topic: str) -> np.random.Generator:
@@ -76,6 +78,22 @@ def delta_mask(sampled_type: np.ndarray) -> np.ndarray:
     """True where a sample's lobe is a delta (Dirac in 2D or 1D)."""
     bits = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
     return (sampled_type & bits) != 0
+
+
+def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarray:
+    """The samples that carry a density (χ²'s histogram, the normalization count): not a delta
+    lobe, and weight ≠ 0 in some channel (Mitsuba marks a rejected sample with weight 0).
+
+    ``black_at_wo``: per sample, whether ``sample`` drew its wo inside the support where the
+    BSDF is black (bs.pdf > 0, pdf(wi, wo) > 0, eval(wi, wo) = 0 in every channel); those
+    count too, their weight 0 being the right value eval/pdf, not a rejection.  For a black
+    cell that is χ²'s drawn-direction rule; it also covers a cell black in part (pplastic
+    in a polarized variant at cos θ_i = 1e-4: 89 % of its diffuse samples have eval 0 there).
+    """
+    drawn = np.any(s.weight != 0, axis=1)
+    if black_at_wo is not None:
+        drawn |= black_at_wo
+    return drawn & ~delta_mask(s.sampled_type)
 
 
 def bsdf_has(bsdf, flags) -> bool:

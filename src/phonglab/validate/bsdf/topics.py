@@ -10,7 +10,8 @@ from __future__ import annotations
 from ... import verdict
 
 #: The validator's BSDF topics, in the order the table lists them.
-TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "energy", "reciprocity", "component",
+TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energy",
+          "reciprocity", "component", "eval_null_transmission", "eval_diffuse_reflectance",
           "gradient", "cost")
 
 

@@ -1,0 +1,126 @@
+r"""Lobe-centred quadrature of a per-direction function of a BSDF over the sphere of ω_o.
+
+The ``energy`` topic integrates ``eval`` (∫ f cos θ_o dω_o, the directional albedo) and the
+``normalization`` topic integrates ``pdf`` (∫ pdf dω_o, the probability that ``sample`` returns
+a direction with a density); both by :func:`phonglab.physics.quadrature.lobe_quadrature`,
+composite Gauss-Legendre in a frame centred on the lobe, with the horizon a panel edge.
+
+Placement.  :func:`layout` finds each incidence cell's reflected lobe (and transmitted one, for
+a transmitting BSDF) from the BSDF's own samples: the centre is the mean direction of the 10 %
+most probable samples -- the lobe's peak, wherever a normal map or a rotated anisotropy puts
+it -- and the width the 10 % quantile of the samples' angles to it.  Each rule covers the whole
+circle around its centre (``symmetric=False``), so anisotropy and azimuth φ_i ≠ 0 are covered.
+Only the panels depend on the samples: the value is Σ_k w_k g(ω_k), independent of ``sample``.
+
+Error.  :func:`integrate` returns Q(n) per cell; ``energy`` estimates the error as
+|Q(n) − Q(n/2)| (Gauss-Legendre converges fast, so Q(n) is far closer than that).
+:func:`integrate_with_error` takes the larger difference to TWO coarser rules, n/2 and 3n/4
+nodes per panel: one pair can agree by accident where neither has converged -- for
+``roughconductor`` (GGX, α_u = 0.05, α_v = 0.4) at cos θ_i = 0.05, φ_i = 2.1 the quick rules
+gave Q(5) = 0.992441 and Q(10) = 0.992460, while Q(8) = 0.982707 and Q(40) = 0.987551.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mitsuba as mi
+import numpy as np
+
+from ... import probe
+from ...physics.quadrature import lobe_quadrature
+from . import lanes
+
+#: Samples per cell that place the panels (only the layout depends on them).
+LAYOUT_SAMPLES = 2048
+#: Width of a lobe whose samples are too few to measure (a hemisphere-wide lobe).
+FALLBACK_WIDTH = 0.5
+
+#: Float32 floor of a quadrature's band: a value summed over ~10⁴ nodes is good to ~1e-5 relative.
+FLOOR = 1e-5
+
+#: (polar angle of the centre, its azimuth, angular width) of one lobe, upper-hemisphere frame.
+Lobe = tuple
+
+
+def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
+    """(polar angle, azimuth, width) of a lobe from its samples (upper-hemisphere frame); the
+    ``fallback`` direction and :data:`FALLBACK_WIDTH` when there are fewer than 16 samples."""
+    if len(wo) < 16:
+        c, width = fallback, FALLBACK_WIDTH
+    else:
+        top = wo[pdf >= np.quantile(pdf, 0.9)]
+        c = top.mean(axis=0)
+        c = c / np.linalg.norm(c) if np.linalg.norm(c) > 1e-6 else fallback
+        width = float(np.clip(np.quantile(np.arccos(np.clip(wo @ c, -1.0, 1.0)), 0.1), 1e-3, 1.0))
+    return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
+
+
+def layout(bsdf, cells: np.ndarray, seed: int, whole_sphere: bool = False,
+           samples: int = LAYOUT_SAMPLES) -> list:
+    """Per (θ_i, φ_i) cell: (reflected lobe, transmitted lobe or None).
+
+    The transmitted lobe is placed for a transmitting BSDF, and with ``whole_sphere`` for every
+    BSDF (then the lower hemisphere of a reflection-only BSDF gets the mirror-centred fallback:
+    whatever its integrand is there, it is integrated too).  ``seed``, ``samples``: of the
+    placing samples (per cell).
+    """
+    out = []
+    transmits = lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission) or whole_sphere
+    n = samples
+    wi, _ = lanes.incident(cells, n)
+    s = probe.sample_random(bsdf, wi, len(wi), seed=seed)
+    for k, (theta, phi) in enumerate(cells):
+        sl = slice(k * n, (k + 1) * n)
+        wo, pdf = s.wo[sl], s.pdf[sl]
+        live = np.any(s.weight[sl] != 0, axis=1) & ~lanes.delta_mask(s.sampled_type[sl])
+        live &= np.all(np.isfinite(wo), axis=1) & np.isfinite(pdf)
+        mirror = probe.direction(theta, phi + math.pi)
+        up = live & (wo[:, 2] > 0)
+        reflected = centre(wo[up], pdf[up], mirror)
+        transmitted = None
+        if transmits:
+            down = live & (wo[:, 2] < 0)
+            transmitted = centre(wo[down] * np.array([1.0, 1.0, -1.0]), pdf[down], mirror)
+        out.append((reflected, transmitted))
+    return out
+
+
+def nodes(lobe_r: Lobe, lobe_t: Lobe | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unit directions and weights: the upper hemisphere around ``lobe_r``, and the lower one
+    (the same rule mirrored) around ``lobe_t`` when given."""
+    wo, w = lobe_quadrature(lobe_r[0], lobe_r[2], n, azimuth=lobe_r[1], symmetric=False)
+    if lobe_t is not None:
+        wt, ww = lobe_quadrature(lobe_t[0], lobe_t[2], n, azimuth=lobe_t[1], symmetric=False)
+        wo, w = np.concatenate([wo, wt * np.array([1.0, 1.0, -1.0])]), np.concatenate([w, ww])
+    return wo / np.linalg.norm(wo, axis=1, keepdims=True), w
+
+
+def integrate(fn, cells: np.ndarray, lobes: list, n: int) -> list[tuple[float, int]]:
+    """Q_n = Σ_k w_k fn(ω_i, ω_k) per cell, and its count of non-finite nodes (left out).
+
+    ``fn(wi (M, 3), wo (M, 3)) -> (M,)`` is called once for all cells' nodes (one kernel).
+    """
+    parts = [nodes(lobe_r, lobe_t, n) for lobe_r, lobe_t in lobes]
+    wis = lanes.exact(probe.direction(cells[:, 0], cells[:, 1]))
+    wi = np.concatenate([np.repeat(w[None], len(p[0]), 0) for w, p in zip(wis, parts)])
+    values = fn(wi, np.concatenate([p[0] for p in parts]))
+    out, start = [], 0
+    for _, w in parts:
+        v = values[start:start + len(w)]
+        start += len(w)
+        ok = np.isfinite(v)
+        out.append((float(np.sum(w[ok] * v[ok])), int((~ok).sum())))
+    return out
+
+
+def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int) -> tuple:
+    """(Q(n) (M,), error (M,), non-finite nodes) per cell: error = max(|Q(n) − Q(n/2)|,
+    |Q(n) − Q(3n/4)|), the module docstring says why two coarser rules."""
+    q = integrate(fn, cells, lobes, n)
+    value = np.array([v for v, _ in q])
+    err = np.zeros_like(value)
+    for m in sorted({max(1, n // 2), max(1, (3 * n) // 4)} - {n}):
+        coarse = np.array([v for v, _ in integrate(fn, cells, lobes, m)])
+        err = np.maximum(err, np.abs(value - coarse))
+    return value, err, sum(c for _, c in q)

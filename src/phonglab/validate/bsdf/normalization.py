@@ -1,0 +1,144 @@
+r"""The ``normalization`` topic: does ``pdf`` integrate to the probability that ``sample``
+returns a direction it has a density for?
+
+For a sampler whose ``wo`` has the density ``pdf`` (solid angle) wherever it returns a
+usable non-delta direction,
+
+    Q(ω_i) = ∫_{S²} pdf(ω_i, ω_o) dω_o  =  P(ω_i) = Pr[sample(ω_i) is counted],
+
+where a sample is counted by the χ² topic's rule applied per sample (:func:`.lanes.counted`):
+not a delta lobe -- ``pdf`` has no density for a mirror or a glass interface, so a mixture
+such as ``plastic`` is held to its non-delta part, whose Q and P are then both below 1 -- and
+weight ≠ 0 (Mitsuba's mark of a rejected sample is weight 0), or weight 0 at a direction drawn
+inside the support (``bs.pdf > 0``, ``pdf(wo) > 0``) where the BSDF is black (``eval(wo)`` = 0):
+there the weight 0 is the right value, not a rejection.  In a black cell that is χ²'s
+drawn-direction rule; it also covers a cell that is black in part (``pplastic`` in a
+polarized variant at cos θ_i = 1e-4, where 89 % of the diffuse samples have eval 0), which
+the weight rule alone would count as 30 % rejected against ∫ pdf = 1.  A sampler that
+returns weight 0 where eval is not 0 still fails: those samples are not counted.
+
+Why a topic of its own.  A pdf scaled by a constant c ≠ 1 everywhere, with ``sample`` exact
+and weight = eval / pdf (so the ``weight`` and ``pdf`` identities hold, and every render is
+darker by 1/c), is seen by χ² only through its normalization, where at 10⁵–10⁶ samples it has
+no power for c = 1.01 (issue #26).  Here Q = c·P against P: a deterministic quadrature and a
+count, which see 1 % at once.
+
+Estimators.  Q by :mod:`.lobes` (``lobe_quadrature`` centred on the sampled lobe, the same rule
+as ``energy``, over BOTH hemispheres for every BSDF: the pdf of a reflection-only BSDF must
+vanish below the horizon, or it reports density where nothing is counted), with
+:attr:`~.config.Options.normalization_nodes` per panel at both sizes (a pdf is sharper than
+an albedo at grazing incidence) and the error max(|Q(n) − Q(n/2)|, |Q(n) − Q(3n/4)|)
+(:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident), or, where it is
+larger, Q's float32 conditioning: its change when wi's norm moves by 8u (by the n/2 rule)
+(:data:`~.config.PERTURB`, the identities' perturbation).  A sampler builds its frame from
+wi and draws directions whatever wi's rounding, while a pdf such as cos^p α with
+cos α = ω_o · reflect(ω_i) scales by |ω_i|^p: phonglab's ``phong`` at p = 10⁴ integrates to
+0.99979 at cos θ_i = 0.05 (every sample valid), the 1e-8 by which float32 ω_i misses unit
+length raised to the 10⁴; an 8u move changes Q by ~1 % there, by 3e-5 at p = 30, and not
+at all for a pdf that does not depend on ω_i's length (Lambert).
+P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
+Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
+(k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
+(k = N, p̂(1 − p̂) = 0: the counting error of a sampler without rejection is 0) still allows
+≈ z²/(√2 N) for a rejection not yet seen, and the tolerance there is essentially the
+quadrature's.  Band: z·σ + the quadrature error + :data:`.lobes.FLOOR`·max(1, Q), z the Šidák
+critical value over the BSDF's statistical tests (each cell here is one of them:
+:func:`.kind.statistical_tests`).  Fail when |Q − k/N| > band at any cell.
+
+Cells: cos θ_i of :attr:`~.config.Options.energy_cos` at the azimuths of the grid (an
+anisotropic BSDF differs between them), down to 1e-4 and 0, where Q and P both vanish for a
+BSDF that rejects grazing light.  A BSDF whose every lobe is a delta has no density: skipped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ... import probe, stats
+from . import lanes, lobes
+from .config import PERTURB
+from .topics import Row
+
+
+def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
+    """Per cell: (counted samples k, of which drawn where the BSDF is black); one cell per
+    call (n lanes each), the sample values from the topic's own stream (lanes.rng)."""
+    r = lanes.rng(opts.seed, "normalization")
+    ks, blacks = [], []
+    for theta, phi in cells:
+        wi = lanes.exact(probe.direction(theta, phi))
+        s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
+        zero = (~np.any(s.weight != 0, axis=1) & (s.pdf > 0)
+                & np.all(np.isfinite(s.wo), axis=1))
+        black = np.zeros(n, dtype=bool)
+        if zero.any():
+            ev, pd = probe.eval(bsdf, wi, s.wo[zero]), probe.pdf(bsdf, wi, s.wo[zero])
+            black[zero] = (pd > 0) & np.all(ev == 0, axis=1)
+        k = lanes.counted(s, black)
+        ks.append(int(k.sum()))
+        blacks.append(int((k & black).sum()))
+    return np.array(ks), blacks
+
+
+def _conditioning(density, cells, layout, nodes) -> np.ndarray:
+    """Per cell: the largest |Q(wi·(1 ± PERTURB)) − Q(wi)| -- how far ∫pdf moves when the
+    incidence direction's float32 norm moves by 8u (the identities' perturbation) -- by the
+    rule of ``nodes`` per panel (a difference of two integrals by one rule: its own error
+    cancels to first order, so a coarse rule measures it)."""
+    integral = np.array([v for v, _ in lobes.integrate(density, cells, layout, nodes)])
+    moved = []
+    for scale in (1.0 + PERTURB, 1.0 - PERTURB):
+        def scaled(wi, wo, scale=scale):
+            return density(wi * scale, wo)
+        moved.append(np.array([v for v, _ in lobes.integrate(scaled, cells, layout, nodes)]))
+    return np.max(np.abs(np.array(moved) - integral), axis=0)
+
+
+def counting_error(k: np.ndarray, n: int, z: float) -> np.ndarray:
+    """Binomial standard error of k/n with p the Agresti–Coull centre (k + z²/2)/(n + z²)."""
+    p = (k + 0.5 * z * z) / (n + z * z)
+    return np.sqrt(p * (1.0 - p) / (n + z * z))
+
+
+def normalization(bsdf, opts, m_tests: int) -> list[Row]:
+    name = "∫ pdf dω_o = P(sample counted)"
+    if lanes.delta_only(bsdf):
+        return [Row("normalization", name, None, None, None, None, "skipped",
+                    "every lobe is a delta: pdf has no density to integrate", {})]
+    cells = opts.cells(opts.energy_cos)
+    layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
+                          whole_sphere=True)
+
+    def density(wi, wo):
+        return probe.pdf(bsdf, wi, wo)
+
+    nodes = opts.normalization_nodes
+    integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
+    qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2)))
+    n = opts.normalization_samples
+    k, blacks = _counts(bsdf, cells, n, opts)
+    z = stats.z_critical(stats.ALPHA, m_tests)
+    p_hat = k / n
+    sigma = counting_error(k, n, z)
+    band = z * sigma + qerr + lobes.FLOOR * np.maximum(1.0, integral)
+    dev = np.abs(integral - p_hat)
+    bad = dev > band
+    j = int(np.argmax(dev / band))
+    theta_deg = np.degrees(cells[:, 0])
+    where = ", ".join(f"θ_i = {theta_deg[i]:.1f}° φ = {cells[i, 1]:.2f} (∫pdf {integral[i]:.5g}"
+                      f" vs {p_hat[i]:.5g})" for i in np.flatnonzero(bad))
+    reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({nodes} nodes/panel, "
+              f"error max |Q{nodes} − Q{nodes // 2}|, |Q{nodes} − Q{3 * nodes // 4}|) against "
+              f"the fraction of {n} samples with weight ≠ 0 (or 0 where eval is 0) and not "
+              f"delta; band z·σ + "
+              f"quadrature error, σ binomial (Agresti–Coull), z = {z:.3f} (Šidák over "
+              f"{m_tests} tests) at {len(cells)} incidence cells"
+              + (f"; NOT NORMALIZED at {where}" if bad.any() else ""))
+    details = {"theta_deg": theta_deg.tolist(), "phi": cells[:, 1].tolist(),
+               "integral": integral.tolist(), "counted": p_hat.tolist(),
+               "samples": n, "sigma": sigma.tolist(), "quadrature_error": qerr.tolist(),
+               "band": band.tolist(), "black_samples": blacks,
+               "nonfinite_nodes": nonfinite}
+    return [Row("normalization", name, float(integral[j]), float(p_hat[j]), float(sigma[j]),
+                float(band[j]), "fail" if bad.any() else "pass", reason, details)]
+
