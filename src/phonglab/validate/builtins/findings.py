@@ -69,6 +69,8 @@ _MICROFACET_NAN = ("roughconductor/beckmann-a0.2", "roughconductor/ggx-a0.3-Cu",
 CHI2_ROW = "sampling matches pdf (min p-value)"
 SAMPLE_ROW = "sample: NaN/Inf/negative values"
 NAN_ROWS = ("pdf: NaN/Inf/negative values", "eval_pdf: NaN/Inf/negative values")
+NORM_ROW = "∫ pdf dω_o = P(sample counted)"
+ONE_TYPE_ROW = "one sampled_type per component"
 AGREE_ROW = "sampled_component/sampled_type agree with the flags"
 RESTRICTED_ROW = "restricted context samples only its component"
 SUM_ROW = "Σ_k eval(component k) = eval"
@@ -90,6 +92,16 @@ FINDINGS: tuple[Finding, ...] = (
             "to wo.z > 0 (p = 0.09-0.78 at 0-85 deg, both distributions)",
             "tests/repro/roughplastic_pdf_below_horizon.py",
             rows=(CHI2_ROW,), region=Chi2Outside("below_horizon")),
+    Finding("roughplastic-pdf-below-horizon-normalization", "normalization",
+            ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+             "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
+            "src/bsdfs/roughplastic.cpp:422",
+            "the same unmasked pdf: the specular density it gives wo below the horizon, where "
+            "sample() never goes, makes pdf integrate to more than the probability of a "
+            "counted sample",
+            "pdf(wo below the horizon) = 0.0677 in llvm_ad_rgb (alpha 0.25, wi at 45 deg)",
+            "int pdf = P(sample counted), 1 for roughplastic's valid samples",
+            "tests/repro/roughplastic_pdf_below_horizon.py", rows=(NORM_ROW,)),
     Finding("roughplastic-pdf-nan-grazing", "finite",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
@@ -152,6 +164,38 @@ FINDINGS: tuple[Finding, ...] = (
             "P(wo.y == 0) ~ 1e-7 for a continuous density; sampling consistent with pdf",
             "tests/repro/hair_residual_lobe_sampling.py",
             rows=(CHI2_ROW,), region=Chi2Excess("normal_plane")),
+    Finding("hair-residual-lobe-normalization", "normalization",
+            ("hair/default", "hair/blond-rough"),
+            "src/bsdfs/hair.cpp:267",
+            "the residual lobe's samples collapse onto the plane wo.y = 0 (the loop never sets "
+            "its incident angle), so the density pdf() reports for that lobe is not the one "
+            "sample() draws, and pdf integrates to less than the share of counted samples",
+            "3.49 % of samples have wo.y == 0 exactly (blond, 85 deg)",
+            "int pdf = P(sample counted)",
+            "tests/repro/hair_residual_lobe_sampling.py", rows=(NORM_ROW,)),
+    Finding("beckmann-pdf-normalization", "normalization",
+            ("roughconductor/beckmann-a0.2", "roughconductor/polarized",
+             "roughdielectric/beckmann-a0.1", "blendbsdf/roughconductor+roughdielectric",
+             "pplastic/default"),
+            "include/mitsuba/render/microfacet.h:346",
+            "Beckmann's smith_g1() is a rational approximation (\"< 0.35 % rel. error\", lines "
+            "346-352) while sample_visible() inverts the exact visible-normal distribution, so "
+            "the visible-normal pdf D G1 |wi.m| / cos theta_i (line 223) integrates to "
+            "G1_approx / G1_exact instead of 1",
+            "int pdf dm = 0.99724 at cos theta_i = 1e-4, 1.00283 at 0.05, 1.00036 at 0.5 "
+            "(alpha 0.3; GGX 1.00000 at each)",
+            "int pdf = 1 with every sample valid (the exact G1, as for GGX at line 354)",
+            "tests/repro/beckmann_pdf_normalization.py", rows=(NORM_ROW,)),
+    Finding("mask-diffuse-reflectance-opacity", "eval_diffuse_reflectance",
+            ("mask/diffuse-0.5",),
+            "src/bsdfs/mask.cpp:229",
+            "eval_diffuse_reflectance() returns the nested BSDF's value (lines 229-231) without "
+            "the opacity that eval() applies, so it reports the nested albedo, not the masked "
+            "one",
+            "eval_diffuse_reflectance = 0.5000; pi * eval(wi, n) = 0.2500 (opacity 0.5)",
+            "the masked albedo 0.25 (opacity x the nested diffuse albedo)",
+            "tests/repro/mask_diffuse_reflectance_opacity.py",
+            rows=("eval_diffuse_reflectance = diffuse albedo",)),
     Finding("principled-component-ids", "component",
             ("principled/default", "principled/metal"),
             "src/bsdfs/principled.cpp:423",
@@ -183,6 +227,15 @@ FINDINGS: tuple[Finding, ...] = (
             "component 1",
             "tests/repro/blendbsdf_component_ids.py",
             rows=(AGREE_ROW, RESTRICTED_ROW), region=ComponentOfAnotherLobe()),
+    Finding("blendbsdf-component-ids-mixed", "component",
+            ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
+            "src/bsdfs/blendbsdf.cpp:154",
+            "the same numbering: bsdf_1's samples report component 0, so component 0 shows both "
+            "nested BSDFs' sampled types (a component is one lobe)",
+            "GlossyReflection samples of bsdf_1 report component 0 (flags(0) = "
+            "DiffuseReflection)",
+            "component 1",
+            "tests/repro/blendbsdf_component_ids.py", rows=(ONE_TYPE_ROW,)),
     Finding("pplastic-component-ids", "component", ("pplastic/default", "pplastic/rough-ggx"),
             "src/bsdfs/pplastic.cpp:210",
             "one component (Glossy|Diffuse) is declared but sample() reports components 0 and 1 "
