@@ -82,7 +82,8 @@ def delta_mask(sampled_type: np.ndarray) -> np.ndarray:
 
 def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarray:
     """The samples that carry a density (χ²'s histogram, the normalization count): not a delta
-    lobe, and weight ≠ 0 in some channel (Mitsuba marks a rejected sample with weight 0).
+    lobe, finite (:func:`finite_sample`), and weight ≠ 0 in some channel (Mitsuba marks a
+    rejected sample with weight 0).
 
     ``black_at_wo``: per sample, whether ``sample`` drew its wo inside the support where the
     BSDF is black (bs.pdf > 0, pdf(wi, wo) > 0, eval(wi, wo) = 0 in every channel); those
@@ -93,7 +94,13 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarra
     drawn = np.any(s.weight != 0, axis=1)
     if black_at_wo is not None:
         drawn |= black_at_wo
-    return drawn & ~delta_mask(s.sampled_type)
+    return drawn & ~delta_mask(s.sampled_type) & finite_sample(s)
+
+
+def finite_sample(s: probe.Sample) -> np.ndarray:
+    """Samples whose weight and wo are finite: a non-finite one is the ``finite`` topic's
+    alone, and the other topics leave it out (of their counts and their totals)."""
+    return np.all(np.isfinite(s.weight), axis=1) & np.all(np.isfinite(s.wo), axis=1)
 
 
 def bsdf_has(bsdf, flags) -> bool:

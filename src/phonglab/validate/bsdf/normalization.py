@@ -61,10 +61,11 @@ from .topics import Row
 
 
 def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
-    """Per cell: (counted samples k, of which drawn where the BSDF is black); one cell per
-    call (n lanes each), the sample values from the topic's own stream (lanes.rng)."""
+    """Per cell: (counted samples k, finite samples n_f, of which drawn where the BSDF is
+    black); one cell per call (n lanes each), the sample values from the topic's own stream
+    (lanes.rng).  Non-finite samples are the finite topic's: left out of k and of n_f."""
     r = lanes.rng(opts.seed, "normalization")
-    ks, blacks = [], []
+    ks, totals, blacks = [], [], []
     for theta, phi in cells:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
@@ -76,8 +77,9 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
             black[zero] = (pd > 0) & np.all(ev == 0, axis=1)
         k = lanes.counted(s, black)
         ks.append(int(k.sum()))
+        totals.append(int(lanes.finite_sample(s).sum()))
         blacks.append(int((k & black).sum()))
-    return np.array(ks), blacks
+    return np.array(ks), np.array(totals), blacks
 
 
 def _conditioning(density, cells, layout, nodes) -> np.ndarray:
@@ -116,10 +118,11 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
     qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2)))
     n = opts.normalization_samples
-    k, blacks = _counts(bsdf, cells, n, opts)
+    k, n_f, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
-    p_hat = k / n
-    sigma = counting_error(k, n, z)
+    n_f = np.maximum(n_f, 1)
+    p_hat = k / n_f
+    sigma = counting_error(k, n_f, z)
     band = z * sigma + qerr + lobes.FLOOR * np.maximum(1.0, integral)
     dev = np.abs(integral - p_hat)
     bad = dev > band
@@ -136,9 +139,14 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
               + (f"; NOT NORMALIZED at {where}" if bad.any() else ""))
     details = {"theta_deg": theta_deg.tolist(), "phi": cells[:, 1].tolist(),
                "integral": integral.tolist(), "counted": p_hat.tolist(),
-               "samples": n, "sigma": sigma.tolist(), "quadrature_error": qerr.tolist(),
+               "samples": n, "finite_samples": n_f.tolist(), "sigma": sigma.tolist(),
+               "quadrature_error": qerr.tolist(),
                "band": band.tolist(), "black_samples": blacks,
                "nonfinite_nodes": nonfinite}
-    return [Row("normalization", name, float(integral[j]), float(p_hat[j]), float(sigma[j]),
-                float(band[j]), "fail" if bad.any() else "pass", reason, details)]
+    row = Row("normalization", name, float(integral[j]), float(p_hat[j]), float(sigma[j]),
+              float(band[j]), "fail" if bad.any() else "pass", reason, details)
+    if bad.any():      # the failing cells' incidence, for a finding's signature
+        row.failing_lanes = {"wi": np.array([lanes.exact(probe.direction(t, p))
+                                             for t, p in cells[bad]])}
+    return [row]
 

@@ -154,6 +154,16 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = 0 for an inactive lane",
             "tests/repro/principledthin_pdf_nan_grazing.py",
             rows=NAN_ROWS, region=GrazingIncidence()),
+    Finding("principledthin-pdf-grazing-normalization", "normalization",
+            ("principledthin/default", "principledthin/all-lobes"),
+            "src/bsdfs/principledthin.cpp:704",
+            "the same unmasked `pdf`: at exactly grazing incidence (cos_theta_i = 0, a "
+            "measure-zero input) sample() returns no sample while pdf() still returns a "
+            "density, so pdf integrates to more than the (zero) share of counted samples",
+            "pdf = NaN for wi = (1, 0, 0) next to a valid lane",
+            "pdf = 0 for an inactive lane",
+            "tests/repro/principledthin_pdf_nan_grazing.py", rows=(NORM_ROW,),
+            region=GrazingIncidence()),
     Finding("hair-residual-lobe-sampling", "chi2", ("hair/default", "hair/blond-rough"),
             "src/bsdfs/hair.cpp:267",
             "the loop `for (j = 0; j < P_MAX; j++)` never sets the incident angle of the "
