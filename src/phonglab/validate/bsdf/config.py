@@ -68,13 +68,16 @@ class Options:
     phi_grid: tuple = (0.0, 2.1)
     n_identity: int = 4096            #: sample() lanes per cell for weight/pdf/component
     n_finite: int = 2048              #: random wo per cell for finite/eval_pdf/reciprocity
-    #: χ² incidences avoid the pole: mi.chi2's SphericalDomain bins (φ, cos θ), so a narrow lobe
-    #: at θ ≈ 0 (or 180°) falls within one row of bins and its pdf integral per bin is poor.
+    #: χ² incidences avoid the pole: the (φ, cos θ) bins of sphere_bins, so a narrow lobe
+    #: at θ ≈ 0 (or 180°) falls within one row of bins, all meeting at the pole.
     chi2_cos: tuple = (0.95, 0.8, 0.7071, 0.5, 0.2)
     chi2_phi: tuple = (0.0, 1.0)
     chi2_samples: int = 1_000_000
-    chi2_res: int = 101
-    chi2_ires: int = 24               #: pdf integration points per bin and axis (narrow lobes)
+    chi2_res: int = 101               #: rows of cos θ bins (odd); ⌊res/2⌋ columns of φ
+    #: Gauss-Legendre nodes per panel and axis of a bin's pdf integral: the first level, and the
+    #: cap of the per-bin refinement k, 2k, 4k, ... (sphere_bins.expected_counts; 2 × 2 panels).
+    chi2_ires: int = 2
+    chi2_ires_max: int = 64
     energy_cos: tuple = (1.0, 0.95, 0.85, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 1e-4, 0.0)
     energy_nodes: int = 16            #: Gauss-Legendre nodes per panel (error from n vs n/2)
     energy_samples: int = 100_000     #: samples per cell for the delta lobes' albedo
@@ -108,7 +111,7 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
                    cos_grid=(1.0, 0.6, 0.2, 1e-4, 0.0), phi_grid=(0.0, 2.1),
                    n_identity=1024, n_finite=512,
                    chi2_cos=(0.8, 0.5, 0.2), chi2_phi=(0.0,), chi2_samples=200_000,
-                   chi2_res=61, chi2_ires=24,
+                   chi2_res=61,
                    energy_cos=(1.0, 0.7, 0.3, 0.05, 1e-4), energy_nodes=10,
                    energy_samples=20_000, normalization_samples=1 << 17,
                    null_samples=1 << 14, gradient_lanes=1024, cost_lanes=1 << 16,
