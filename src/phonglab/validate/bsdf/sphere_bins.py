@@ -13,7 +13,8 @@ each axis, so the horizon -- where every BSDF's pdf may have a kink or a jump --
 edge, never inside a panel) with k nodes per panel and axis, k = k₀, 2k₀, 4k₀, ... up to
 ``k_max``.  A bin is done at the first k where its integrals I_k and I_{k/2} differ by at most
 
-    τ(E) = ε · max(E / √max(E, 5), √5 / B),        ε = :data:`EPS` = 0.02,
+    τ(E) = max(ε E / √max(E, 5),  ε √5 / B,  ρ E),        ε = :data:`EPS` = 0.02,
+                                                          ρ = :data:`FLOAT32_REL` = 10⁻⁴,
 
 with E = N·I_k its expected count and B the number of bins, and I_k is its value; a bin not
 done at ``k_max`` keeps I_{k_max} and is counted (``integration.unconverged`` in the cell's
@@ -28,7 +29,11 @@ standard deviation ≤ 2ε√K (K bins), against its own standard deviation √(
 With ε = 0.02 that is ≤ 4·10⁻⁴ K and ≤ 0.04√K: at K = 5050 (the default 101-row grid),
 2.0 and 2.8 against 100, i.e. a change of the p-value in its third digit -- not enough to pass
 a wrong sampler or fail a right one.  A pooled group of expected count E_g ∈ (5, 10] is off by
-≤ ε E_g/√5 + ε√5 (the floor summed over all bins) ≲ 2ε√E_g, the same order.
+≤ ε E_g/√5 + ε√5 (the floor summed over all bins) ≲ 2ε√E_g, the same order.  The ρE term
+is the float32 floor of the pdf itself: a lobe cos^p α of a float32 cos α moves by p·2⁻²⁴ per
+ulp (6·10⁻⁴ at p = 10⁴), so its integral is a staircase's, not defined much better than 10⁻⁴
+relative; it binds only where E > (ε/ρ)² = 40 000, and moves the statistic by at most
+Σρ²E = ρ²N = 0.01 at N = 10⁶.
 """
 
 from __future__ import annotations
@@ -39,6 +44,8 @@ import numpy as np
 
 #: Fraction of a bin's Poisson standard deviation its pdf integral may be off by (see above).
 EPS = 0.02
+#: Relative accuracy of a bin's integral beyond which a float32 pdf has no more to give.
+FLOAT32_REL = 1e-4
 #: Pooling threshold of the χ² test (stats.POOL_BELOW), in the floor of the tolerance.
 POOL = 5.0
 #: Pdf evaluations per probe call (memory bound of one kernel launch).
@@ -111,7 +118,8 @@ def _integrals(grid: Grid, pdf_fn, bins: np.ndarray, k: int) -> tuple[np.ndarray
 def tolerance(expected: np.ndarray, bins: int) -> np.ndarray:
     """τ(E) of the module docstring: the integration error a bin of expected count E may have."""
     e = np.abs(expected)
-    return EPS * np.maximum(e / np.sqrt(np.maximum(e, POOL)), math.sqrt(POOL) / bins)
+    return np.maximum(EPS * np.maximum(e / np.sqrt(np.maximum(e, POOL)), math.sqrt(POOL) / bins),
+                      FLOAT32_REL * e)
 
 
 def expected_counts(grid: Grid, pdf_fn, n: int, k0: int, k_max: int) -> tuple[np.ndarray, dict]:
@@ -137,5 +145,5 @@ def expected_counts(grid: Grid, pdf_fn, n: int, k0: int, k_max: int) -> tuple[np
     info = {"nodes_per_axis_max": 2 * k, "pdf_evaluations": int(evals),
             "unconverged": int(len(active)),
             "max_error_unconverged": float(error[active].max()) if len(active) else 0.0,
-            "nonfinite_pdf_dropped": bad, "eps": EPS}
+            "nonfinite_pdf_dropped": bad, "eps": EPS, "float32_rel": FLOAT32_REL}
     return value.reshape(grid.shape), info
