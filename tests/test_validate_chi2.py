@@ -102,6 +102,28 @@ def test_narrow_lobe_refines_only_its_bins():
     assert info["pdf_evaluations"] < 3 * expected.size * 8 ** 2
 
 
+def test_recheck_integrates_a_lobe_both_coarse_levels_missed():
+    # a cos^(10^5) lobe (0.003 rad) in 11 x 5 bins: the nodes of k = 2 and 4 both miss it and
+    # agree on ~0; its samples then contradict the integral and the bin is integrated again
+    axis = np.array([math.sin(1.0), 0.0, math.cos(1.0)])
+    q, n = 1e5, 100_000
+
+    def lobe(wo):
+        c = np.clip(wo @ axis, 0.0, 1.0)
+        return (q + 1.0) / (2 * math.pi) * np.exp(q * np.log(np.maximum(c, 1e-300)))
+
+    rng = np.random.default_rng(1)
+    local = _cos_power(rng, n, q)
+    t = np.cross(axis, [0.0, 1.0, 0.0])
+    t /= np.linalg.norm(t)
+    wo = local[:, :1] * t + local[:, 1:2] * np.cross(axis, t) + local[:, 2:] * axis
+    grid = sphere_bins.Grid(11)
+    expected, info = sphere_bins.expected_counts(grid, lobe, n, 2, 64)
+    assert expected.sum() < 1e-6 * n
+    again = sphere_bins.recheck(grid, lobe, n, expected, grid.histogram(wo), 64, info)
+    assert info["rechecked"] >= 1 and abs(again.sum() - n) < 0.01 * n
+
+
 @pytest.mark.parametrize("spec, params", [
     ("roughconductor", {"alpha": 0.01}),
     ("phong", {"exponent": 10000.0, "diffuse_reflectance": 0.0, "specular_reflectance": 0.9}),

@@ -88,6 +88,7 @@ class Options:
     normalization_samples: int = 1 << 19
     normalization_nodes: int = 16     #: its Gauss-Legendre nodes per panel, at both sizes
     null_samples: int = 1 << 16       #: samples per cell of the Null lobe (eval_null_transmission)
+    energy_layout_samples: int = 2048  #: samples per cell that place energy's panels (lobes.layout)
     gradient_lanes: int = 4096
     cost_lanes: int = 1 << 18
     cost_repeats: int = 5
@@ -111,12 +112,16 @@ def options(quick: bool = False, seed: int = 0, topics=(), scalar: bool | None =
     ``scalar``: the sizes of a scalar variant (default: whether the active variant is one).
     There a Dr.Jit value holds one lane and the probe calls the BSDF once per lane from Python
     (~40 µs a call, about 150× a JIT lane), so the same grids of incidence cells get fewer
-    lanes per cell (:data:`SCALAR`), i.e. less power per cell: the identities see ~8× fewer
-    random lanes per cell (still every grid cell, every edge sample value and special
-    direction), χ² tests N = 20 000 (quick 5 000) samples in 21 × 10 (15 × 7) bins, which
-    still rejects a uniform-for-cosine sampler (tests/defects/pdf_mismatch.py) at p ≈ 0 but
-    only sees a density error of ≳ 10 % over a ≳ 0.1 sr region, and the energy quadrature
-    uses fewer nodes, so its band (from |Q(n) − Q(n/2)|) is wider.
+    lanes per cell (:data:`SCALAR`).  What that costs: the identities see 8× fewer random lanes
+    per cell (still every cell, every edge sample value and special direction); χ² tests
+    N = 4 000 samples in 13 × 6 bins at --quick (20 000 in 21 × 10 at default) instead of
+    200 000 in 61 × 30 (10⁶ in 101 × 50).  Its power: a sampled density off by a factor 1 + r
+    over a region holding a fraction P of the samples is rejected half the time when the
+    noncentrality N·r²·P reaches ≈ χ²-critical − dof, i.e. r²P ≳ 0.007 at --quick (r = 30 %
+    over 8 % of the samples) and 0.0026 at default, against 0.0006 and 0.0002 in JIT
+    variants; a uniform-for-cosine sampler (tests/defects/pdf_mismatch.py) is still rejected
+    at p ≈ 0.  The energy quadrature uses fewer nodes (and --quick 3 cells), so its band,
+    from |Q(n) − Q(n/2)|, is wider.
     """
     if scalar is None:
         scalar = mi.variant() is not None and not dr.is_jit_v(mi.Float)
@@ -138,9 +143,11 @@ def options(quick: bool = False, seed: int = 0, topics=(), scalar: bool | None =
 #: Sizes that replace the JIT ones in scalar variants (see :func:`options`).
 SCALAR = {
     "default": dict(n_identity=512, n_finite=256, chi2_samples=20_000, chi2_res=21,
+                    chi2_ires_max=32,
                     energy_nodes=10, energy_samples=5_000, cost_lanes=2048, cost_repeats=3),
-    "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13,
+    "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13, chi2_ires_max=16,
                   energy_cos=(1.0, 0.3, 1e-4), energy_nodes=6, energy_samples=2_000,
+                  energy_layout_samples=512,
                   cost_lanes=512, cost_repeats=1),
 }
 

@@ -4,7 +4,9 @@ Pearson's χ² test, phonglab's own (numpy/scipy, so it runs in every variant, s
 included, where ``mi.chi2`` cannot: it names ``mi.ScalarBoundingBox2f`` and tabulates with
 JIT arrays): N directions from ``probe.sample`` with seeded uniforms, histogrammed in the
 (φ, cos θ) bins of ``mi.chi2.SphericalDomain``, against N·∫pdf per bin from a lobe-adaptive
-quadrature (:mod:`.sphere_bins`, which states the integration error bound), cells of expected
+quadrature (:mod:`.sphere_bins`, which states the integration error bound; bins whose count
+contradicts their integral by > 4σ are integrated again at the finest level,
+:func:`.sphere_bins.recheck`, which only makes them more accurate), cells of expected
 count < 5 pooled as ``mitsuba::math::chi2`` pools them, p-value from the χ² distribution
 (:func:`phonglab.stats.pearson_chi2`).  One test per incidence cell; each at the Šidák level
 ``stats.sidak(ALPHA, m)`` where m counts every statistical test of the BSDF (χ² cells and the
@@ -93,8 +95,12 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     grid, n = sphere_bins.Grid(opts.chi2_res), opts.chi2_samples
     s = probe.sample(bsdf, wi, *_draws(r, n))
     kept = _kept(bsdf, wi, s, black=False)
-    expected, integration = sphere_bins.expected_counts(
-        grid, lambda wo: probe.pdf(bsdf, wi, wo), n, opts.chi2_ires, opts.chi2_ires_max)
+
+    def pdf_fn(wo):
+        return probe.pdf(bsdf, wi, wo)
+
+    expected, integration = sphere_bins.expected_counts(grid, pdf_fn, n, opts.chi2_ires,
+                                                        opts.chi2_ires_max)
     pdf_sum = float(expected.sum()) / n
     black = not kept.any() and pdf_sum >= 1e-6 and black_at(bsdf, wi, opts)
     if black:
@@ -102,6 +108,9 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     if not kept.any() and pdf_sum < 1e-6:
         return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
     hist = grid.histogram(s.wo[kept])
+    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, hist, opts.chi2_ires_max,
+                                   integration)
+    pdf_sum = float(expected.sum()) / n
     test = stats.pearson_chi2(hist, expected)
     hist_sum = float(kept.sum()) / n
     problems = [m for m, bad in (
