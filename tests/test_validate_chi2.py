@@ -120,8 +120,28 @@ def test_recheck_integrates_a_lobe_both_coarse_levels_missed():
     grid = sphere_bins.Grid(11)
     expected, info = sphere_bins.expected_counts(grid, lobe, n, 2, 64)
     assert expected.sum() < 1e-6 * n
-    again = sphere_bins.recheck(grid, lobe, n, expected, grid.histogram(wo), 64, info)
+    again = sphere_bins.recheck(grid, lobe, n, expected, wo, 64, info)
     assert info["rechecked"] >= 1 and abs(again.sum() - n) < 0.01 * n
+
+
+def test_a_support_sliver_the_nodes_miss_is_pooled_not_impossible():
+    # the pdf is > 0 only within 1e-7 of a row edge (a shadowed region's rim): no node sees it
+    grid = sphere_bins.Grid(11)
+    edge = 1.0 - 6.0 / 11.0                     # between rows 2 and 3
+
+    def rim(wo):
+        return np.where(wo[:, 2] > edge - 1e-7, 1.0, 0.0) * (wo[:, 2] < edge)
+
+    def at(cos):
+        return np.array([[math.sqrt(1.0 - cos * cos), 0.0, cos]])
+
+    wo = np.concatenate([at(edge - 5e-8), at(-0.5)])     # on the rim; where the pdf is 0
+    expected, info = sphere_bins.expected_counts(grid, rim, 2, 2, 4)
+    assert expected.sum() == 0.0
+    again = sphere_bins.recheck(grid, rim, 2, expected, wo, 4, info)
+    assert info["slivers"] == 1
+    t = stats.pearson_chi2(grid.histogram(wo), again)
+    assert t.impossible == 1                              # only the sample where pdf = 0
 
 
 @pytest.mark.parametrize("spec, params", [

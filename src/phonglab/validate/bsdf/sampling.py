@@ -108,7 +108,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     if not kept.any() and pdf_sum < 1e-6:
         return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
     hist = grid.histogram(s.wo[kept])
-    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, hist, opts.chi2_ires_max,
+    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
                                    integration)
     pdf_sum = float(expected.sum()) / n
     test = stats.pearson_chi2(hist, expected)

@@ -153,24 +153,34 @@ def expected_counts(grid: Grid, pdf_fn, n: int, k0: int, k_max: int) -> tuple[np
 RECHECK_Z = 4.0
 #: Bins per cell that :func:`recheck` integrates again, the most discrepant first.
 RECHECK_BINS = 16
+#: Expected count of a bin that meets the pdf's support in a sliver the nodes miss.
+SLIVER = 1e-9
 
 
-def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, observed: np.ndarray,
-            k_max: int, info: dict) -> np.ndarray:
-    """``expected`` with the bins whose count contradicts it integrated again at k_max/2 and
-    k_max nodes per panel (the :data:`RECHECK_BINS` worst with |O − E| > RECHECK_Z·√max(E, 1)).
+def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_max: int,
+            info: dict) -> np.ndarray:
+    """``expected`` with the bins whose count of the directions ``wo`` contradicts it
+    integrated again at k_max/2 and k_max nodes per panel: the :data:`RECHECK_BINS` worst with
+    |O − E| > RECHECK_Z·√max(E, 1), and every bin holding samples where E = 0.
 
     The two-level test of :func:`expected_counts` is blind to a lobe narrower than the node
     spacing of both levels (both miss it and agree); the samples then land where E ≈ 0.  A
     bin integrated again is only made more accurate, so this cannot hide a sampling defect,
-    and for a correct BSDF under H0 a bin exceeds 4σ with probability 6·10⁻⁵.
-    ``info`` (the cell's ``integration`` record) gains ``rechecked`` and their error estimate.
+    and for a correct BSDF under H0 a bin exceeds 4σ with probability 6·10⁻⁵.  A bin still at
+    E = 0 whose samples have pdf > 0 at their own directions meets the support in a sliver
+    thinner than the nodes (a shadowed region's edge): it gets E = :data:`SLIVER`, so the test
+    pools it instead of calling its samples impossible; samples where pdf = 0 stay impossible.
+    ``info`` (the cell's ``integration`` record) gains ``rechecked``, their error estimate
+    and ``slivers``.
     """
-    e, o = expected.ravel().copy(), observed.ravel()
+    e = expected.ravel().copy()
+    index = grid.index(wo)
+    o = np.bincount(index, minlength=e.size).astype(np.float64)
     z = np.abs(o - e) / np.sqrt(np.maximum(e, 1.0))
-    bins = np.flatnonzero(z > RECHECK_Z)
-    bins = bins[np.argsort(-z[bins], kind="stable")][:RECHECK_BINS]
-    info["rechecked"], info["recheck_error_max"] = int(len(bins)), 0.0
+    worst = np.flatnonzero(z > RECHECK_Z)
+    worst = worst[np.argsort(-z[worst], kind="stable")][:RECHECK_BINS]
+    bins = np.union1d(worst, np.flatnonzero((e == 0) & (o > 0)))
+    info.update(rechecked=int(len(bins)), recheck_error_max=0.0, slivers=0)
     if len(bins) and k_max >= 2:
         coarse, bad1 = _integrals(grid, pdf_fn, bins, k_max // 2)
         fine, bad2 = _integrals(grid, pdf_fn, bins, k_max)
@@ -178,4 +188,11 @@ def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, observed: np.ndarr
         info["recheck_error_max"] = float(np.max(np.abs(fine - coarse)) * n)
         info["pdf_evaluations"] += len(bins) * ((k_max) ** 2 + (2 * k_max) ** 2)
         info["nonfinite_pdf_dropped"] += bad1 + bad2
+    empty = (e == 0) & (o > 0)
+    if empty.any():
+        inside = empty[index]
+        p = np.asarray(pdf_fn(wo[inside]), np.float64)
+        slivers = np.unique(index[inside][np.isfinite(p) & (p > 0)])
+        e[slivers] = SLIVER
+        info["slivers"] = int(len(slivers))
     return e.reshape(expected.shape)
