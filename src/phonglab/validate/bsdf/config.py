@@ -143,9 +143,10 @@ def options(quick: bool = False, seed: int = 0, topics=(), scalar: bool | None =
 #: Sizes that replace the JIT ones in scalar variants (see :func:`options`).
 SCALAR = {
     "default": dict(n_identity=512, n_finite=256, chi2_samples=20_000, chi2_res=21,
-                    chi2_ires_max=32,
+                    chi2_ires=1, chi2_ires_max=32,
                     energy_nodes=10, energy_samples=5_000, cost_lanes=2048, cost_repeats=3),
-    "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13, chi2_ires_max=16,
+    "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13, chi2_ires=1,
+                  chi2_ires_max=16,
                   energy_cos=(1.0, 0.3, 1e-4), energy_nodes=6, energy_samples=2_000,
                   energy_layout_samples=512,
                   cost_lanes=512, cost_repeats=1),
