@@ -144,11 +144,14 @@ def options(quick: bool = False, seed: int = 0, topics=(), scalar: bool | None =
 SCALAR = {
     "default": dict(n_identity=512, n_finite=256, chi2_samples=20_000, chi2_res=21,
                     chi2_ires=1, chi2_ires_max=32,
-                    energy_nodes=10, energy_samples=5_000, cost_lanes=2048, cost_repeats=3),
+                    energy_nodes=10, energy_samples=5_000, normalization_samples=1 << 15,
+                    normalization_nodes=8, null_samples=1 << 13, cost_lanes=2048,
+                    cost_repeats=3),
     "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13, chi2_ires=1,
                   chi2_ires_max=16,
                   energy_cos=(1.0, 0.3, 1e-4), energy_nodes=6, energy_samples=2_000,
-                  energy_layout_samples=512,
+                  energy_layout_samples=512, normalization_samples=1 << 12,
+                  normalization_nodes=4, null_samples=1 << 11,
                   cost_lanes=512, cost_repeats=1),
 }
 
