@@ -8,7 +8,11 @@ quadrature (:mod:`.sphere_bins`, which states the integration error bound; bins 
 contradicts their integral by > 4σ are integrated again at the finest level,
 :func:`.sphere_bins.recheck`, which only makes them more accurate), cells of expected
 count < 5 pooled as ``mitsuba::math::chi2`` pools them, p-value from the χ² distribution
-(:func:`phonglab.stats.pearson_chi2`).  One test per incidence cell; each at the Šidák level
+(:func:`phonglab.stats.pearson_chi2`).  It tests the density's shape: the expected counts are
+N·∫pdf scaled to the number of samples counted (a multinomial given that total, dof = bins
+− 1); the scale, ∫pdf against the fraction counted, is the ``normalization`` topic's, which
+sees a pdf × 1.01 at once, where a histogram of 10⁶ samples sees it only sometimes (so a
+planted scale defect failed χ² or not by the luck of the seed).  One test per incidence cell; each at the Šidák level
 ``stats.sidak(ALPHA, m)`` where m counts every statistical test of the BSDF (χ² cells and the
 energy cells that use sample weights), so the BSDF as a whole fails by chance with probability
 ALPHA = 0.01.
@@ -111,6 +115,8 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
                                    integration)
     pdf_sum = float(expected.sum()) / n
+    if pdf_sum > 0:     # the shape: scaled to the counted samples (the scale is normalization's)
+        expected = expected * (float(kept.sum()) / (pdf_sum * n))
     test = stats.pearson_chi2(hist, expected)
     hist_sum = float(kept.sum()) / n
     problems = [m for m, bad in (
