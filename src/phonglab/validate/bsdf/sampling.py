@@ -8,9 +8,10 @@ quadrature (:mod:`.sphere_bins`, which states the integration error bound; bins 
 contradicts their integral by > 4σ are integrated again at the finest level,
 :func:`.sphere_bins.recheck`, which only makes them more accurate), cells of expected
 count < 5 pooled as ``mitsuba::math::chi2`` pools them, p-value from the χ² distribution
-(:func:`phonglab.stats.pearson_chi2`).  It tests the density's shape: the expected counts are
-N·∫pdf scaled to the number of samples counted (a multinomial given that total, dof = bins
-− 1); the scale, ∫pdf against the fraction counted, is the ``normalization`` topic's, which
+(:func:`phonglab.stats.pearson_chi2`).  It tests the density's shape: the histogram against
+N·∫pdf per bin times ``scale`` = (samples counted)/(N·∫pdf) (a multinomial given that total,
+dof = bins − 1; the cell keeps N·∫pdf as ``expected``, the residual map and the worst bin are
+against the scaled counts); the scale, ∫pdf against the fraction counted, is the ``normalization`` topic's, which
 sees a pdf × 1.01 at once, where a histogram of 10⁶ samples sees it only sometimes (so a
 planted scale defect failed χ² or not by the luck of the seed).  One test per incidence cell; each at the Šidák level
 ``stats.sidak(ALPHA, m)`` where m counts every statistical test of the BSDF (χ² cells and the
@@ -22,7 +23,7 @@ delta lobe's (``pdf`` has no density for it: a mixture such as ``plastic`` is hi
 its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a finite
 direction.  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
 expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1.  A failing cell
-keeps its histogram, its expected counts and its residual map (obs − exp)/√exp (NaN where the
+keeps its histogram, its expected counts and its residual map (obs − scale·exp)/√(scale·exp) (NaN where the
 bin was pooled or empty), and names its worst bin (θ_o/φ_o range, observed, expected,
 residual), which the row's evidence line repeats for the cell of smallest p.
 
@@ -110,14 +111,15 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     if black:
         kept = _kept(bsdf, wi, s, black=True)
     if not kept.any() and pdf_sum < 1e-6:
-        return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
+        return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum,
+                "integration": integration}
     hist = grid.histogram(s.wo[kept])
     expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
                                    integration)
     pdf_sum = float(expected.sum()) / n
-    if pdf_sum > 0:     # the shape: scaled to the counted samples (the scale is normalization's)
-        expected = expected * (float(kept.sum()) / (pdf_sum * n))
-    test = stats.pearson_chi2(hist, expected)
+    # the shape: N·∫pdf scaled to the counted samples (the scale is normalization's)
+    scale = float(kept.sum()) / (pdf_sum * n) if pdf_sum > 0 else 1.0
+    test = stats.pearson_chi2(hist, expected * scale)
     hist_sum = float(kept.sum()) / n
     problems = [m for m, bad in (
         ("the histogram is empty while the pdf integrates to > 0", not kept.any()),
@@ -132,7 +134,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     messages.append(("Accepted" if ok else "Rejected") + f" the null hypothesis (p-value = "
                     f"{test.p_value:.6g}, significance level = {level:.6g})")
     cell = {"wi": wi.tolist(), "p_value": test.p_value, "statistic": test.statistic,
-            "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum,
+            "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum, "scale": scale,
             "status": "pass" if ok else "fail", "messages": "\n".join(messages),
             "nonfinite_wo_dropped": int((~np.all(np.isfinite(s.wo), axis=1)).sum()),
             "integration": integration}
@@ -141,7 +143,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     if not ok:
         cell.update(histogram=hist.tolist(), expected=expected.tolist(),
                     residual=test.residual.tolist(),
-                    worst_bin=_worst_bin(grid, hist, expected, test.residual))
+                    worst_bin=_worst_bin(grid, hist, expected * scale, test.residual))
     return cell
 
 
@@ -181,9 +183,12 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
               f"each at the Šidák level {level:.2e} of the BSDF's {m_tests} statistical tests; "
               f"delta samples excluded") + (f"; rejected at {where}" if failed else "")
     if not tested:
-        return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped",
-                    "the BSDF sampled nothing and has zero pdf at every tested incidence",
-                    {"cells": records})]
+        nonfinite = sum(r["integration"]["nonfinite_pdf_dropped"] for r in records)
+        why = ("the BSDF sampled nothing and has zero pdf at every tested incidence" +
+               (f" where its pdf is finite: it is not finite at {nonfinite} quadrature nodes "
+                f"(the finite topic's; dropped here)" if nonfinite else ""))
+        return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped", why,
+                    {"cells": records, "nonfinite_pdf_dropped": nonfinite})]
     details = {"cells": records, "level": level}
     if failed:
         worst = min(failed, key=lambda r: r["p_value"])
