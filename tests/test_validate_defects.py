@@ -64,7 +64,7 @@ def test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes(variant_llvm
 
 def test_failing_chi2_writes_nothing_into_the_working_directory(variant_llvm_rgb, tmp_path,
                                                                 monkeypatch):
-    # mi.chi2 dumps chi2_data.py on a failed test unless run quietly, as the topic runs it
+    # mi.chi2 dumps chi2_data.py on a failed test unless quiet; the own χ² test writes nothing
     monkeypatch.chdir(tmp_path)
     report = validate_bsdf("defect_pdf_mismatch", plugins=[DEFECTS / "pdf_mismatch.py"],
                            quick=True, seed=0, topics=["chi2"])

@@ -14,12 +14,19 @@ comparisons made together:
   (:func:`holm`), used for per-pixel tests whose pixels a reconstruction filter correlates.
 * **Welch** [B. L. Welch, Biometrika 34 (1947)]: the two-sample t-test with unequal
   variances and the Welch–Satterthwaite degrees of freedom (:func:`welch_pvalues`).
+* **Pearson's χ²** [K. Pearson, Phil. Mag. 50 (1900)] of a histogram against expected counts
+  (:func:`pearson_chi2`), with Mitsuba's pooling of sparse cells (``mitsuba::math::chi2``,
+  include/mitsuba/core/math.h): cells sorted by expected count, those below 5 summed in that
+  order into groups that each exceed 5 (a last group that does not is dropped), dof = cells
+  + groups − 1, p = P(χ²_dof ≥ statistic).
 
 :data:`ALPHA` = 0.01 is the project's family-wise level: a correct plugin fails a whole
 check run, or a test, at most 1 % of the time.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats as _scipy_stats
@@ -81,3 +88,54 @@ def welch_pvalues(m1, se1, m2, se2, passes1: int, passes2: int) -> tuple[np.ndar
     p = 2.0 * _scipy_stats.t.sf(np.abs(t), np.maximum(dof, 1.0))
     p = np.where(zero, np.where(diff == 0, 1.0, 0.0), p)
     return p, np.where(zero, 0.0, t)
+
+
+#: Expected count below which :func:`pearson_chi2` pools a cell with its neighbours in order.
+POOL_BELOW = 5.0
+
+
+@dataclass(frozen=True)
+class PearsonChi2:
+    """The result of :func:`pearson_chi2`."""
+
+    statistic: float
+    dof: int
+    p_value: float               #: 0 when a cell of expected count 0 holds observations
+    pooled_in: int               #: cells pooled (expected count < POOL_BELOW, not both 0)
+    pooled_out: int              #: groups they formed
+    impossible: int              #: observations in cells whose expected count is 0
+    residual: np.ndarray         #: (obs − exp)/√exp per cell, NaN where pooled or empty
+
+
+def pearson_chi2(observed, expected, pool_below: float = POOL_BELOW) -> PearsonChi2:
+    """Pearson's χ² of ``observed`` counts against ``expected`` ones (same shape).
+
+    Pooling as ``mitsuba::math::chi2``: cells sorted by expected count (stable), cells with
+    both counts 0 skipped, a cell of expected count < ``pool_below`` added to a running group
+    that counts as one cell once its expected count exceeds ``pool_below``.  The residual map
+    has the shape of the inputs: (obs − exp)/√exp for every cell tested on its own.
+    """
+    obs = np.asarray(observed, np.float64)
+    exp = np.asarray(expected, np.float64)
+    o, e = obs.ravel(), exp.ravel()
+    order = np.argsort(e, kind="stable")
+    o, e = o[order], e[order]
+    high = e >= pool_below
+    stat = float(np.sum((o[high] - e[high]) ** 2 / e[high]))
+    dof = int(np.count_nonzero(high))
+    low = ~high & ((o != 0) | (e != 0))
+    pooled_in, pooled_out = int(np.count_nonzero(low)), 0
+    po = pe = 0.0
+    for ok, ek in zip(o[low], e[low]):
+        po, pe = po + ok, pe + ek
+        if pe > pool_below:
+            stat += (po - pe) ** 2 / pe
+            po = pe = 0.0
+            pooled_out += 1
+            dof += 1
+    dof -= 1
+    impossible = float(np.sum(obs[exp == 0]))
+    p = float(_scipy_stats.chi2.sf(stat, dof)) if dof >= 1 and impossible == 0 else 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        residual = np.where(exp >= pool_below, (obs - exp) / np.sqrt(exp), np.nan)
+    return PearsonChi2(stat, dof, p, pooled_in, pooled_out, int(impossible), residual)

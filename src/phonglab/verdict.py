@@ -139,8 +139,11 @@ def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool 
 
 def evidence(row: Row) -> str:
     """The worst lane of a failing per-lane row in plain numbers (its directions and the
-    values the identity compares there, from ``details``), or "" for rows without one."""
+    values the identity compares there, from ``details``), a failing χ² row's worst bin, or ""
+    for rows without one."""
     d = row.details or {}
+    if "worst_bin" in d:
+        return _worst_bin(d["worst_bin"])
     if "worst_wi" not in d:
         return ""
 
@@ -156,6 +159,20 @@ def evidence(row: Row) -> str:
         # measured is rel_diff / the lane's tolerance (round-off + sensitivity)
         parts.append(f"held to a relative tolerance of {rel / row.measured:.3g} there")
     return "worst lane: " + ", ".join(parts)
+
+
+def _worst_bin(b: dict) -> str:
+    """A failing χ² row's worst bin (``details["worst_bin"]``) in plain numbers."""
+    def span(key) -> str:
+        lo, hi = b[key]
+        return f"{float(lo):.1f}° to {float(hi):.1f}°"
+
+    r = b.get("residual")
+    r = float(r) if isinstance(r, (int, float)) else float("nan")
+    return (f"worst bin: at θ_i = {float(b['theta_i_deg']):.1f}°, φ_i = {float(b['phi_i']):.2f} "
+            f"(p = {float(b['p_value']):.3g}), θ_o {span('theta_o_deg')}, φ_o {span('phi_o_deg')}:"
+            f" observed {float(b['observed']):.6g}, expected {float(b['expected']):.6g}, "
+            + (f"residual {r:+.3g}" if math.isfinite(r) else "pooled (no residual of its own)"))
 
 
 @dataclass

@@ -2,7 +2,8 @@
 
 Contents: the table of rows (status coloured), the directional albedo against θ_i with its
 band (from the ``energy`` row's details), lobe slices (eval and pdf in the plane of incidence),
-and for each failing χ² cell the histogram beside the integrated pdf.  Figures are matplotlib
+and for each failing χ² cell the histogram beside the integrated pdf and the residual map
+(obs − exp)/√exp on a diverging colour scale with symmetric limits.  Figures are matplotlib
 PNGs embedded as base64 ``data:`` URIs; the file references nothing outside itself.
 """
 
@@ -80,24 +81,32 @@ def _lobes(d: dict) -> str:
 
 def _chi2_cells(d: dict) -> str:
     out = []
+    extent = (-180, 180, -1, 1)   # the bins' second coordinate is −cos θ_o: row 0 is cos θ_o = 1
     for cell in d.get("cells", []):
         if cell.get("status") != "fail" or "histogram" not in cell:
             continue
         hist, exp = np.array(cell["histogram"]), np.array(cell["expected"])
-        fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), layout="constrained")
+        res = np.array(cell["residual"], dtype=float) if "residual" in cell else None
+        n = 2 if res is None else 3
+        fig, axes = plt.subplots(1, n, figsize=(4.5 * n, 3.4), layout="constrained")
         vmax = max(hist.max(), exp.max(), 1e-12)
         for ax, img, title in ((axes[0], hist, "histogram of samples"),
                                (axes[1], exp, "expected (integrated pdf)")):
-            # mi.chi2.SphericalDomain's second coordinate is −cos θ_o: row 0 is cos θ_o = 1.
-            im = ax.imshow(img, aspect="auto", origin="upper", vmin=0, vmax=vmax,
-                           extent=(-180, 180, -1, 1))
+            im = ax.imshow(img, aspect="auto", origin="upper", vmin=0, vmax=vmax, extent=extent)
             ax.set_title(title, fontsize=9)
+        fig.colorbar(im, ax=axes[:2].tolist())
+        if res is not None:
+            lim = float(np.nanmax(np.abs(res))) if np.isfinite(res).any() else 1.0
+            im = axes[2].imshow(res, aspect="auto", origin="upper", cmap="RdBu_r", vmin=-lim,
+                                vmax=lim, extent=extent)
+            axes[2].set_title("residual (obs − exp)/√exp (blank: pooled/empty)", fontsize=9)
+            fig.colorbar(im, ax=axes[2])
+        for ax in axes:
             ax.set_xlabel("φ_o (°)")
             ax.set_ylabel("cos θ_o")
-        fig.colorbar(im, ax=axes.ravel().tolist())
         fig.suptitle(f"χ² cell θ_i = {cell.get('theta_deg', 0):.1f}°, φ_i = "
                      f"{cell.get('phi', 0):.2f}: p = {cell.get('p_value', 0):.3g}", fontsize=10)
-        out.append(_img(_png(fig), "chi2 histogram and expected"))
+        out.append(_img(_png(fig), "chi2 histogram, expected and residual"))
     return "".join(out)
 
 

@@ -76,7 +76,8 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     qerr, se, nonfinite = np.zeros(len(thetas)), np.zeros(len(thetas)), 0
     if not only_delta:
         cells = np.column_stack([thetas, np.zeros_like(thetas)])
-        layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["energy"])
+        layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["energy"],
+                              samples=opts.energy_layout_samples)
 
         def albedo(wi, wo):
             return probe.eval(bsdf, wi, wo, ctx).mean(axis=1)

@@ -1,24 +1,37 @@
 r"""The ``chi2`` topic: does ``sample`` draw directions with the density ``pdf`` reports?
 
-Pearson's χ² test of Mitsuba (``mi.chi2.ChiSquareTest`` over ``mi.chi2.SphericalDomain``):
-the histogram of N sampled directions against N·∫pdf per cell, cells with expected count < 5
-pooled, p-value from the χ² distribution.  One test per incidence cell; each at the Šidák level
+Pearson's χ² test, phonglab's own (numpy/scipy, so it runs in every variant, scalar ones
+included, where ``mi.chi2`` cannot: it names ``mi.ScalarBoundingBox2f`` and tabulates with
+JIT arrays): N directions from ``probe.sample`` with seeded uniforms, histogrammed in the
+(φ, cos θ) bins of ``mi.chi2.SphericalDomain``, against N·∫pdf per bin from a lobe-adaptive
+quadrature (:mod:`.sphere_bins`, which states the integration error bound; bins whose count
+contradicts their integral by > 4σ are integrated again at the finest level,
+:func:`.sphere_bins.recheck`, which only makes them more accurate), cells of expected
+count < 5 pooled as ``mitsuba::math::chi2`` pools them, p-value from the χ² distribution
+(:func:`phonglab.stats.pearson_chi2`).  It tests the density's shape: the histogram against
+N·∫pdf per bin times ``scale`` = (samples counted)/(N·∫pdf) (a multinomial given that total,
+dof = bins − 1; the cell keeps N·∫pdf as ``expected``, the residual map and the worst bin are
+against the scaled counts); the scale, ∫pdf against the fraction counted, is the ``normalization`` topic's, which
+sees a pdf × 1.01 at once, where a histogram of 10⁶ samples sees it only sometimes (so a
+planted scale defect failed χ² or not by the luck of the seed).  One test per incidence cell; each at the Šidák level
 ``stats.sidak(ALPHA, m)`` where m counts every statistical test of the BSDF (χ² cells and the
 energy cells that use sample weights), so the BSDF as a whole fails by chance with probability
 ALPHA = 0.01.
 
-Differences from ``mi.chi2.BSDFAdapter``: the BSDF is the given object (not re-loaded from a
-type name), ``wi`` is a kernel input array (one compiled kernel for all cells), and samples
-of a delta lobe get weight 0 -- ``pdf`` has no density for them; a mixture such as ``plastic``
-is histogrammed on its non-delta part only, whose ∫pdf is then < 1 in step with the histogram.
+What counts as a sample (:func:`_kept`): weight ≠ 0 (a rejected sample has weight 0), not a
+delta lobe's (``pdf`` has no density for it: a mixture such as ``plastic`` is histogrammed on
+its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a finite
+direction.  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
+expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1.  A failing cell
+keeps its histogram, its expected counts and its residual map (obs − scale·exp)/√(scale·exp) (NaN where the
+bin was pooled or empty), and names its worst bin (θ_o/φ_o range, observed, expected,
+residual), which the row's evidence line repeats for the cell of smallest p.
 
 Guards: a cell whose histogram is empty while ∫pdf > 0 fails (``mi.chi2`` would accept an
 empty histogram vacuously) -- unless the BSDF is black there (``eval`` 0 at every direction
 ``sample`` draws and at random ones: :func:`black_at`), where every weight is 0 and the
 histogram is of the directions ``sample`` drew (``bs.pdf > 0``) instead; a cell where both
-are empty (nothing sampled, zero pdf) is not tested.  ``mi.chi2`` writes ``chi2_data.py`` into the working directory on failure
-only when not ``quiet`` (mitsuba/python/chi2.py, ``run``: ``if not quiet: ... _dump_tables()``);
-the test runs quietly, so it writes nothing and the process's directory is left alone.
+are empty (nothing sampled, zero pdf) is not tested.
 
 Delta lobes cannot be histogrammed: for a BSDF whose every component is a delta lobe the
 topic instead checks each sampled direction against the law of reflection (reflect(wi)) or
@@ -30,44 +43,33 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 from ... import probe, stats
-from . import lanes
+from . import lanes, sphere_bins
 from .topics import Row
 
 #: Tolerance of a delta sample's direction, per vector component (see the module docstring).
 DIRECTION_TOL = 1e-4
 
 
-def _adapters(bsdf, wi: np.ndarray, black: bool = False):
-    """sample_func, pdf_func for ``mi.chi2.ChiSquareTest`` at incidence wi (3,).
+def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
+    """Which samples the histogram counts (N,) bool.
 
-    wi reaches the kernel as an array (probe.interaction), not a literal: one kernel for all
-    cells.  A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so), or,
-    with ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
+    A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so), or, with
+    ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
     (``pdf(wo) > 0``; a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet
-    it draws its directions from its density.
+    it draws its directions from its density.  Delta samples never count (``pdf`` has no
+    density for them), nor do non-finite directions (the ``finite`` topic's).
     """
-    delta = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
-
-    def sample_func(sample):
-        si = probe.interaction(wi[None], n=dr.width(sample))
-        bs, weight = bsdf.sample(probe.context(), si, sample[0], mi.Point2f(sample[1], sample[2]))
-        value = mi.unpolarized_spectrum(weight) if mi.is_polarized else weight
-        if black:      # drawn, and inside the support (a rejected wo below the horizon is not)
-            drawn = (bs.pdf > 0) & (bsdf.pdf(probe.context(), si, bs.wo) > 0)
-        else:
-            drawn = dr.any(value != 0)
-        keep = drawn & ((mi.UInt32(bs.sampled_type) & delta) == 0)
-        return bs.wo, dr.select(keep, mi.Float(1.0), mi.Float(0.0))
-
-    def pdf_func(wo):
-        return bsdf.pdf(probe.context(), probe.interaction(wi[None], n=dr.width(wo)), wo)
-
-    return sample_func, pdf_func
+    finite = np.all(np.isfinite(s.wo), axis=1)
+    if black:
+        drawn = (s.pdf > 0) & finite
+        if drawn.any():
+            drawn[drawn] = probe.pdf(bsdf, wi, s.wo[drawn]) > 0
+    else:
+        drawn = np.any(s.weight != 0, axis=1)
+    return drawn & finite & ~lanes.delta_mask(s.sampled_type)
 
 
 def black_at(bsdf, wi: np.ndarray, opts) -> bool:
@@ -82,43 +84,82 @@ def black_at(bsdf, wi: np.ndarray, opts) -> bool:
     return not (np.any(probe.eval(bsdf, wis[ok], s.wo[ok])) or np.any(probe.eval(bsdf, wis, d)))
 
 
-def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, seed: int) -> dict:
-    """One χ² test at incidence wi; returns the cell's record (p-value, sums, verdict).
+def _draws(r: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(u1 (n,), u2 (n, 2)): uniform in [0, 1), also after rounding to float32."""
+    u1, u2 = r.random(n), r.random((n, 2))
+    return np.minimum(u1, lanes.ONE_MINUS), np.minimum(u2, lanes.ONE_MINUS)
+
+
+def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) -> dict:
+    """One χ² test at incidence wi, its N samples drawn from ``r``; returns the cell's record.
 
     A histogram of non-zero weights that is empty while ∫pdf > 0 is tested again on the
     drawn directions when the BSDF is black there (:func:`black_at`); else the cell fails.
     """
     wi = np.asarray(wi, dtype=np.float64)
-    test, hist_sum, pdf_sum = _tabulate(bsdf, wi, opts, seed, black=False)
-    black = hist_sum == 0 and pdf_sum >= 1e-6 and black_at(bsdf, wi, opts)
+    grid, n = sphere_bins.Grid(opts.chi2_res), opts.chi2_samples
+    s = probe.sample(bsdf, wi, *_draws(r, n))
+    kept = _kept(bsdf, wi, s, black=False)
+
+    def pdf_fn(wo):
+        return probe.pdf(bsdf, wi, wo)
+
+    expected, integration = sphere_bins.expected_counts(grid, pdf_fn, n, opts.chi2_ires,
+                                                        opts.chi2_ires_max)
+    pdf_sum = float(expected.sum()) / n
+    black = not kept.any() and pdf_sum >= 1e-6 and black_at(bsdf, wi, opts)
     if black:
-        test, hist_sum, pdf_sum = _tabulate(bsdf, wi, opts, seed, black=True)
-    if hist_sum == 0 and pdf_sum < 1e-6:
-        return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum}
-    ok = hist_sum > 0 and test.run(significance_level=level, test_count=1, quiet=True)
-    p = float(test.p_value) if test.p_value is not None else 0.0
-    cell = {"wi": wi.tolist(), "p_value": p if math.isfinite(p) else 0.0,
-            "hist_sum": hist_sum / opts.chi2_samples, "pdf_sum": pdf_sum,
-            "status": "pass" if ok else "fail", "messages": test.messages[-400:]}
+        kept = _kept(bsdf, wi, s, black=True)
+    if not kept.any() and pdf_sum < 1e-6:
+        return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum,
+                "integration": integration}
+    hist = grid.histogram(s.wo[kept])
+    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
+                                   integration)
+    pdf_sum = float(expected.sum()) / n
+    # the shape: N·∫pdf scaled to the counted samples (the scale is normalization's)
+    scale = float(kept.sum()) / (pdf_sum * n) if pdf_sum > 0 else 1.0
+    test = stats.pearson_chi2(hist, expected * scale)
+    hist_sum = float(kept.sum()) / n
+    problems = [m for m, bad in (
+        ("the histogram is empty while the pdf integrates to > 0", not kept.any()),
+        ("a bin has a negative expected count (pdf < 0)", bool((expected < 0).any())),
+        (f"the pdf integrates to {pdf_sum:.4f} > 1.1", pdf_sum > 1.1),
+        (f"{test.impossible} samples lie in bins of expected count 0", test.impossible > 0),
+        ("fewer than 2 bins to compare (dof < 1)", test.dof < 1)) if bad]
+    ok = not problems and test.p_value >= level
+    messages = [f"Pooled {test.pooled_in} low-valued cells into {test.pooled_out} cells",
+                f"Histogram sum = {hist_sum:.6f}, PDF sum = {pdf_sum:.6f}",
+                f"Chi^2 statistic = {test.statistic:.6g} (d.o.f = {test.dof})"] + problems
+    messages.append(("Accepted" if ok else "Rejected") + f" the null hypothesis (p-value = "
+                    f"{test.p_value:.6g}, significance level = {level:.6g})")
+    cell = {"wi": wi.tolist(), "p_value": test.p_value, "statistic": test.statistic,
+            "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum, "scale": scale,
+            "status": "pass" if ok else "fail", "messages": "\n".join(messages),
+            "nonfinite_wo_dropped": int((~np.all(np.isfinite(s.wo), axis=1)).sum()),
+            "integration": integration}
     if black:
         cell["black"] = True
     if not ok:
-        shape = (int(test.res.y), int(test.res.x))
-        cell["histogram"] = np.array(test.histogram).reshape(shape).tolist()
-        cell["expected"] = np.array(test.pdf).reshape(shape).tolist()
+        cell.update(histogram=hist.tolist(), expected=expected.tolist(),
+                    residual=test.residual.tolist(),
+                    worst_bin=_worst_bin(grid, hist, expected * scale, test.residual))
     return cell
 
 
-def _tabulate(bsdf, wi: np.ndarray, opts, seed: int, black: bool):
-    """The χ² test at wi with its histogram and pdf tabulated: (test, Σ histogram, Σ pdf)."""
-    sample_func, pdf_func = _adapters(bsdf, wi, black)
-    test = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), sample_func=sample_func,
-                                 pdf_func=pdf_func, sample_dim=3, sample_count=opts.chi2_samples,
-                                 res=opts.chi2_res, ires=opts.chi2_ires, seed=seed)
-    test.tabulate_histogram()
-    test.tabulate_pdf()
-    hist_sum = float(dr.sum(test.histogram)[0]) if dr.width(test.histogram) else 0.0
-    return test, hist_sum, float(test.pdf_sum[0])
+def _worst_bin(grid: sphere_bins.Grid, hist: np.ndarray, expected: np.ndarray,
+               residual: np.ndarray) -> dict:
+    """The bin that most contradicts the pdf: samples where the expected count is 0 first,
+    else the largest |residual|, else (everything pooled) the largest |obs − exp|."""
+    impossible = np.where(expected == 0, hist, 0.0)
+    if impossible.any():
+        flat = int(np.argmax(impossible))
+    elif np.isfinite(residual).any():
+        flat = int(np.nanargmax(np.abs(residual)))
+    else:
+        flat = int(np.argmax(np.abs(hist - expected)))
+    h, e, r = (float(a.ravel()[flat]) for a in (hist, expected, residual))
+    return {**grid.ranges(flat), "observed": h, "expected": e, "residual": r}
 
 
 def chi2(bsdf, opts, m_tests: int) -> list[Row]:
@@ -126,25 +167,35 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
         return [delta_directions(bsdf, opts)]
     level = stats.sidak(stats.ALPHA, m_tests)
     cells = opts.cells(opts.chi2_cos, opts.chi2_phi)
-    records = []
-    for k, (theta, phi) in enumerate(cells):
-        rec = chi2_cell(bsdf, probe.direction(theta, phi), opts, level, seed=opts.seed * 1000 + k)
+    records, r = [], lanes.rng(opts.seed, "chi2")     # one stream, cell after cell
+    for theta, phi in cells:
+        rec = chi2_cell(bsdf, probe.direction(theta, phi), opts, level, r)
         rec.update(theta_deg=math.degrees(theta), phi=phi)
         records.append(rec)
     tested = [r for r in records if r["status"] != "empty"]
     failed = [r for r in tested if r["status"] == "fail"]
     p_min = min((r["p_value"] for r in tested), default=1.0)
     where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f}" for r in failed)
-    reason = (f"Pearson χ² of sample() vs pdf() (mi.chi2, {opts.chi2_samples} samples, "
-              f"{opts.chi2_res}x{2 * opts.chi2_res} cells) at {len(tested)} incidence cells, "
+    grid = sphere_bins.Grid(opts.chi2_res)
+    reason = (f"Pearson χ² of sample() vs pdf() (stats.pearson_chi2, {opts.chi2_samples} "
+              f"samples, {grid.rows} cos θ_o x {grid.cols} φ_o bins, pdf integrated per bin "
+              f"to {sphere_bins.EPS:g} of its Poisson error) at {len(tested)} incidence cells, "
               f"each at the Šidák level {level:.2e} of the BSDF's {m_tests} statistical tests; "
               f"delta samples excluded") + (f"; rejected at {where}" if failed else "")
     if not tested:
-        return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped",
-                    "the BSDF sampled nothing and has zero pdf at every tested incidence",
-                    {"cells": records})]
+        nonfinite = sum(r["integration"]["nonfinite_pdf_dropped"] for r in records)
+        why = ("the BSDF sampled nothing and has zero pdf at every tested incidence" +
+               (f" where its pdf is finite: it is not finite at {nonfinite} quadrature nodes "
+                f"(the finite topic's; dropped here)" if nonfinite else ""))
+        return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped", why,
+                    {"cells": records, "nonfinite_pdf_dropped": nonfinite})]
+    details = {"cells": records, "level": level}
+    if failed:
+        worst = min(failed, key=lambda r: r["p_value"])
+        details["worst_bin"] = {"theta_i_deg": worst["theta_deg"], "phi_i": worst["phi"],
+                                "p_value": worst["p_value"], **worst["worst_bin"]}
     row = Row("chi2", "sampling matches pdf (min p-value)", p_min, level, None, level,
-              "fail" if failed else "pass", reason, {"cells": records, "level": level})
+              "fail" if failed else "pass", reason, details)
     row.failing_lanes = {"cell": failed} if failed else None
     return [row]
 

@@ -1,0 +1,193 @@
+"""The validator's own χ² test (stats.pearson_chi2 over validate.bsdf.sphere_bins): analytic
+cases, Mitsuba's pooling, the lobe-adaptive pdf integral, narrow lobes that the fixed 24 × 24
+integration failed, a scalar variant, and the residual map of a failing cell."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phonglab import stats
+from phonglab.validate import validate_bsdf
+from phonglab.validate.bsdf import sphere_bins
+from phonglab.verdict import evidence
+
+DEFECTS = Path(__file__).parent / "defects"
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def _cos_power(rng, n: int, q: float) -> np.ndarray:
+    """n directions on the upper hemisphere with density (q + 1)/(2π) cos^q θ."""
+    cos = rng.random(n) ** (1.0 / (q + 1.0))
+    phi = 2.0 * math.pi * rng.random(n)
+    sin = np.sqrt(1.0 - cos * cos)
+    return np.stack([sin * np.cos(phi), sin * np.sin(phi), cos], axis=1)
+
+
+def _cos_power_pdf(q: float):
+    return lambda wo: np.where(wo[:, 2] > 0, (q + 1.0) / (2 * math.pi)
+                               * np.maximum(wo[:, 2], 0.0) ** q, 0.0)
+
+
+def _test(wo: np.ndarray, pdf_fn, res: int = 31) -> stats.PearsonChi2:
+    grid = sphere_bins.Grid(res)
+    expected, info = sphere_bins.expected_counts(grid, pdf_fn, len(wo), 2, 64)
+    assert info["unconverged"] == 0
+    return stats.pearson_chi2(grid.histogram(wo), expected)
+
+
+def test_uniform_sphere_sampler_passes_against_its_pdf():
+    rng = np.random.default_rng(3)
+    z, phi = 2.0 * rng.random(200_000) - 1.0, 2.0 * math.pi * rng.random(200_000)
+    s = np.sqrt(1.0 - z * z)
+    wo = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+    grid = sphere_bins.Grid(31)
+    expected, _ = sphere_bins.expected_counts(
+        grid, lambda w: np.full(len(w), 1.0 / (4 * math.pi)), len(wo), 2, 64)
+    # a constant pdf integrates exactly: N / bins in every bin
+    np.testing.assert_allclose(expected, len(wo) / expected.size, rtol=1e-12)
+    t = stats.pearson_chi2(grid.histogram(wo), expected)
+    assert t.dof == expected.size - 1 and t.p_value > 0.01
+
+
+def test_cos_p_plus_1_sampler_fails_against_a_cos_p_pdf():
+    rng = np.random.default_rng(4)
+    assert _test(_cos_power(rng, 100_000, 4.0), _cos_power_pdf(4.0)).p_value > 0.01
+    wrong = _test(_cos_power(rng, 100_000, 5.0), _cos_power_pdf(4.0))
+    assert wrong.p_value < 1e-12
+    assert np.nanmax(np.abs(wrong.residual)) > 5
+
+
+def test_pooling_and_statistic_match_mitsubas_chi2(variant_llvm_rgb):
+    import mitsuba as mi
+    rng = np.random.default_rng(5)
+    exp = rng.gamma(0.7, 8.0, 400)
+    exp[:20] = 0.0
+    obs = rng.poisson(exp).astype(float)
+    t = stats.pearson_chi2(obs, exp)
+    order = np.argsort(exp, kind="stable")          # mi.chi2's run() sorts before pooling
+    chsq, dof, pooled_in, pooled_out = mi.math_py.chi2(obs[order], exp[order], 5)
+    assert (t.statistic, t.dof, t.pooled_in, t.pooled_out) == pytest.approx(
+        (chsq, dof, pooled_in, pooled_out), rel=1e-12)
+    assert np.isnan(t.residual[exp < 5]).all()
+    high = exp >= 5
+    np.testing.assert_allclose(t.residual[high], (obs[high] - exp[high]) / np.sqrt(exp[high]))
+
+
+def test_samples_where_the_pdf_is_zero_reject():
+    exp = np.array([10.0, 10.0, 0.0])
+    t = stats.pearson_chi2(np.array([10.0, 9.0, 1.0]), exp)
+    assert t.impossible == 1 and t.p_value == 0.0
+
+
+def test_narrow_lobe_refines_only_its_bins():
+    grid = sphere_bins.Grid(31)
+    wi_r = np.array([math.sin(1.0), 0.0, math.cos(1.0)])
+    q = 20_000.0     # a cos^q lobe of width ~ 1/√q = 0.007 rad around wi_r
+
+    def lobe(wo):
+        c = np.clip(wo @ wi_r, 0.0, 1.0)
+        return (q + 1.0) / (2 * math.pi) * np.exp(q * np.log(np.maximum(c, 1e-300)))
+
+    expected, info = sphere_bins.expected_counts(grid, lobe, 10**6, 2, 64)
+    assert info["unconverged"] == 0
+    assert abs(expected.sum() - 10**6) < 0.02 * math.sqrt(10**6)
+    assert info["pdf_evaluations"] < 3 * expected.size * 8 ** 2
+
+
+def test_recheck_integrates_a_lobe_both_coarse_levels_missed():
+    # a cos^(10^5) lobe (0.003 rad) in 11 x 5 bins: the nodes of k = 2 and 4 both miss it and
+    # agree on ~0; its samples then contradict the integral and the bin is integrated again
+    axis = np.array([math.sin(1.0), 0.0, math.cos(1.0)])
+    q, n = 1e5, 100_000
+
+    def lobe(wo):
+        c = np.clip(wo @ axis, 0.0, 1.0)
+        return (q + 1.0) / (2 * math.pi) * np.exp(q * np.log(np.maximum(c, 1e-300)))
+
+    rng = np.random.default_rng(1)
+    local = _cos_power(rng, n, q)
+    t = np.cross(axis, [0.0, 1.0, 0.0])
+    t /= np.linalg.norm(t)
+    wo = local[:, :1] * t + local[:, 1:2] * np.cross(axis, t) + local[:, 2:] * axis
+    grid = sphere_bins.Grid(11)
+    expected, info = sphere_bins.expected_counts(grid, lobe, n, 2, 64)
+    assert expected.sum() < 1e-6 * n
+    again = sphere_bins.recheck(grid, lobe, n, expected, wo, 64, info)
+    assert info["rechecked"] >= 1 and abs(again.sum() - n) < 0.01 * n
+
+
+def test_a_support_sliver_the_nodes_miss_is_pooled_not_impossible():
+    # the pdf is > 0 only within 1e-7 of a row edge (a shadowed region's rim): no node sees it
+    grid = sphere_bins.Grid(11)
+    edge = 1.0 - 6.0 / 11.0                     # between rows 2 and 3
+
+    def rim(wo):
+        return np.where(wo[:, 2] > edge - 1e-7, 1.0, 0.0) * (wo[:, 2] < edge)
+
+    def at(cos):
+        return np.array([[math.sqrt(1.0 - cos * cos), 0.0, cos]])
+
+    wo = np.concatenate([at(edge - 5e-8), at(-0.5)])     # on the rim; where the pdf is 0
+    expected, info = sphere_bins.expected_counts(grid, rim, 2, 2, 4)
+    assert expected.sum() == 0.0
+    again = sphere_bins.recheck(grid, rim, 2, expected, wo, 4, info)
+    assert info["slivers"] == 1
+    t = stats.pearson_chi2(grid.histogram(wo), again)
+    assert t.impossible == 1                              # only the sample where pdf = 0
+
+
+@pytest.mark.parametrize("spec, params", [
+    ("roughconductor", {"alpha": 0.01}),
+    ("phong", {"exponent": 10000.0, "diffuse_reflectance": 0.0, "specular_reflectance": 0.9}),
+])
+def test_narrow_lobes_pass_chi2_at_default_size(variant_llvm_rgb, spec, params):
+    # θ_i = 78.5° (cos 0.2) is in the default χ² grid; ires = 24 trapezoid points failed both
+    report = validate_bsdf(spec, params=params, topics=["chi2"], seed=0)
+    (row,) = report.rows
+    assert row.status == "pass", row.reason
+    assert any(abs(c["theta_deg"] - 78.46) < 0.1 for c in row.details["cells"])
+    assert all(c["integration"]["unconverged"] == 0 for c in row.details["cells"])
+
+
+def test_residual_map_only_in_failing_cells(variant_llvm_rgb):
+    bad = validate_bsdf("defect_pdf_mismatch", plugins=[DEFECTS / "pdf_mismatch.py"],
+                        quick=True, seed=0, topics=["chi2"])
+    (row,) = bad.rows
+    assert row.status == "fail"
+    for cell in row.details["cells"]:
+        assert cell["status"] == "fail"
+        res = np.array(cell["residual"], dtype=float)
+        assert res.shape == np.array(cell["histogram"]).shape
+        assert np.isnan(res).any() and np.nanmax(np.abs(res)) > 10
+    wb = row.details["worst_bin"]
+    assert wb["observed"] > wb["expected"] + 10 * math.sqrt(wb["expected"])   # uniform > cosine
+    assert evidence(row).startswith("worst bin: at θ_i = ")
+    assert "θ_o " in evidence(row) and "residual +" in evidence(row)
+    json.dumps(bad.to_dict(), allow_nan=False)
+    good = validate_bsdf("diffuse", quick=True, seed=0, topics=["chi2"])
+    (row,) = good.rows
+    assert row.status == "pass" and "worst_bin" not in row.details and evidence(row) == ""
+    assert not any("residual" in c or "histogram" in c for c in row.details["cells"])
+
+
+@pytest.mark.parametrize("bsdf", ["diffuse"])
+def test_scalar_rgb_quick_passes(bsdf, tmp_path):
+    # scalar variants cannot run mi.chi2; a fresh process (the variant is global)
+    out = tmp_path / "r.json"
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", bsdf, "--quick",
+                           "--variant", "scalar_rgb", "--json", str(out)],
+                          capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(
+                              [str(SRC)] + [p for p in [os.environ.get("PYTHONPATH")] if p])})
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    d = json.loads(out.read_text())
+    chi2 = [r for r in d["results"] if r["topic"] == "chi2"]
+    assert chi2 and chi2[0]["status"] == "pass" and len(chi2[0]["details"]["cells"]) == 3
