@@ -43,10 +43,13 @@ are the same, but this is thousands of times slower; keep N small there (tens to
 Inputs are rounded to float32 (Mitsuba's ``Float``) in every variant; outputs are float64.
 
 Sampling versus pdf: the probe only exposes the numbers.  To test statistically that a
-BSDF's ``sample`` draws directions with the density its ``pdf`` reports, use Mitsuba's
-``mi.chi2.ChiSquareTest`` with ``mi.chi2.BSDFAdapter``; note that it checks sampling
-against pdf only, not that eval / pdf equals the sample weight, nor that eval is right
-(compare ``sample(...).weight`` with ``eval / pdf`` at ``sample(...).wo`` for that).
+BSDF's ``sample`` draws directions with the density its ``pdf`` reports, run ``phonglab
+validate`` (its ``chi2`` topic: a Pearson χ² over the sphere with a lobe-adaptive pdf
+integral, in every variant, and its ``normalization`` topic for the density's scale);
+Mitsuba's own ``mi.chi2.ChiSquareTest`` checks sampling against pdf only, not that eval / pdf
+equals the sample weight, nor that eval is right (the ``weight`` topic compares
+``sample(...).weight`` with ``eval / pdf`` at ``sample(...).wo``), and does not run in scalar
+variants.
 """
 
 from __future__ import annotations

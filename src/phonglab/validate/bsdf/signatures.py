@@ -18,7 +18,9 @@ direction) and φ_o from −π to π: the (φ, −cos θ) parametrization of the
 bins in (``mi.chi2.SphericalDomain``'s).  A failing cell lies in
 the signature when it passes the same test -- Pearson's χ² with bins of expected count < 5
 pooled, dof = bins − 1, p ≥ the row's Šidák level -- on the bins *outside* the region: the
-discrepancy is then confined to where the finding says it is.
+discrepancy is then confined to where the finding says it is.  The cell's ``expected`` is
+N·∫pdf as the pdf says it (the χ² topic tests the shape against it times the cell's
+``scale``; a finding's bins are held against the pdf itself).
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats as sps
+
+from ... import stats
 
 #: Tolerance of "on the singular sample point": sample values are float64 draws (or edges).
 SAMPLE_TOL = 1e-6
@@ -249,7 +253,7 @@ class Chi2Outside(Region):
         inside = bin_mask(self.bins, obs.shape)
         if not inside.any() or inside.all():
             return False
-        return pearson_p(obs[~inside], exp[~inside]) >= level
+        return stats.pearson_chi2(obs[~inside], exp[~inside]).p_value >= level
 
     @property
     def text(self):
@@ -294,7 +298,8 @@ class Chi2Excess(Region):
 
 
 def bin_mask(bins: str, shape) -> np.ndarray:
-    """The bins of a (−cos θ_o, φ_o) histogram of ``shape`` in the named set:
+    """The bins of a (−cos θ_o, φ_o) histogram of ``shape`` (:class:`.sphere_bins.Grid`) in
+    the named set:
     ``below_horizon`` every row with some wo below the horizon, ``normal_plane`` the φ_o
     columns that hold 0 or ±π (wo.y = 0; a value on a column edge marks both columns)."""
     rows, cols = shape
@@ -310,26 +315,3 @@ def bin_mask(bins: str, shape) -> np.ndarray:
     else:
         raise ValueError(f"unknown χ² bin region {bins!r}")
     return out
-
-
-def pearson_p(observed: np.ndarray, expected: np.ndarray) -> float:
-    """Pearson's χ² p-value of counts against expected counts, as the χ² topic judges a cell:
-    0 when a bin of expected count 0 holds samples; bins taken in increasing expected count,
-    those below 5 pooled in runs until a run reaches 5; dof = bins − 1; 1.0 with dof < 1."""
-    o, e = np.ravel(observed).astype(np.float64), np.ravel(expected).astype(np.float64)
-    if np.any((e == 0) & (o != 0)):
-        return 0.0
-    order = np.argsort(e, kind="stable")
-    o, e = o[order], e[order]
-    stat, dof, run_o, run_e = 0.0, 0, 0.0, 0.0
-    for oi, ei in zip(o, e):
-        if ei == 0:
-            continue
-        if ei < 5.0:
-            run_o, run_e = run_o + oi, run_e + ei
-            if run_e >= 5.0:
-                stat, dof, run_o, run_e = stat + (run_o - run_e) ** 2 / run_e, dof + 1, 0.0, 0.0
-        else:
-            stat, dof = stat + (oi - ei) ** 2 / ei, dof + 1
-    dof -= 1
-    return 1.0 if dof < 1 else float(sps.chi2.sf(stat, dof))

@@ -494,7 +494,9 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "2e5 samples) the cell at 78.5 deg is rejected, while mi.chi2 with 201x402 cells, "
         "ires 16 and 1e6 samples accepts the same incidence (p = 0.44, histogram 0.99037 vs "
         "pdf 0.99018): the pdf integration of a sharp lobe on the coarse grid, not sampling",
-        fixed_by="commit 0402b28 (chi2: 24x24 pdf integration points per bin)"),
+        fixed_by="commit 0402b28 (chi2: 24x24 pdf integration points per bin), and since #26 "
+        "a lobe-adaptive integral per bin (validate/bsdf/sphere_bins.py: Gauss-Legendre "
+        "refined until two levels agree to 0.02 of the bin's Poisson error)"),
     ValidatorIssue(
         "energy-quadrature-off-lobe", "energy", ("normalmap/roughconductor",),
         "the validator's albedo at theta_i = 0 is 1.282, but a 1600x800 midpoint rule over "
