@@ -54,6 +54,10 @@ class Kind:
     statistical_tests: Callable[[Any, Any, tuple], int]
     #: (plugin, options, topics, m) -> {topic: () -> rows}
     runners: Callable[[Any, Any, tuple, int], dict[str, Callable[[], list[Row]]]]
+    #: (plugin, spec, pinned names) -> the parameters a sweep varies (each with ``name``,
+    #: ``value``, ``range`` (``lo``, ``hi``, ``edges``, ``values(quick)``) and ``source``);
+    #: None: the kind is checked at its given point only (:mod:`phonglab.validate.sweep`)
+    parameters: Callable[[Any, Any, set], list] | None = None
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
