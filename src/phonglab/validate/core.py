@@ -58,6 +58,8 @@ class Kind:
     #: ``value``, ``range`` (``lo``, ``hi``, ``edges``, ``values(quick)``) and ``source``);
     #: None: the kind is checked at its given point only (:mod:`phonglab.validate.sweep`)
     parameters: Callable[[Any, Any, set], list] | None = None
+    #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
+    informational: tuple[str, ...] = ()
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.

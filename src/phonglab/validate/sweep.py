@@ -18,6 +18,8 @@ Statistics.  With P points run, each statistical test runs at the Šidák level 
 (``family`` = P in :func:`phonglab.validate.core.run`), so the plugin as a whole still fails
 by chance with probability α = :data:`phonglab.stats.ALPHA`.
 
+Informational topics (``cost``: a timing that never fails) run at the given point only.
+
 Rows.  Every row carries its point (``Row.point``: the parameters that differ from the given
 point, ``{}`` there); the report's meta records the parameters swept, their ranges and where
 they came from, and each point's status and time.  A plugin given as an XML file or a loaded
@@ -106,7 +108,8 @@ def validate(kind: core.Kind, spec, *, variant=None, params=None, topics=None, s
     options = {"variant": base_variant(), "topics": list(topics), "seed": seed, "quick": quick,
                "known": known, "plugins": [str(p) for p in plugins], "family": size,
                "sizes": sizes, "kind": kind.name}
-    reports = _run_points(spec, params or {}, runnable, options, runner, progress)
+    reports = _run_points(spec, params or {}, runnable, options, runner, progress,
+                          [t for t in topics if t not in kind.informational])
     rows: list[Row] = []
     records = []
     for pt, rep in zip(runnable, reports):
@@ -133,9 +136,11 @@ def base_variant() -> str:
     return mi.variant()
 
 
-def _run_points(spec, params, pts, options, runner, progress) -> list[Report]:
-    """Each point's report, in point order: here, or one job per point on ``runner``."""
+def _run_points(spec, params, pts, options, runner, progress, other_topics) -> list[Report]:
+    """Each point's report, in point order: here, or one job per point on ``runner``; the
+    points after the given one run ``other_topics`` (no informational topic)."""
     results: dict[int, Report] = {}
+    per_point = [options] + [{**options, "topics": list(other_topics)}] * (len(pts) - 1)
 
     def finished(i, d):
         results[i] = Report.from_dict(d) if isinstance(d, dict) else d
@@ -144,10 +149,10 @@ def _run_points(spec, params, pts, options, runner, progress) -> list[Report]:
 
     if runner is None or runner.serial:
         for i, pt in enumerate(pts):
-            finished(i, run_point(spec, {**params, **pt.params}, options, local=True))
+            finished(i, run_point(spec, {**params, **pt.params}, per_point[i], local=True))
     else:
         from ..parallel import Job
-        jobs = [Job(run_point, (spec, {**params, **pt.params}, options), key=str(i))
+        jobs = [Job(run_point, (spec, {**params, **pt.params}, per_point[i]), key=str(i))
                 for i, pt in enumerate(pts)]
         runner.run(jobs, lambda job, d: finished(int(job.key), d), desc="sweep")
     return [results[i] for i in range(len(pts))]

@@ -19,8 +19,8 @@ The range of each, in this order of precedence:
 2. Mitsuba 3.9.1's documented ranges of its built-ins (:data:`BUILTIN`, from the plugin
    reference: reflectances in [0, 1], microfacet roughness α, where the docs give 0.001-0.01
    as "very smooth" to 0.3+ as "rough", IORs between equal (1) and the densest tabulated
-   materials (≈ 2.4 for diamond; 3 here)); ``alpha`` is held ≥ 0.01, the smoothest lobe the
-   χ² bins resolve;
+   materials (≈ 2.4 for diamond; 3 here), a conductor's η ∈ [0, 5] and k ∈ [0.01, 10] (η = k
+   = 0 is no material)); ``alpha`` is held ≥ 0.01, the smoothest lobe the χ² bins resolve;
 3. otherwise probed: the candidates 0, 10⁻⁴, d/10, d, 10d, 1, 10 and 10⁴ around the loaded
    value d, each loaded once; a value the plugin refuses at load time is outside the range,
    not a failure, and the range is [smallest accepted, largest accepted] (a parameter that
@@ -75,11 +75,14 @@ class Range:
 _REFLECTANCE = Range(0.0, 1.0)
 _ALPHA = Range(0.01, 1.0, (0.05,))
 _IOR = Range(1.0, 3.0, (1.0001,))
+#: A conductor's complex IOR η + ik: η from 0 (the 'none' material's perfect mirror, η = 0,
+#: k = 1) to 5; k > 0 for a conductor (η = k = 0 is no material: its Fresnel term is 0/0).
+_ETA = Range(0.0, 5.0)
+_K = Range(0.01, 10.0)
 BUILTIN: dict[str, dict[str, Range]] = {
     "diffuse": {"reflectance": _REFLECTANCE},
-    "roughconductor": {"alpha": _ALPHA, "eta": Range(0.0, 5.0), "k": Range(0.0, 10.0)},
-    "conductor": {"eta": Range(0.0, 5.0), "k": Range(0.0, 10.0),
-                  "specular_reflectance": _REFLECTANCE},
+    "roughconductor": {"alpha": _ALPHA, "eta": _ETA, "k": _K},
+    "conductor": {"eta": _ETA, "k": _K, "specular_reflectance": _REFLECTANCE},
     "roughplastic": {"alpha": _ALPHA, "int_ior": _IOR, "diffuse_reflectance": _REFLECTANCE,
                      "specular_reflectance": _REFLECTANCE},
     "plastic": {"int_ior": _IOR, "diffuse_reflectance": _REFLECTANCE,
