@@ -70,11 +70,13 @@ def main() -> int:
     ap.add_argument("--only", nargs="+", metavar="LABEL",
                     help=f"correct cases ({', '.join(CORRECT)}) or defect file stems")
     ap.add_argument("--no-defects", action="store_true")
+    ap.add_argument("--defects", type=Path, default=DEFECTS,
+                    help="the folder of planted-defect plugins (default tests/defects)")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     chosen = {k: v for k, v in CORRECT.items() if not args.only or k in args.only}
     defects = [] if args.no_defects else sorted(
-        p for p in DEFECTS.glob("*.py") if not args.only or p.stem in args.only)
+        p for p in args.defects.glob("*.py") if not args.only or p.stem in args.only)
     result = {"alpha": stats.ALPHA, "seeds": args.seeds, "defect_seeds": args.defect_seeds,
               "correct": {}, "defects": {}}
     t_all = time.perf_counter()

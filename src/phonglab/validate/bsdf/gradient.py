@@ -134,6 +134,7 @@ def _one(bsdf, params, key, opts, dirs, discontinuous: bool) -> Row:
     keep = ~jumps & ~nonfinite & np.isfinite(d1) & np.isfinite(d2)
     ad, fd1, fd2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
     details = {"fd_h": fd1, "fd_h2": fd2, "h": h / 2, "one_sided": one_sided,
+               "value_range": [float(values.min()), float(values.max())],
                "lanes": int(len(g)), "jump_lanes": int(jumps.sum()),
                "nonfinite_ad_lanes": int(nonfinite.sum()),
                "discontinuous_flag": discontinuous,

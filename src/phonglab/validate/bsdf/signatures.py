@@ -137,6 +137,28 @@ class Grazing(Region):
 
 
 @dataclass(frozen=True)
+class ParameterAt(Region):
+    """A parameter row (``gradient``) measured with every entry of its parameter at one of
+    ``values`` (``details["value_range"]``): a range end, where a lobe switches on or a term
+    has a kink."""
+
+    values: tuple[float, ...]
+
+    def covers(self, row):
+        vr = (row.details or {}).get("value_range")
+        if vr is None:
+            return None
+        lo, hi = vr
+        return np.array([lo == hi and any(abs(lo - v) <= 1e-6 * max(1.0, abs(v))
+                                          for v in self.values)])
+
+    @property
+    def text(self):
+        return ("the parameter at " + " or ".join(f"{v:g}" for v in self.values)
+                + " (an end of its range)")
+
+
+@dataclass(frozen=True)
 class ComponentOutOfRange(Region):
     """Samples whose sampled_component is ≥ component_count() (``details["flags"]``)."""
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
-                               Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence, Region,
+                               Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence,
+                               ParameterAt, Region,
                                SampleEdgeAtNormalIncidence, SamplePoint, Union)
 from ..core import Known
 
@@ -249,7 +250,7 @@ FINDINGS: tuple[Finding, ...] = (
             "lane)",
             "a continuous derivative (about -1.95 at eta = 0)",
             "tests/repro/conductor_eta0_gradient.py",
-            rows=("eta.value",)),
+            rows=("eta.value",), region=ParameterAt((0.0,))),
     Finding("principled-gradient-lobe-masks", "gradient",
             ("principled/default", "principled/metal", "principledthin/default"),
             "src/bsdfs/principled.cpp:559",
@@ -264,7 +265,7 @@ FINDINGS: tuple[Finding, ...] = (
             "the one-sided derivative from inside [0, 1]",
             "tests/repro/principled_gradient_lobe_masks.py",
             rows=("clearcoat.value", "sheen.value", "spec_trans.value", "metallic.value",
-                  "diff_trans.value")),
+                  "diff_trans.value"), region=ParameterAt((0.0, 1.0))),
     Finding("principledthin-transmission-reciprocity", "reciprocity",
             ("principledthin/all-lobes",),
             "src/bsdfs/principledthin.cpp:463",
