@@ -126,7 +126,8 @@ def _all_builtins(args) -> int:
               + (f"  (KNOWN: {','.join(known)})" if known else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
-    options = {"seed": args.seed, "quick": args.quick, "topics": args.only}
+    options = {"seed": args.seed, "quick": args.quick, "topics": args.only,
+               "sweep": not args.no_sweep}
     log = batch.CaseLog(args.json, options) if args.json else None
     if log is not None and log.done:
         print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
@@ -141,7 +142,7 @@ def _all_builtins(args) -> int:
 
 def run(args) -> int:
     params, topics = _check_inputs(args)
-    if args.no_sweep and (args.workers != 1 or args.scheduler):
+    if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
     if args.all_builtins:

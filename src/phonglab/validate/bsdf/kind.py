@@ -55,7 +55,8 @@ def runners(bsdf, opts, topics, m: int) -> dict:
 #: The BSDF kind: what :mod:`phonglab.validate.core` runs.
 BSDF = core.Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
                  topics=TOPICS, options=options, statistical_tests=statistical_tests,
-                 runners=runners, parameters=ranges.parameters, informational=("cost",))
+                 runners=runners, parameters=ranges.parameters, informational=("cost",),
+                 values=ranges.traversed)
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
