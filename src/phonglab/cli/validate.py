@@ -126,8 +126,8 @@ def _all_builtins(args) -> int:
               + (f"  (KNOWN: {','.join(known)})" if known else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
-    options = {"seed": args.seed, "quick": args.quick, "topics": args.only,
-               "sweep": not args.no_sweep}
+    # the catalogue's cases are its named points (scripts/conformance.py --sweep sweeps them)
+    options = {"seed": args.seed, "quick": args.quick, "topics": args.only}
     log = batch.CaseLog(args.json, options) if args.json else None
     if log is not None and log.done:
         print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)

@@ -79,6 +79,10 @@ _IOR = Range(1.0, 3.0, (1.0001,))
 #: k = 1) to 5; k > 0 for a conductor (η = k = 0 is no material: its Fresnel term is 0/0).
 _ETA = Range(0.0, 5.0)
 _K = Range(0.01, 10.0)
+#: The principled models' roughness r, α = r² (principled.cpp): r ≥ 0.1 keeps α ≥ 0.01.
+_ROUGHNESS = Range(0.1, 1.0)
+#: A polarizer's or retarder's angle in degrees (theta: the axis; delta: the phase shift).
+_ANGLE = Range(0.0, 180.0, (45.0, 90.0))
 BUILTIN: dict[str, dict[str, Range]] = {
     "diffuse": {"reflectance": _REFLECTANCE},
     "roughconductor": {"alpha": _ALPHA, "eta": _ETA, "k": _K},
@@ -90,12 +94,20 @@ BUILTIN: dict[str, dict[str, Range]] = {
     "dielectric": {"int_ior": _IOR},
     "thindielectric": {"int_ior": _IOR},
     "roughdielectric": {"alpha": _ALPHA, "int_ior": _IOR},
-    "principled": {name: _REFLECTANCE for name in (
-        "base_color", "roughness", "metallic", "specular", "spec_tint", "anisotropic", "sheen",
-        "sheen_tint", "clearcoat", "clearcoat_gloss", "spec_trans")},
-    "principledthin": {name: _REFLECTANCE for name in (
-        "base_color", "roughness", "anisotropic", "spec_trans", "diff_trans", "sheen",
-        "sheen_tint")},
+    "principled": {**{name: _REFLECTANCE for name in (
+        "base_color", "metallic", "specular", "spec_tint", "anisotropic", "sheen",
+        "sheen_tint", "clearcoat", "clearcoat_gloss", "spec_trans")}, "roughness": _ROUGHNESS},
+    "principledthin": {**{name: _REFLECTANCE for name in (
+        "base_color", "anisotropic", "spec_trans", "diff_trans", "sheen", "sheen_tint")},
+        "roughness": _ROUGHNESS},
+    "pplastic": {"alpha": _ALPHA, "int_ior": _IOR, "diffuse_reflectance": _REFLECTANCE,
+                 "specular_reflectance": _REFLECTANCE},
+    "polarizer": {"theta": _ANGLE, "transmittance": _REFLECTANCE},
+    "retarder": {"theta": _ANGLE, "delta": _ANGLE, "transmittance": _REFLECTANCE},
+    "circular": {"transmittance": _REFLECTANCE},
+    "hair": {"longitudinal_roughness": Range(0.05, 1.0), "azimuthal_roughness": Range(0.05, 1.0),
+             "eta": Range(1.0, 2.0), "eumelanin": Range(0.0, 5.0),
+             "pheomelanin": Range(0.0, 5.0)},
 }
 
 def _candidates(d: float) -> list[float]:
@@ -128,12 +140,16 @@ def scalar_value(v) -> float | None:
 def traversed(plugin) -> dict[str, float]:
     """Load-time name -> loaded value for each scalar/spectrum parameter ``mi.traverse``
     exposes (``NAME.value`` -> ``NAME``; dotted nested names and bitmap data left out)."""
+    params = mi.traverse(plugin)
     out = {}
-    for key in mi.traverse(plugin).keys():
+    for key in params.keys():
         name = key[:-len(".value")] if key.endswith(".value") else key
         if "." in name:
             continue
-        v = scalar_value(mi.traverse(plugin)[key])
+        try:
+            v = scalar_value(params[key])
+        except (TypeError, RuntimeError):     # a value traverse cannot read (hair's sigma_a)
+            continue
         if v is not None:
             out[name] = v
     return out
