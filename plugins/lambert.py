@@ -37,6 +37,9 @@ DIFFUSE = 0  #: component index of the diffuse lobe
 class Lambert(mi.BSDF):
     """f = ρ/π, cosine-weighted importance sampling."""
 
+    #: The valid range of each parameter (lo, hi[, edges]) for ``phonglab validate``'s sweep.
+    PARAMETER_RANGES = {"reflectance": (0.0, 1.0)}
+
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
         (self.reflectance,) = _common.load_textures("lambert", props, [("reflectance", 0.5)])

@@ -85,6 +85,12 @@ def phong_lobe(cos_alpha, exponent):
 class Phong(mi.BSDF):
     """f = k_d/π + k_s (p+2)/(2π) cos^p α, sampled as a mixture of its two lobes."""
 
+    #: The valid range of each parameter (lo, hi[, edges]) for ``phonglab validate``'s sweep:
+    #: p from a uniform lobe to a near-mirror one, with small exponents, where the (p+1)
+    #: and (p+2) normalizations differ most, as edges.
+    PARAMETER_RANGES = {"diffuse_reflectance": (0.0, 1.0), "specular_reflectance": (0.0, 1.0),
+                        "exponent": (0.0, 1e4, (1.0, 5.0))}
+
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
         self.diffuse_reflectance, self.specular_reflectance = _common.load_textures(

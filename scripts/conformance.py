@@ -26,6 +26,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the validator's --quick sizes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--sweep", action="store_true",
+                    help="each case across its parameter sweep (default: its own point only)")
     ap.add_argument("--only", nargs="+", metavar="LABEL", help="validate only these cases")
     ap.add_argument("--json", type=Path, default=Path("docs/conformance.json"))
     ap.add_argument("--markdown", type=Path, default=Path("docs/conformance.md"))
@@ -46,7 +48,7 @@ def main(argv=None) -> int:
             print(f"{d['meta']['case']:42s} {d['meta']['wall_seconds']:6.1f} s  "
                   f"{', '.join(bad) or 'ok'}", flush=True)
         chosen = [c for c in builtins.cases() if not args.only or c.label in args.only]
-        options = {"seed": args.seed, "quick": args.quick}
+        options = {"seed": args.seed, "quick": args.quick, "sweep": args.sweep}
         log = batch.CaseLog(args.json, options)     # an interrupted run resumes from it
         if log.done:
             print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)

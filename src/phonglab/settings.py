@@ -146,6 +146,10 @@ def mitsuba_reason(exc: Exception) -> str:
     text = re.sub(r"\[[\w.]+:\d+\] ", "", text)              # [parser.cpp:444] source tags
     text = re.sub(r"^(While loading|At) dictionary node \"root\": ", "", text)
     text = text.split(": [")[-1].lstrip("[")                   # the innermost cause
+    if "Traceback (most recent call last):" in text:           # a Python plugin raised:
+        head, _, tail = text.partition("Traceback (most recent call last):")
+        frames = re.findall(r"\b\w+(?:Error|Exception): .*", tail)   # keep its last line
+        text = head + (frames[-1] if frames else tail.strip())
     return text.replace("] ", ": ").rstrip(".!")
 
 

@@ -13,22 +13,32 @@
         assert_bsdf_valid("mybsdf", plugins=[HERE / "mybsdf.py"], quick=True)
 
 The options are those of :func:`phonglab.validate.validate_bsdf` (variant, params, topics,
-seed, quick, known, plugins).  On failure the AssertionError's message is the table of the
-failing rows, so pytest shows what is wrong and where.
+seed, quick, known, plugins); by default the BSDF is checked across its parameter sweep
+(:mod:`phonglab.validate.sweep`; ``params`` are pinned), ``sweep=False`` checks the given point
+alone.  On failure the AssertionError's message is the table of the failing rows, grouped by
+the parameter point they failed at, so pytest shows what is wrong and where.
 """
 
 from __future__ import annotations
 
 from .validate import validate_bsdf
+from .verdict import point_label, table
 
 __all__ = ["assert_bsdf_valid"]
 
 
-def assert_bsdf_valid(spec, **options):
-    """Validate ``spec``; raise AssertionError listing the failing rows. Returns the report."""
-    report = validate_bsdf(spec, **options)
+def assert_bsdf_valid(spec, sweep: bool = True, **options):
+    """Validate ``spec`` across its parameter sweep (``sweep=False``: at the given point
+    alone); raise AssertionError listing the failing rows, each with its point. Returns the
+    report."""
+    report = validate_bsdf(spec, sweep=sweep, **options)
     if not report.passed:
+        by_point = {}
+        for r in report.failing:
+            by_point.setdefault(point_label(r.point) if r.point is not None else "", []).append(r)
+        text = "\n".join((f"at {label}:\n" if label else "") + table(rows)
+                         for label, rows in by_point.items())
         raise AssertionError(f"{report.meta.get('bsdf', spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
-                             + report.table(report.failing))
+                             + text)
     return report

@@ -22,7 +22,8 @@ tolerance); the table shows a one-sided row's expected value as ``â‰¤ x`` or ``â
 without it states its comparison in ``reason``.
 
 JSON (:meth:`Report.to_json`, :func:`write_json`): ``{"meta": {...}, "results": [row, ...]}``
-with each row's fields exactly those of :class:`Row`, made strict-JSON-safe by
+with each row's fields exactly those of :class:`Row` (``point`` only on a sweep's rows), made
+strict-JSON-safe by
 :func:`jsonable` (numpy scalars and arrays to Python numbers and lists, NaN/Inf to strings,
 paths to strings).  Text: :func:`table`; the HTML report (:mod:`phonglab.validate.html`)
 formats its cells with the same :func:`cells`.
@@ -73,6 +74,10 @@ class Row:
     status: str
     reason: str
     details: dict = field(default_factory=dict)
+    #: The parameter point the row was measured at, when a sweep measured it at several
+    #: (parameter -> value, ``{}`` for the given point); None otherwise, and then the row's
+    #: JSON has no ``point`` key.
+    point: dict | None = None
 
     #: The inputs of the row's failing lanes (name -> array with one entry per failing lane, or
     #: a list of failing cells' records), set by the harness that made the row, so that a
@@ -85,13 +90,16 @@ class Row:
             raise ValueError(f"unknown status {self.status!r}; choose one of {', '.join(STATUSES)}")
 
     def to_dict(self) -> dict:
-        return jsonable(asdict(self))
+        d = jsonable(asdict(self))
+        if self.point is None:
+            del d["point"]
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "Row":
         return cls(**{k: d.get(k) for k in ("topic", "name", "measured", "expected", "stderr",
                                              "tolerance", "status", "reason")},
-                   details=d.get("details") or {})
+                   details=d.get("details") or {}, point=d.get("point"))
 
 
 def format_number(x, digits: int = 4) -> str:
@@ -135,6 +143,48 @@ def table(rows: list[Row], digits: int = 4, stderr: bool = False, reasons: bool 
         if reasons and r.status == "fail" and evidence(r):
             lines.append(" " * (widths[0] + 2) + evidence(r))
     return "\n".join(lines)
+
+
+def point_label(point: dict | None) -> str:
+    """A parameter point as text: ``exponent=0, kd=0.5``; ``given`` for the given point."""
+    if not point:
+        return "given"
+    return ", ".join(f"{k}={format_number(v, 6) if isinstance(v, float) else v}"
+                     for k, v in point.items())
+
+
+def table_by_point(rows: list[Row], digits: int = 4) -> str:
+    """A sweep's rows grouped by parameter point: one line per point (its verdict counts and
+    its worst row: the first failing one, else the first KNOWN one), then the full rows of
+    every point with a failing row."""
+    points: dict[str, list[Row]] = {}
+    for r in rows:
+        points.setdefault(point_label(r.point), []).append(r)
+    width = max((len(k) for k in points), default=5)
+    lines = [f"{'point'.ljust(width)}  pass fail KNOWN skipped  worst row"]
+    for label, group in points.items():
+        count = {s: sum(r.status == s for r in group) for s in STATUSES}
+        worst = _worst(group)
+        lines.append(f"{label.ljust(width)}  {count['pass']:4d} {count['fail']:4d} "
+                     f"{count['KNOWN']:5d} {count['skipped']:7d}  "
+                     + (f"{worst.status} {worst.topic}: {worst.name} "
+                        f"({format_number(worst.measured, digits)} against "
+                        f"{format_number(worst.tolerance, digits)})" if worst else "all pass"))
+    for label, group in points.items():
+        failing = [r for r in group if r.status == "fail"]
+        if failing:
+            lines += ["", f"at {label}:", table(failing, digits)]
+    return "\n".join(lines)
+
+
+def _worst(rows: list[Row]) -> Row | None:
+    """The first row of the worst status among ``rows`` (fail, then KNOWN), None if all
+    pass or are skipped."""
+    for status in ("fail", "KNOWN"):
+        found = [r for r in rows if r.status == status]
+        if found:
+            return found[0]
+    return None
 
 
 def evidence(row: Row) -> str:

@@ -49,7 +49,12 @@ def add_parser(sub) -> None:
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
     add_seed(p)
     p.add_argument("--quick", action="store_true",
-                   help="fewer samples and angles (every topic kept; about 10 s)")
+                   help="fewer samples and angles (every topic kept), and a sweep of each "
+                        "parameter's ends only")
+    p.add_argument("--no-sweep", action="store_true",
+                   help="check the given parameter point alone (by default every parameter "
+                        "is swept across its range: its ends, middle and edge values, one at "
+                        "a time, plus all at minimum and all at maximum; --set pins one)")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.builtins); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
@@ -85,6 +90,31 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     return parse_sets(args.set), topics
 
 
+def sweep_text(report: Report) -> str:
+    """A sweep's table (grouped by point) with the parameters swept and the points refused."""
+    from ..verdict import point_label, table_by_point
+    sw = report.meta.get("sweep", {})
+    if sw.get("points", 1) == 1 and "note" in sw:
+        return report.table() + f"\n\n{sw['note']}"
+    lines = [f"swept {sw['points']} parameter points of "
+             + (", ".join(f"{p['name']} in [{p['lo']:g}, {p['hi']:g}] ({p['source']})"
+                          for p in sw["parameters"]) or "no parameter")
+             + (f"; pinned: {', '.join(sw['pinned'])}" if sw["pinned"] else ""), "",
+             "at the given point:", report.table([r for r in report.rows if not r.point]), "",
+             "every point:"]
+    lines.append(table_by_point(report.rows))
+    probed = [p["name"] for p in sw["parameters"] if p["source"] == "probed"]
+    if probed:
+        lines += ["", f"the ranges of {', '.join(probed)} were probed (the values the plugin "
+                      f"accepts at load time); declare them on the plugin class as "
+                      f"PARAMETER_RANGES = {{name: (lo, hi)}} if they are narrower"]
+    refused = [r for r in sw["runs"] if r["status"] == "refused"]
+    if refused:
+        lines += ["", "outside the plugin's range (refused at load time, not run):"]
+        lines += [f"  {point_label(r['point'])}: {r['reason']}" for r in refused]
+    return "\n".join(lines)
+
+
 def _all_builtins(args) -> int:
     from ..outputs import write_json   # lazy: numpy, OpenEXR and Pillow, not for --help
     from ..validate import batch
@@ -96,6 +126,7 @@ def _all_builtins(args) -> int:
               + (f"  (KNOWN: {','.join(known)})" if known else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
+    # the catalogue's cases are its named points (scripts/conformance.py --sweep sweeps them)
     options = {"seed": args.seed, "quick": args.quick, "topics": args.only}
     log = batch.CaseLog(args.json, options) if args.json else None
     if log is not None and log.done:
@@ -111,19 +142,27 @@ def _all_builtins(args) -> int:
 
 def run(args) -> int:
     params, topics = _check_inputs(args)
-    if not args.all_builtins and (args.workers != 1 or args.scheduler):
-        raise ValidateError("--workers and --scheduler spread the cases of --all-builtins; "
-                            "drop them to validate one BSDF")
+    if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
+        raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
+                            "the points of a sweep; drop them or drop --no-sweep")
     if args.all_builtins:
         return _all_builtins(args)
-    from ..validate import core, html   # lazy: Mitsuba and matplotlib load only for a run
+    from ..validate import core, html, sweep   # lazy: Mitsuba and matplotlib load only for a run
     from ..validate.bsdf.kind import BSDF
 
-    target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
-                          plugins=args.plugin)
-    report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
-    label = target.label
-    print(report.table())
+    if args.no_sweep:
+        target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
+                              plugins=args.plugin)
+        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
+        label = target.label
+        print(report.table())
+    else:
+        with runner_from_args(args) as runner:
+            report = sweep.validate(BSDF, args.bsdf, variant=args.variant, params=params,
+                                    topics=topics, seed=args.seed, quick=args.quick,
+                                    plugins=args.plugin, runner=runner)
+        label = report.meta["bsdf"]
+        print(sweep_text(report))
     if args.json:
         report.write_json(args.json)
     if args.report:

@@ -36,7 +36,9 @@ def find_case(case):
 
 
 def run_case(case, options: dict | None = None) -> dict:
-    """Validate one case (a Case or its label); ``options``: seed, quick, topics.
+    """Validate one case (a Case or its label); ``options``: seed, quick, topics, and
+    ``sweep`` (True: across the case's parameter sweep, the keys of its spec pinned, so the
+    case is the sweep's given point; default: the case's point alone).
 
     Returns ``Report.to_dict()`` with ``meta["case"]`` set to the label.
     """
@@ -46,7 +48,7 @@ def run_case(case, options: dict | None = None) -> dict:
     try:
         report = validate_bsdf(case.spec, variant=case.resolved_variant(), known=case.known,
                                seed=options.get("seed", 0), quick=options.get("quick", False),
-                               topics=options.get("topics"))
+                               topics=options.get("topics"), sweep=options.get("sweep", False))
     except Exception as exc:      # one broken case is a result, not the end of the batch
         report = Report({"bsdf": case.plugin, "variant": case.variant, "error": repr(exc)},
                         [Row("finite", "the case loads and runs", None, None, None, None, "fail",

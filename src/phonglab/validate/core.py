@@ -54,6 +54,14 @@ class Kind:
     statistical_tests: Callable[[Any, Any, tuple], int]
     #: (plugin, options, topics, m) -> {topic: () -> rows}
     runners: Callable[[Any, Any, tuple, int], dict[str, Callable[[], list[Row]]]]
+    #: (plugin, spec, pinned names) -> the parameters a sweep varies (each with ``name``,
+    #: ``value``, ``range`` (``lo``, ``hi``, ``edges``, ``values(quick)``) and ``source``);
+    #: None: the kind is checked at its given point only (:mod:`phonglab.validate.sweep`)
+    parameters: Callable[[Any, Any, set], list] | None = None
+    #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
+    informational: tuple[str, ...] = ()
+    #: plugin -> {parameter: value} (a documented cause's ``at`` is held against it)
+    values: Callable[[Any], dict] | None = None
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
@@ -167,6 +175,17 @@ class Known:
     rows: tuple[str, ...] = ()
     region: Any = None
     key: str = ""                  #: the finding's id, if it is one
+    #: parameter values the cause holds at ((name, value), ...): it explains nothing at a
+    #: point where a named parameter has another value or none (() -- at every point)
+    at: tuple[tuple[str, float], ...] = ()
+
+    def holds_at(self, values: dict | None) -> bool:
+        """Whether the plugin's parameter ``values`` (name -> float) meet :attr:`at`."""
+        for name, v in self.at:
+            got = (values or {}).get(name)
+            if not isinstance(got, (int, float)) or abs(got - v) > 1e-6 * max(1.0, abs(v)):
+                return False
+        return True
 
     def names(self, row: Row) -> bool:
         """Whether the cause names ``row`` (a parameter row ``nested.eta.value`` matches
@@ -181,6 +200,8 @@ class Known:
             where.append("rows " + ", ".join(repr(r) for r in self.rows))
         if self.region is not None:
             where.append(self.region.text)
+        if self.at:
+            where.append("at " + ", ".join(f"{n} = {v:g}" for n, v in self.at))
         return self.cause + (f" [signature: {'; '.join(where)}]" if where else "")
 
 
@@ -198,13 +219,15 @@ def _failing_count(row: Row) -> int:
     return len(next(iter(lanes.values()))) if lanes else 1
 
 
-def mark_known(rows: list[Row], known) -> None:
+def mark_known(rows: list[Row], known, values: dict | None = None) -> None:
     """A failing row whose every failing lane lies in the signature of a documented cause that
-    names it becomes KNOWN, its reason prefixed by the cause(s); a failing lane outside every
-    such signature keeps the row a fail, and its reason and details say how many lanes lie
-    outside and where the first one is (a new failure hides behind no old finding)."""
+    names it (and holds at the plugin's parameter ``values``) becomes KNOWN, its reason
+    prefixed by the cause(s); a failing lane outside every such signature keeps the row a
+    fail, and its reason and details say how many lanes lie outside and where the first one
+    is (a new failure hides behind no old finding)."""
     for r in rows:
-        causes = [k for k in known_entries((known or {}).get(r.topic)) if k.names(r)]
+        causes = [k for k in known_entries((known or {}).get(r.topic))
+                  if k.names(r) and k.holds_at(values)]
         if r.status != "fail" or not causes:
             continue
         n = _failing_count(r)
@@ -240,6 +263,16 @@ def _lane_value(values, i):
     return np.asarray(v).tolist()
 
 
+def parameter_values(kind: Kind, target: Loaded) -> dict:
+    """The plugin's parameter values a cause's ``at`` is held against: its traversed values
+    (:attr:`Kind.values`) and the numbers it was loaded with (which a plugin may not expose)."""
+    out = dict(kind.values(target.plugin)) if kind.values is not None else {}
+    for name, v in (target.spec or {}).items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            out[name] = float(v)
+    return out
+
+
 def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, family=1,
         sizes=None) -> Report:
     """Every topic of ``topics`` (checked, in table order) on the prepared ``target``.
@@ -264,7 +297,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         rows += _guarded(topic, runners[topic])
         seconds[topic] = round(time.perf_counter() - t0, 3)
     rows.sort(key=lambda r: kind.topics.index(r.topic))
-    mark_known(rows, known)
+    mark_known(rows, known, parameter_values(kind, target))
     meta = {kind.name: target.label, "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,

@@ -13,7 +13,8 @@ import mitsuba as mi
 
 from ...verdict import Report
 from .. import core
-from . import lanes
+from ..sweep import validate as sweep_validate
+from . import lanes, ranges
 from .config import options
 from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost
@@ -65,11 +66,13 @@ def runners(bsdf, opts, topics, m: int) -> dict:
 #: The BSDF kind: what :mod:`phonglab.validate.core` runs.
 BSDF = core.Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
                  topics=TOPICS, options=options, statistical_tests=statistical_tests,
-                 runners=runners)
+                 runners=runners, parameters=ranges.parameters, informational=("cost",),
+                 values=ranges.traversed)
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                  known=None, plugins=(), family=1, sizes=None) -> Report:
+                  known=None, plugins=(), family=1, sizes=None, sweep=False,
+                  runner=None) -> Report:
     """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`.
 
     ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
@@ -78,8 +81,14 @@ def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick
     signature, or a plain string judging the whole topic): a failing row is KNOWN when every
     failing lane lies in the signature of a cause that names it; ``plugins``:
     Python files that call ``mi.register_bsdf``, run after the variant is set.  ``family``,
-    ``sizes``: see :func:`phonglab.validate.core.run`.  Bad input raises
+    ``sizes``: see :func:`phonglab.validate.core.run`.  ``sweep``: check every point of the
+    plugin's parameter sweep (:mod:`phonglab.validate.sweep`; ``params`` are then pinned and
+    ``runner`` says where the points run), not the given point alone.  Bad input raises
     :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
     """
+    if sweep:
+        return sweep_validate(BSDF, spec, variant=variant, params=params, topics=topics,
+                              seed=seed, quick=quick, known=known, plugins=plugins,
+                              family=family, sizes=sizes, runner=runner)
     return core.validate(BSDF, spec, variant=variant, params=params, topics=topics, seed=seed,
                          quick=quick, known=known, plugins=plugins, family=family, sizes=sizes)

@@ -44,6 +44,8 @@ class Finding:
     rows: tuple[str, ...] = ()
     #: the failing lanes it explains (:mod:`phonglab.validate.bsdf.signatures`); None: all
     region: Region | None = None
+    #: parameter values it holds at ((name, value), ...; () -- every point of a sweep)
+    at: tuple[tuple[str, float], ...] = ()
 
     def known_text(self) -> str:
         """The ``known`` entry of a case: ``file:line: cause``."""
@@ -51,7 +53,7 @@ class Finding:
 
     def known(self) -> Known:
         """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
-        return Known(self.known_text(), self.rows, self.region, self.key)
+        return Known(self.known_text(), self.rows, self.region, self.key, self.at)
 
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
@@ -76,6 +78,12 @@ RESTRICTED_ROW = "restricted context samples only its component"
 SUM_ROW = "Σ_k eval(component k) = eval"
 REFLECTION_ROW = "f(wi, wo) = f(wo, wi), reflection"
 TRANSMISSION_ROW = "f(wi, wo) = f*(wo, wi), transmission (η² form)"
+
+#: Every roughplastic case: a sweep reaches both reflectances 0 from each of them.
+_ROUGHPLASTIC = ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
+                 "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear",
+                 "roughplastic/black")
+BLACK_PLASTIC = (("diffuse_reflectance", 0.0), ("specular_reflectance", 0.0))
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
 FINDINGS: tuple[Finding, ...] = (
@@ -114,7 +122,7 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = 0 for an inactive lane",
             "tests/repro/roughplastic_pdf_below_horizon.py",
             rows=NAN_ROWS, region=GrazingIncidence()),
-    Finding("roughplastic-black-nan-pdf", "finite", ("roughplastic/black",),
+    Finding("roughplastic-black-nan-pdf", "finite", _ROUGHPLASTIC,
             "src/bsdfs/roughplastic.cpp:229",
             "`m_specular_sampling_weight = s_mean / (d_mean + s_mean)` is 0/0 = NaN when both "
             "reflectances are 0, so prob_specular and prob_diffuse (lines 400-401, 446-447) and "
@@ -123,7 +131,7 @@ FINDINGS: tuple[Finding, ...] = (
             "integrator that uses the pdf directly is not",
             "pdf = nan at 40 deg (eval = 0)",
             "a finite pdf (e.g. the diffuse lobe's, or 0)",
-            "tests/repro/roughplastic_black_nan.py", rows=NAN_ROWS),
+            "tests/repro/roughplastic_black_nan.py", rows=NAN_ROWS, at=BLACK_PLASTIC),
     Finding("roughplastic-gradient-detached", "gradient",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),

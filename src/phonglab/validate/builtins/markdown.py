@@ -10,6 +10,7 @@ that JSON only.
 
 from __future__ import annotations
 
+from ...verdict import point_label
 from ..bsdf.topics import TOPICS
 from . import findings
 from .catalogue import LEFT_OUT
@@ -72,14 +73,17 @@ def _label(report: dict) -> str:
 
 
 def _table(data: dict) -> list[str]:
-    head = "| case | variant | " + " | ".join(TOPICS) + " |"
-    lines = [head, "|" + "---|" * (len(TOPICS) + 2)]
+    """One line per case: the worst status of each topic over the case's sweep points."""
+    head = "| case | variant | points | " + " | ".join(TOPICS) + " |"
+    lines = [head, "|" + "---|" * (len(TOPICS) + 3)]
     for report in data["reports"]:
         by_topic = {t: [r for r in report["results"] if r["topic"] == t] for t in TOPICS}
         cells = [cell_status(by_topic[t]) or " " for t in TOPICS]
         cells = [f"**{c}**" if c == "fail" else c for c in cells]
         variant = str(report["meta"].get("variant", "")).replace("llvm_ad_", "")
-        lines.append(f"| `{_label(report)}` | {variant} | " + " | ".join(cells) + " |")
+        points = (report["meta"].get("sweep") or {}).get("points", 1)
+        lines.append(f"| `{_label(report)}` | {variant} | {points} | " + " | ".join(cells)
+                     + " |")
     return lines
 
 
@@ -93,11 +97,14 @@ def _case_section(report: dict) -> list[str]:
     spec = report["meta"].get("spec")
     if spec:
         out += [f"Spec: `{_md(spec)}`; {report['meta'].get('note', '')}.", ""]
-    out += ["| status | topic | check | measured | expected | tolerance | reason |",
-            "|---|---|---|---|---|---|---|"]
+    swept = any("point" in r for r in bad)
+    out += [("| point " if swept else "") + "| status | topic | check | measured | expected "
+            "| tolerance | reason |", "|---" * (8 if swept else 7) + "|"]
     for r in bad:
-        out.append(f"| {r['status']} | {r['topic']} | {_md(r['name'])} | {_num(r['measured'])} "
-                   f"| {_num(r['expected'])} | {_num(r['tolerance'])} | {_md(r['reason'])} |")
+        where = f"| {_md(point_label(r['point']))} " if swept else ""
+        out.append(f"{where}| {r['status']} | {r['topic']} | {_md(r['name'])} "
+                   f"| {_num(r['measured'])} | {_num(r['expected'])} | {_num(r['tolerance'])} "
+                   f"| {_md(r['reason'])} |")
     causes = [f for f in findings.FINDINGS
               if label in f.labels and any(r["topic"] == f.topic for r in bad)]
     for f in causes:
@@ -144,8 +151,9 @@ def _findings_section(data: dict) -> list[str]:
 
 def _signature(f) -> str:
     rows = ", ".join(f"`{r}`" for r in f.rows)
+    at = ("; at " + ", ".join(f"{n} = {v:g}" for n, v in f.at)) if f.at else ""
     return f"{f.topic} rows {rows}; " + (f.region.text if f.region is not None
-                                         else "every failing lane of those rows")
+                                         else "every failing lane of those rows") + at
 
 
 def _validator_section(data: dict) -> list[str]:

@@ -1,0 +1,173 @@
+r"""A plugin checked across its parameters, not at one point: the sweep of ``phonglab validate``.
+
+Points.  From the parameters a kind reports for the loaded plugin (for BSDFs
+:func:`phonglab.validate.bsdf.ranges.parameters`: name, loaded value, range, edges) the sweep
+derives (:func:`points`):
+
+* the given point (the plugin as loaded: its defaults and whatever the caller set);
+* one parameter at a time at each value of its range (the ends, the middle and the edges
+  where formulas break: 0, 1e-4, a huge exponent, equal IORs), the others as given;
+* two corners: every parameter at its minimum, every one at its maximum.
+
+Values equal to the given one are not repeated.  ``--quick`` keeps the ends only.  A parameter
+the caller pins (``--set NAME=VALUE``, or a key of the dict the plugin is loaded from) keeps
+its value at every point.  A point the plugin refuses at load time (phong's k_d + k_s > 1 at
+"all at maximum") is outside its range: it is reported as such, not run and not a failure.
+
+Statistics.  With P points run, each statistical test runs at the Šidák level of P · m tests
+(``family`` = P in :func:`phonglab.validate.core.run`), so the plugin as a whole still fails
+by chance with probability α = :data:`phonglab.stats.ALPHA`.
+
+Informational topics (``cost``: a timing that never fails) run at the given point only.
+
+Rows.  Every row carries its point (``Row.point``: the parameters that differ from the given
+point, ``{}`` there); the report's meta records the parameters swept, their ranges and where
+they came from, and each point's status and time.  A plugin given as an XML file or a loaded
+object cannot be reloaded with other values: it is checked at its one point, and the meta
+says so.  Points are independent jobs: with a :class:`phonglab.parallel.Runner` they run on
+its workers (:func:`run_point`, picklable), one job per point, as the conformance table's
+cases do.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..verdict import Report, Row, point_label
+from . import core
+from .inputs import ValidateError, check_topics
+
+
+@dataclass(frozen=True)
+class Point:
+    """One parameter point: its parameters beyond the given ones (``{}``: the given point)."""
+
+    params: dict
+
+    @property
+    def label(self) -> str:
+        return point_label(self.params)
+
+
+def points(parameters, quick: bool = False) -> list[Point]:
+    """The points of a sweep over ``parameters`` (module docstring), the given point first."""
+    out = [Point({})]
+    for p in parameters:
+        for v in p.range.values(quick):
+            if v != p.value:
+                out.append(Point({p.name: v}))
+    if len(parameters) >= 2:
+        out.append(Point({p.name: p.range.lo for p in parameters}))
+        out.append(Point({p.name: p.range.hi for p in parameters}))
+    seen, unique = set(), []
+    for pt in out:
+        key = tuple(sorted(pt.params.items()))
+        if key not in seen:
+            seen.add(key)
+            unique.append(pt)
+    return unique
+
+
+def sweepable(spec) -> bool:
+    """Whether ``spec`` can be reloaded with other values (a type name or a dict)."""
+    return isinstance(spec, dict) or (isinstance(spec, str) and not spec.endswith(".xml"))
+
+
+def validate(kind: core.Kind, spec, *, variant=None, params=None, topics=None, seed=0,
+             quick=False, known=None, plugins=(), family=1, sizes=None, runner=None,
+             progress=None) -> Report:
+    """Validate ``spec`` at every point of its sweep; one Report whose rows carry their point.
+
+    ``params`` are pinned (kept at every point); ``runner``: where the points run (serially
+    here by default); ``progress(point_label, report)`` is called as each point finishes.
+    Bad input (the plugin at its given point) raises :class:`ValidateError` before any work.
+    """
+    topics = check_topics(topics, kind.topics)
+    t0 = time.perf_counter()
+    base = core.prepare(kind, spec, variant=variant, params=params, plugins=plugins)
+    if not sweepable(spec) or kind.parameters is None:
+        report = core.run(kind, base, topics=topics, seed=seed, quick=quick, known=known,
+                          family=family, sizes=sizes)
+        report.meta["sweep"] = {"points": 1, "note": "an XML file or a loaded object is checked "
+                                "at its one point: give a type name or a dict to sweep it"}
+        return report
+    pinned = set(params or {}) | (set(spec) - {"type"} if isinstance(spec, dict) else set())
+    swept = kind.parameters(base.plugin, spec, pinned)
+    pts = points(swept, quick)
+    runnable, refused = [], []
+    for pt in pts:
+        try:
+            core.prepare(kind, spec, params={**(params or {}), **pt.params})
+            runnable.append(pt)
+        except ValidateError as exc:
+            reason = str(exc).split("; check the type name")[0].split("; the plugin files")[0]
+            refused.append({"point": pt.params, "status": "refused", "reason": reason})
+    size = family * len(runnable)
+    options = {"variant": base_variant(), "topics": list(topics), "seed": seed, "quick": quick,
+               "known": known, "plugins": [str(p) for p in plugins], "family": size,
+               "sizes": sizes, "kind": kind.name}
+    reports = _run_points(spec, params or {}, runnable, options, runner, progress,
+                          [t for t in topics if t not in kind.informational])
+    rows: list[Row] = []
+    records = []
+    for pt, rep in zip(runnable, reports):
+        for r in rep.rows:
+            r.point = dict(pt.params)
+        rows += rep.rows
+        records.append({"point": pt.params, "status": "run",
+                        "failing": sorted({r.topic for r in rep.failing}),
+                        "seconds": rep.meta.get("seconds")})
+    meta = dict(reports[0].meta)
+    # every point ran at the family level: its statistical_tests is already P·m (P points)
+    meta.update(seconds=round(time.perf_counter() - t0, 3),
+        sweep={"points": len(runnable), "refused": len(refused),
+               "parameters": [{"name": p.name, "given": p.value, "lo": p.range.lo,
+                               "hi": p.range.hi, "edges": list(p.range.edges),
+                               "source": p.source} for p in swept],
+               "pinned": sorted(pinned), "runs": records + refused})
+    meta.pop("topic_seconds", None)
+    return Report(meta, rows)
+
+
+def base_variant() -> str:
+    import mitsuba as mi
+    return mi.variant()
+
+
+def _run_points(spec, params, pts, options, runner, progress, other_topics) -> list[Report]:
+    """Each point's report, in point order: here, or one job per point on ``runner``; the
+    points after the given one run ``other_topics`` (no informational topic)."""
+    results: dict[int, Report] = {}
+    per_point = [options] + [{**options, "topics": list(other_topics)}] * (len(pts) - 1)
+
+    def finished(i, d):
+        results[i] = Report.from_dict(d) if isinstance(d, dict) else d
+        if progress:
+            progress(pts[i].label, results[i])
+
+    if runner is None or runner.serial:
+        for i, pt in enumerate(pts):
+            finished(i, run_point(spec, {**params, **pt.params}, per_point[i], local=True))
+    else:
+        from ..parallel import Job
+        jobs = [Job(run_point, (spec, {**params, **pt.params}, per_point[i]), key=str(i))
+                for i, pt in enumerate(pts)]
+        runner.run(jobs, lambda job, d: finished(int(job.key), d), desc="sweep")
+    return [results[i] for i in range(len(pts))]
+
+
+def run_point(spec, params, options: dict, local: bool = False):
+    """One point of a sweep (a picklable job): the plugin loaded with ``params``, every topic
+    at the sweep's family level.  Returns the Report here (``local``), else its dict."""
+    from .bsdf.kind import BSDF
+    kinds = {BSDF.name: BSDF}
+    kind = kinds[options["kind"]]
+    plugins = [] if local else [Path(p) for p in options["plugins"]]
+    target = core.prepare(kind, spec, variant=None if local else options["variant"],
+                          params=params, plugins=plugins)
+    report = core.run(kind, target, topics=tuple(options["topics"]), seed=options["seed"],
+                      quick=options["quick"], known=options["known"],
+                      family=options["family"], sizes=options["sizes"])
+    return report if local else report.to_dict()
