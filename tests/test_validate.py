@@ -171,7 +171,8 @@ def test_cli_pass_json_and_html(variant_llvm_rgb, tmp_path, capsys):
 def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys):
     out_html = tmp_path / "r.html"
     rc = main(["validate", "defect_pdf_mismatch", "--plugin", str(DEFECTS / "pdf_mismatch.py"),
-               "--quick", "--only", "chi2", "--only", "energy", "--report", str(out_html)])
+               "--quick", "--only", "chi2", "--only", "energy", "--report", str(out_html),
+               "--no-sweep"])
     assert rc == 1 and "FAILED" in capsys.readouterr().out
     assert "Failing χ² cells" in out_html.read_text()
 
