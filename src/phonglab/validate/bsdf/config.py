@@ -123,7 +123,7 @@ def options(quick: bool = False, seed: int = 0, topics=(), scalar: bool | None =
     at p ≈ 0.  The energy and normalization quadratures use fewer nodes (--quick: 4 and 2 per
     panel, on 3 cos θ_i), so their bands, from |Q(n) − Q(n/2)|, are wider (phong's
     normalization band 0.044 at --quick against 0.018 with 4 nodes); the normalization counts
-    4 096 samples per cell (--quick).  Measured: phonglab's phong --quick took 13.1 s in
+    2 048 samples per cell (--quick).  Measured: phonglab's phong --quick took 13.1 s in
     scalar_rgb with 4 and 6 nodes, 8.7 s with 2 and 4.
     """
     if scalar is None:
@@ -153,7 +153,7 @@ SCALAR = {
     "quick": dict(n_identity=128, n_finite=64, chi2_samples=4_000, chi2_res=13, chi2_ires=1,
                   chi2_ires_max=16,
                   energy_cos=(1.0, 0.3, 1e-4), energy_nodes=4, energy_samples=2_000,
-                  energy_layout_samples=512, normalization_samples=1 << 12,
+                  energy_layout_samples=512, normalization_samples=1 << 11,
                   normalization_nodes=2, null_samples=1 << 11,
                   cost_lanes=512, cost_repeats=1),
 }
