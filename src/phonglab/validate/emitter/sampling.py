@@ -1,0 +1,233 @@
+r"""The ``chi2`` topic: does ``sample_direction`` draw directions with the density
+``pdf_direction`` reports, seen from each reference point?
+
+From each reference point p (:func:`~.setup.ref_groups`, the groups marked ``chi2``) N
+directions are drawn; those with a non-zero weight are histogrammed over (φ, cos θ) in a frame
+whose z axis points from p to the centre of the emitter's bounding box (an environment: the
+world's z).  cos θ spans [c₀, 1]: c₀ = √(1 − (R/|p − c|)²) where p lies outside the bounding
+sphere (centre c, radius R) of the shape -- no direction that leaves it can reach the emitter,
+so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π].  Bins are equal in
+(φ, cos θ), i.e. in solid angle (dω = dφ d cos θ).  The expected count of a bin is
+N ∫_bin pdf_direction dω by the midpoint rule on ``chi2_ires``² nodes per bin (the bins where the nodes disagree -- the emitter's silhouette, a steep
+pdf, a dark bin beside a lit one -- again on (4·ires)² nodes); at each node the
+direction is traced to the shape (``shape.ray_intersect`` from p moved 10⁻⁴ R along the
+direction, so that a point on the surface does not hit itself) and the DirectionSample3f built
+from the hit (``mi.DirectionSample3f(None, si, it)``, as an integrator's BSDF-sampled ray
+would), an environment's from the direction alone.
+
+Pearson's χ² statistic over the bins, bins with expected count < 5 pooled into one (merged
+into the smallest remaining bin when the pool is itself < 5), p-value from the χ² distribution
+with (cells − 1) degrees of freedom; each reference point is one test at the Šidák level of the
+emitter's m statistical tests (:func:`~phonglab.stats.sidak`).  Written here until
+phonglab's own Pearson χ² in :mod:`phonglab.stats` lands (another branch): the two are to
+be merged.  A reference point whose histogram is empty while ∫pdf > 0 fails; one where both
+are empty (the back of a one-sided emitter) is not tested.  ``mi.chi2.EmitterAdapter``
+(mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
+reference point is its own test and a sample counts only when its weight is not 0.
+
+Delta emitters have no density: for a delta-position light every ds.d must point from the
+reference point at the light's position (ds.d = (P − p)/|P − p|, ds.dist = |P − p|), for a
+directional light ds.d must be the same at every reference point; to :data:`DIRECTION_TOL`
+per component (float32 normalisation is good to ~1e-6) and relatively for dist.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+from scipy import stats as scipy_stats
+
+from ... import probe, stats
+from . import lanes as lanes_
+from .config import rng
+from .identities import bounded, lane_inputs
+from .setup import Setup, basis, interaction, point2, ref_groups
+from .topics import Row
+
+#: Tolerance of a delta light's direction, per component of the unit vector.
+DIRECTION_TOL = 1e-4
+#: Bins whose expected count is below this are pooled (Pearson's rule of thumb).
+MIN_EXPECTED = 5.0
+
+
+def pearson(observed: np.ndarray, expected: np.ndarray) -> tuple[float, float, int]:
+    """(statistic, p-value, degrees of freedom) of Pearson's χ² with low bins pooled."""
+    obs, exp = np.ravel(observed).astype(np.float64), np.ravel(expected).astype(np.float64)
+    low = exp < MIN_EXPECTED
+    cells_o, cells_e = list(obs[~low]), list(exp[~low])
+    po, pe = float(obs[low].sum()), float(exp[low].sum())
+    if pe >= MIN_EXPECTED or not cells_e:
+        cells_o.append(po)
+        cells_e.append(pe)
+    elif po > 0 or pe > 0:
+        k = int(np.argmin(cells_e))
+        cells_o[k] += po
+        cells_e[k] += pe
+    o, e = np.array(cells_o), np.array(cells_e)
+    if np.any((e <= 0) & (o > 0)):
+        return math.inf, 0.0, len(e) - 1
+    keep = e > 0
+    chi = float(np.sum((o[keep] - e[keep]) ** 2 / e[keep]))
+    dof = max(1, int(keep.sum()) - 1)
+    return chi, float(scipy_stats.chi2.sf(chi, dof)), dof
+
+
+def frame(setup: Setup, p: np.ndarray) -> tuple[np.ndarray, float]:
+    """(basis rows s, t, n, c₀): the histogram frame at p and the lowest cos θ it spans."""
+    if setup.kind == "infinite":
+        return np.eye(3), -1.0
+    v = setup.center - p
+    dist = float(np.linalg.norm(v))
+    if dist <= setup.radius * 1.0001:
+        z = v / dist if dist > 1e-6 else np.array([0.0, 0.0, 1.0])
+        c0 = -1.0
+    else:
+        z = v / dist
+        c0 = math.sqrt(max(0.0, 1.0 - (setup.radius / dist) ** 2)) - 1e-3
+    return basis(z), max(-1.0, c0)
+
+
+def _pdf_at(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """pdf_direction from p towards each direction d (traced to the shape)."""
+    n = len(d)
+    it = interaction(np.tile(p, (n, 1)))
+    if setup.kind == "surface":
+        si = lanes_.trace(setup, np.tile(p, (n, 1)), d)
+        ds = mi.DirectionSample3f(None, si, it)
+        ds.emitter = mi.EmitterPtr(setup.emitter)
+        value = dr.select(si.is_valid(), setup.emitter.pdf_direction(it, ds, si.is_valid()), 0.0)
+    else:
+        ds = dr.zeros(mi.DirectionSample3f, n)
+        ds.d = probe.to_vectors(d)
+        ds.dist = mi.Float(math.inf)
+        value = setup.emitter.pdf_direction(it, ds)
+    out = probe.to_numpy(value, n)
+    return np.where(np.isfinite(out), out, 0.0)
+
+
+def _midpoint(setup, p, basis_, c_lo, c_hi, p_lo, p_hi, k) -> np.ndarray:
+    """Midpoint-rule integrals of pdf_direction over bins (c_lo..c_hi) x (p_lo..p_hi) (arrays
+    of B bins), k x k nodes each, and the node values: ((B,), (B, k, k))."""
+    t = (np.arange(k) + 0.5) / k
+    C = c_lo[:, None, None] + (c_hi - c_lo)[:, None, None] * t[None, :, None]
+    P = p_lo[:, None, None] + (p_hi - p_lo)[:, None, None] * t[None, None, :]
+    C, P = np.broadcast_arrays(C, P)
+    s = np.sqrt(np.maximum(0.0, 1.0 - C * C))
+    loc = np.stack([s * np.cos(P), s * np.sin(P), C], axis=-1).reshape(-1, 3)
+    values = _pdf_at(setup, p, loc @ basis_).reshape(C.shape)
+    area = (c_hi - c_lo) * (p_hi - p_lo) / (k * k)
+    return values.sum(axis=(1, 2)) * area, values
+
+
+def bin_integrals(setup, p, basis_, c0, nc, nphi, k) -> np.ndarray:
+    """∫_bin pdf_direction dω for the (nc, nphi) bins of [c0, 1] x [−π, π]: the midpoint rule
+    on k x k nodes, and on (4k)² nodes in the bins where the nodes disagree (a bin holding the
+    emitter's silhouette, where pdf jumps to 0, a dark bin beside a lit one, which the
+    silhouette may cut between its nodes, or where pdf varies by more than 1.5x)."""
+    ce = np.linspace(c0, 1.0, nc + 1)
+    pe = np.linspace(-np.pi, np.pi, nphi + 1)
+    ci, pi = np.meshgrid(np.arange(nc), np.arange(nphi), indexing="ij")
+    ci, pi = ci.ravel(), pi.ravel()
+    integral, values = _midpoint(setup, p, basis_, ce[ci], ce[ci + 1], pe[pi], pe[pi + 1], k)
+    lo, hi = values.min(axis=(1, 2)), values.max(axis=(1, 2))
+    lit = (hi > 0).reshape(nc, nphi)
+    near = lit.copy()                         # a bin beside a lit one (φ wraps around)
+    near[1:] |= lit[:-1]
+    near[:-1] |= lit[1:]
+    near |= np.roll(lit, 1, axis=1) | np.roll(lit, -1, axis=1)
+    rough = np.flatnonzero(((lo <= 0) & (hi > 0)) | (hi > 1.5 * lo) | (near & ~lit).ravel())
+    for start in range(0, len(rough), 256):
+        b = rough[start:start + 256]
+        integral[b], _ = _midpoint(setup, p, basis_, ce[ci[b]], ce[ci[b] + 1], pe[pi[b]],
+                                   pe[pi[b] + 1], 4 * k)
+    return integral.reshape(nc, nphi)
+
+
+def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
+    """One χ² test from reference point p; its record (p-value, sums, verdict)."""
+    basis_, c0 = frame(setup, p)
+    n = opts.chi2_samples
+    r = np.random.default_rng(seed)
+    it = interaction(np.tile(p, (n, 1)))
+    ds, w = setup.emitter.sample_direction(it, point2(r.random((n, 2))))
+    weight, pdf = probe.to_numpy(w, n), probe.to_numpy(ds.pdf, n)
+    d = probe.to_numpy(ds.d, n)
+    keep = (np.all(np.isfinite(weight), axis=1) & np.any(weight != 0, axis=1)
+            & np.all(np.isfinite(d), axis=1) & (pdf > 0))
+    local = d[keep] @ basis_.T
+    cos, phi = np.clip(local[:, 2], -1.0, 1.0), np.arctan2(local[:, 1], local[:, 0])
+    nc, nphi, k = opts.chi2_res, 2 * opts.chi2_res, opts.chi2_ires
+    outside = int(np.sum(cos < c0))
+    hist, _, _ = np.histogram2d(cos, phi, bins=(nc, nphi), range=((c0, 1.0), (-np.pi, np.pi)))
+    integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k)
+    expected = n * integral
+    rec = {"ref": p.tolist(), "c0": c0, "hist_sum": float(keep.sum()) / n,
+           "pdf_sum": float(integral.sum()), "outside_domain": outside}
+    if keep.sum() == 0 and integral.sum() < 1e-6:
+        return {**rec, "status": "empty"}
+    if keep.sum() == 0 or outside > 0:
+        return {**rec, "status": "fail", "p_value": 0.0,
+                "why": "no sample has a non-zero weight" if keep.sum() == 0 else
+                f"{outside} samples lie outside the emitter's bounding sphere"}
+    stat, pv, dof = pearson(hist, expected)
+    rec.update(p_value=pv, statistic=stat, dof=dof, status="pass" if pv >= level else "fail")
+    if pv < level:
+        rec["histogram"], rec["expected"] = hist.tolist(), expected.tolist()
+    return rec
+
+
+def chi2(setup: Setup, opts, m_tests: int) -> list[Row]:
+    if setup.delta:
+        return [delta_directions(setup, opts)]
+    level = stats.sidak(stats.ALPHA, m_tests)
+    groups = [g for g in ref_groups(setup, 1, opts.seed) if g.chi2]
+    records = []
+    for k, g in enumerate(groups):
+        rec = chi2_at(setup, g.p[0], opts, level, seed=[opts.seed, 34, k])
+        rec.update(group=g.label, where=g.where)
+        sph = setup.sphere
+        if sph is not None:
+            rec["rel_radius"] = float(np.linalg.norm(g.p[0] - sph[0]) / sph[1] - 1.0)
+        records.append(rec)
+    tested = [r for r in records if r["status"] != "empty"]
+    failed = [r for r in tested if r["status"] == "fail"]
+    if not tested:
+        return [Row("chi2", "direction sampling matches pdf_direction", None, None, None, None,
+                    "skipped", "no reference point sees the emitter", {"points": records})]
+    p_min = min(r["p_value"] for r in tested)
+    reason = (f"Pearson χ² of sample_direction's directions vs pdf_direction over a "
+              f"{opts.chi2_res}x{2 * opts.chi2_res} (cos θ, φ) histogram, {opts.chi2_samples} "
+              f"samples, from {len(tested)} reference points, each at the Šidák level "
+              f"{level:.2e} of the emitter's {m_tests} statistical tests (own Pearson χ², "
+              f"to be merged with phonglab.stats')")
+    if failed:
+        reason += "; rejected from " + ", ".join(r["group"] for r in failed)
+    row = Row("chi2", "direction sampling matches pdf_direction (min p-value)", p_min, level,
+              None, level, "fail" if failed else "pass", reason,
+              {"points": records, "level": level})
+    row.failing_lanes = {"cell": failed} if failed else None
+    return [row]
+
+
+def delta_directions(setup: Setup, opts) -> Row:
+    s = lanes_.sample(setup, opts, "chi2")
+    live = s.live
+    if setup.kind == "position":
+        v = setup.center - s.p
+        dist = np.linalg.norm(v, axis=1)
+        err = np.maximum(np.max(np.abs(s.d - v / dist[:, None]), axis=1),
+                         np.abs(s.dist - dist) / dist)
+        what = "ds.d = (P − p)/|P − p| and ds.dist = |P − p| (relative) towards the light at P"
+    else:
+        ref = s.d[np.flatnonzero(live)[0]] if live.any() else np.zeros(3)
+        err = np.max(np.abs(s.d - ref), axis=1)
+        what = "ds.d the same at every reference point (a directional light)"
+    err = np.where(live, err, 0.0)
+    return bounded("chi2", "delta: sampled direction points at the light", err, DIRECTION_TOL,
+                   f"a delta light has no density to histogram: max over {int(live.sum())} "
+                   f"sampled lanes of the deviation from {what}; tolerance {DIRECTION_TOL:g}",
+                   {"lanes": int(live.sum()), "light": setup.center.tolist()},
+                   lane_inputs(setup, s, np.ones(s.n, bool)))
