@@ -56,11 +56,14 @@ def _one(setup, params, key, it, u, c) -> Row:
         x = params[key]
         dr.enable_grad(x)
         params.update()
-        dr.set_grad(x, v)
-        _, w = setup.emitter.sample_direction(it, u)
-        dr.forward_to(w)
-        g = c * np.sum(probe.to_numpy(dr.grad(w), len(c)), axis=1)
-        dr.disable_grad(x)
+        try:
+            dr.set_grad(x, v)
+            _, w = setup.emitter.sample_direction(it, u)
+            dr.forward_to(w)
+            g = c * np.sum(probe.to_numpy(dr.grad(w), len(c)), axis=1)
+        finally:             # a parameter left tracked would add its derivative to the next's
+            dr.disable_grad(x)
+            params.update()
         fd = []
         for step in (h, h / 2):
             s = []

@@ -104,9 +104,15 @@ def is_emitter(spec) -> bool:
     if not isinstance(name, str):
         return False
     try:
-        return mi.PluginManager.instance().plugin_type(name) == mi.ObjectType.Emitter
+        kind = mi.PluginManager.instance().plugin_type(name)
     except Exception:
         return False
+    if kind == mi.ObjectType.Unknown:       # a Python plugin (mi.register_emitter): load it
+        try:
+            return isinstance(mi.load_dict({"type": name}), mi.Emitter)
+        except Exception:
+            return False
+    return kind == mi.ObjectType.Emitter
 
 
 def _head(path: str) -> str:

@@ -123,3 +123,23 @@ def normalize(d: np.ndarray) -> np.ndarray:
 def unit_rows(r: np.random.Generator, n: int) -> np.ndarray:
     """n uniform random directions (rows)."""
     return normalize(r.normal(size=(n, 3)))
+
+
+def pdf_towards(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """pdf_direction from each p towards d, its DirectionSample3f built from the shape's hit
+    (``mi.DirectionSample3f(None, si, it)``, as an integrator's BSDF-sampled ray would), an
+    environment's from the direction alone; non-finite values as 0."""
+    n = len(d)
+    it = interaction(p)
+    if setup.kind == "surface":
+        si = trace(setup, p, d)
+        ds = mi.DirectionSample3f(None, si, it)
+        ds.emitter = mi.EmitterPtr(setup.emitter)
+        value = dr.select(si.is_valid(), setup.emitter.pdf_direction(it, ds, si.is_valid()), 0.0)
+    else:
+        ds = dr.zeros(mi.DirectionSample3f, n)
+        ds.d = probe.to_vectors(d)
+        ds.dist = mi.Float(float("inf"))
+        value = setup.emitter.pdf_direction(it, ds)
+    out = probe.to_numpy(value, n)
+    return np.where(np.isfinite(out), out, 0.0)

@@ -92,20 +92,7 @@ def frame(setup: Setup, p: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _pdf_at(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:
     """pdf_direction from p towards each direction d (traced to the shape)."""
-    n = len(d)
-    it = interaction(np.tile(p, (n, 1)))
-    if setup.kind == "surface":
-        si = lanes_.trace(setup, np.tile(p, (n, 1)), d)
-        ds = mi.DirectionSample3f(None, si, it)
-        ds.emitter = mi.EmitterPtr(setup.emitter)
-        value = dr.select(si.is_valid(), setup.emitter.pdf_direction(it, ds, si.is_valid()), 0.0)
-    else:
-        ds = dr.zeros(mi.DirectionSample3f, n)
-        ds.d = probe.to_vectors(d)
-        ds.dist = mi.Float(math.inf)
-        value = setup.emitter.pdf_direction(it, ds)
-    out = probe.to_numpy(value, n)
-    return np.where(np.isfinite(out), out, 0.0)
+    return lanes_.pdf_towards(setup, np.tile(p, (len(d), 1)), d)
 
 
 def _midpoint(setup, p, basis_, c_lo, c_hi, p_lo, p_hi, k) -> np.ndarray:
