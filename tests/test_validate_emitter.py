@@ -32,8 +32,8 @@ PLANTED = {
 }
 
 #: built-in cases expected to pass at --quick (see validate/emitter/builtins.py)
-PASSING = ["point", "directional", "area (rectangle)", "area (disk)", "area (sphere)",
-           "area (sphere, flip_normals)", "constant"]
+PASSING = ["point", "spot", "directional", "area (rectangle)", "area (disk)", "area (cube)",
+           "area (sphere)", "area (sphere, flip_normals)", "constant", "envmap"]
 
 
 @pytest.fixture

@@ -58,6 +58,7 @@ def cases(envmap_path=None) -> dict[str, tuple[dict, dict | None, dict]]:
                          "irradiance": 2.0}, None, {}),
         "area (rectangle)": ({"type": "area", "radiance": 2.0}, {"type": "rectangle"}, {}),
         "area (disk)": ({"type": "area", "radiance": 2.0}, {"type": "disk"}, {}),
+        "area (cube)": ({"type": "area", "radiance": 2.0}, {"type": "cube"}, {}),
         "area (sphere)": ({"type": "area", "radiance": 2.0}, {"type": "sphere"}, known_sphere),
         "area (sphere, flip_normals)": ({"type": "area", "radiance": 2.0},
                                         {"type": "sphere", "flip_normals": True}, known_sphere),

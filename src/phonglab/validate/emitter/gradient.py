@@ -7,8 +7,11 @@ from the reference points (:func:`~.setup.ref_groups`) with fixed sample values,
 1.5] fixed.  As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction
 v_i = |x_i| (max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
 D(h) = (S(x + hv) − S(x − hv))/2h with h = 2⁻⁷ and D(h/2); lanes whose quotients do not
-converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the round-off bound: a jump moving with x, e.g. the
-spot's cutoff edge under cutoff_angle) are left out and counted; tolerance on the kept sums
+converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the round-off bound: a jump moving with x), or
+whose one-sided quotients at h/2 disagree (|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within
+h/2 of x, e.g. a spot lane just outside its cutoff, lit for a larger cutoff_angle only, whose
+central quotient is half the one-sided slope at any step while AD gives the left one, 0),
+are left out and counted; tolerance on the kept sums
 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  The weight is evaluated before the parameter
 update is undone, and x is written as an opaque value so the kernels compile once.
 """
@@ -72,8 +75,15 @@ def _one(setup, params, key, it, u, c) -> Row:
                 s.append(_lanes(setup, it, u, c))
             fd.append((s[0] - s[1]) / (2.0 * step))
         _set(params, key, x0)
+        s0 = _lanes(setup, it, u, c)
+        one_sided = ((s[0] - s0) / (h / 2), (s0 - s[1]) / (h / 2))   # at the step h/2
     except Exception as exc:
         _set(params, key, x0)
+        if "does not depend on the input" in str(exc):
+            return Row("gradient", key, None, None, None, None, "skipped",
+                       "sample_direction's weight does not depend on this parameter (Dr.Jit: "
+                       "the output does not depend on it; e.g. a spot's texture when none is "
+                       "given)", {})
         return Row("gradient", key, None, None, None, None, "skipped",
                    f"the emitter refused the update x ± {h:g}·v: "
                    f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}", {})
@@ -81,7 +91,10 @@ def _one(setup, params, key, it, u, c) -> Row:
     s_abs = np.abs(_lanes(setup, it, u, c))
     noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))
     nonfinite = ~np.isfinite(g)
-    jumps = (np.abs(d1 - d2) > 0.01 * np.maximum(np.abs(d2), np.abs(g)) + 4.0 * noise) & ~nonfinite
+    scale = 0.01 * np.maximum(np.abs(d2), np.abs(g))
+    forward, backward = one_sided
+    jumps = ((np.abs(d1 - d2) > scale + 4.0 * noise)
+             | (np.abs(forward - backward) > scale + 8.0 * noise)) & ~nonfinite
     keep = ~jumps & ~nonfinite & np.isfinite(d1) & np.isfinite(d2)
     ad, f1, f2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
     details = {"fd_h": f1, "fd_h2": f2, "h": h / 2, "lanes": len(g),

@@ -22,7 +22,7 @@ sample_position is finite and ≥ 0 over all reference points and sample values 
 included); ``measured`` is the number of bad lanes, tolerance 0.  ``weight``: weight · ds.pdf
 equals eval_direction(ds) (float32 round-off, ``bsdf.config.REL_TOL`` = 2⁻¹⁰ relative, with
 ``rel_diff``'s floor), and for non-delta emitters it equals the radiance ``eval`` returns at
-the point a ray from it.p along ds.d hits (traced with the shape's own ``ray_intersect``; an
+the point a ray from it.p along ds.d hits (traced in a scene holding the shape alone; an
 environment's at si.wi = −ds.d), to REL_TOL plus the lane's sensitivity to an 8u move of the
 ray (``bsdf.config.sensitivity``; a textured radiance changes along the surface).  ``pdf``:
 ds.pdf = pdf_direction(ds) on every lane with a non-zero weight, to REL_TOL plus, on a lane
@@ -155,7 +155,9 @@ def weight(setup: Setup, opts) -> list[Row]:
     keep = live & same
 
     def traced(p, d):
-        return lanes_.traced_radiance(setup, p, lanes_.normalize(d))[0]
+        # not renormalized: that would undo the move of a component near ±1, the one whose
+        # rounding acos(d.y) (an environment's θ near a pole) amplifies (bsdf.config.perturb)
+        return lanes_.traced_radiance(setup, p, d)[0]
 
     sens = np.zeros(s.n)
     if keep.any():
@@ -190,7 +192,7 @@ def pdf(setup: Setup, opts) -> list[Row]:
     if check.size:
         def towards(index, d):      # the reference point stays exact: only ds.d is rounded
             lane = check[np.rint(index[:, 0]).astype(int) % len(check)]
-            return lanes_.pdf_towards(setup, s.p[lane], lanes_.normalize(d))
+            return lanes_.pdf_towards(setup, s.p[lane], d)    # not renormalized, as above
         index = np.repeat(np.arange(len(check), dtype=np.float64)[:, None], 3, axis=1)
         sens[check] = sensitivity(towards, index, s.d[check], rng(opts.seed, "pdf"))
     excess = rel / (REL_TOL + sens)

@@ -86,12 +86,12 @@ TRACE_OFFSET = 1e-4
 
 
 def trace(setup: Setup, p: np.ndarray, d: np.ndarray):
-    """The shape's intersection of rays from p along d (started TRACE_OFFSET·R along d); si.t
-    is measured from p."""
+    """The shape's intersection of rays from p along d (started TRACE_OFFSET·R along d), in
+    the scene that holds the shape alone; si.t is measured from p."""
     o = p + TRACE_OFFSET * setup.radius * d
     ray = mi.Ray3f(mi.Point3f(*(mi.Float(np.ascontiguousarray(o[:, k], np.float32))
                                 for k in range(3))), probe.to_vectors(d))
-    si = setup.shape.ray_intersect(ray)
+    si = setup.scene.ray_intersect(ray)
     si.t = si.t + TRACE_OFFSET * setup.radius
     return si
 

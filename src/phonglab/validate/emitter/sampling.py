@@ -10,7 +10,7 @@ so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π].  Bins a
 (φ, cos θ), i.e. in solid angle (dω = dφ d cos θ).  The expected count of a bin is
 N ∫_bin pdf_direction dω by the midpoint rule on ``chi2_ires``² nodes per bin (the bins where the nodes disagree -- the emitter's silhouette, a steep
 pdf, a dark bin beside a lit one -- again on (4·ires)² nodes); at each node the
-direction is traced to the shape (``shape.ray_intersect`` from p moved 10⁻⁴ R along the
+direction is traced to the shape (``scene.ray_intersect``, the shape alone, from p moved 10⁻⁴ R along the
 direction, so that a point on the surface does not hit itself) and the DirectionSample3f built
 from the hit (``mi.DirectionSample3f(None, si, it)``, as an integrator's BSDF-sampled ray
 would), an environment's from the direction alone.

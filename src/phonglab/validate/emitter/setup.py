@@ -7,7 +7,8 @@ Mitsuba needs more than the emitter object (Mitsuba 3.9.1 sources, commit 478e19
   ``m_shape->sample_direction``; without one it returns zeros in JIT variants).  An emitter
   loaded without a shape is attached to one (:data:`DEFAULT_SHAPE`, or the ``shape`` the
   caller gives, e.g. ``--set shape.type=sphere``) by loading the shape with the emitter object
-  inside it;
+  inside it; rays are traced in a scene holding that shape alone (a mesh intersects rays only
+  through a scene's acceleration structure);
 * environment and directional emitters take their bounding sphere from the scene in
   ``set_scene`` (constant.cpp, envmap.cpp, directional.cpp: radius r_scene(1 + RayEpsilon),
   RayEpsilon = 1500·2⁻²⁴): they are loaded into a tiny scene (a unit sphere at the origin, so
@@ -70,7 +71,7 @@ class Setup:
     shape: object = None
     shape_name: str = ""
     flipped: bool = False
-    scene: object = None                #: keeps an environment's scene alive
+    scene: object = None                #: an environment's scene, or the shape's alone
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))
     radius: float = 1.0                 #: the shape's or scene's bounding radius
     bsphere_radius: float | None = None  #: the radius Mitsuba's set_scene gives the emitter
@@ -141,6 +142,8 @@ def _attach(setup: Setup, shape_spec) -> None:
     elif shape_spec is not None:
         raise ValidateError("the emitter is already attached to a shape; drop --set shape.*")
     setup.shape, setup.shape_name = shape, shape.class_name()
+    # a scene of the shape alone: meshes (cube, obj, ply) intersect rays only through one
+    setup.scene = mi.load_dict({"type": "scene", "shape": shape})
     setup.flipped = bool(shape.has_flipped_normals())
     bbox = shape.bbox()
     lo, hi = np.array(bbox.min, np.float64).ravel(), np.array(bbox.max, np.float64).ravel()
@@ -236,7 +239,8 @@ def _surface_refs(setup: Setup, n: int, r) -> list[RefGroup]:
     if setup.shape_name in CLOSED:
         d = sphere_dirs(r, n)
         d[0] = unit(np.array([0.2, 0.7, -0.4]))
-        si = shape.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, c)), probe.to_vectors(d)))
+        si = setup.scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, c)),
+                                                probe.to_vectors(d)))
         hit = probe.to_numpy(si.p, n)
         ok = np.array(si.is_valid(), bool).reshape(-1)
         hit[~ok] = hit[ok][0] if ok.any() else c
