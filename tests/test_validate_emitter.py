@@ -29,6 +29,10 @@ PLANTED = {
     "area_control": set(),
     "area_pdf_measure": {"chi2"},
     "area_ray_missing_pi": {"power"},
+    "area_nan_edge": {"finite"},
+    "area_weight_noise": {"weight"},
+    "area_stale_pdf": {"pdf"},
+    "area_wrong_gradient": {"gradient"},
 }
 
 #: built-in cases expected to pass at --quick (see validate/emitter/builtins.py)
@@ -50,6 +54,10 @@ def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
     report = validate_emitter(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
     assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
     assert {r.topic for r in report.rows} == set(TOPICS)
+
+
+def test_every_topic_but_cost_has_a_planted_defect():
+    assert set().union(*PLANTED.values()) | {"cost"} == set(TOPICS)
 
 
 @pytest.mark.parametrize("label", PASSING)
@@ -122,3 +130,30 @@ def test_unknown_emitter_topic_is_bad_input():
                           env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
     assert proc.returncode == 2
     assert "unknown topic 'energy'" in proc.stderr
+
+
+@pytest.fixture
+def variant_llvm_spectral():
+    """llvm_ad_spectral for one test, the variant before it restored afterwards."""
+    import mitsuba as mi
+
+    import phonglab
+
+    before = mi.variant()
+    yield phonglab.register("llvm_ad_spectral")
+    if before:
+        phonglab.register(before)
+
+
+@pytest.mark.parametrize("label", ["point", "area (rectangle)", "area (sphere, flip_normals)",
+                                   "constant", "envmap"])
+def test_builtin_emitters_pass_quick_spectral(variant_llvm_spectral, tmp_path, label):
+    # spectral: sample_ray draws the wavelengths too, radiance.value holds rgb2spec
+    # coefficients (a λ² term): the power and gradient topics handle both
+    from phonglab.validate.emitter import builtins
+    from phonglab.validate.emitter.kind import validate_emitter
+
+    spec, shape, known = builtins.cases(builtins.envmap_file(tmp_path / "env.exr"))[label]
+    report = validate_emitter(spec, shape=shape, known=known, quick=True)
+    assert report.meta["variant"] == "llvm_ad_spectral"
+    assert report.passed, report.table(report.failing)

@@ -27,7 +27,7 @@ environment's at si.wi = −ds.d), to REL_TOL plus the lane's sensitivity to an 
 ray (``bsdf.config.sensitivity``; a textured radiance changes along the surface).  ``pdf``:
 ds.pdf = pdf_direction(ds) on every lane with a non-zero weight, to REL_TOL plus, on a lane
 that exceeds it, pdf_direction's sensitivity to an 8u move of ds.d (the reference point held
-exact: an environment map's pdf near a pole, where θ = acos(d.z) is ill-conditioned); for delta
+exact: an environment map's pdf near a pole, where θ = acos(d.y) is ill-conditioned); for delta
 emitters, ds.delta is set and ds.pdf = 1.  The identity topics drop non-finite lanes (the
 ``finite`` topic's) and count them.
 """

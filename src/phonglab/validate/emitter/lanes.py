@@ -16,7 +16,7 @@ import numpy as np
 
 from ... import probe
 from .config import rng
-from .setup import RefGroup, Setup, interaction, point2, ref_groups
+from .setup import RefGroup, Setup, interaction, point2, ref_groups, surface_interaction
 
 #: 1 − ε for a float32 sample value: the largest float32 below 1.
 ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
@@ -90,7 +90,8 @@ def trace(setup: Setup, p: np.ndarray, d: np.ndarray):
     the scene that holds the shape alone; si.t is measured from p."""
     o = p + TRACE_OFFSET * setup.radius * d
     ray = mi.Ray3f(mi.Point3f(*(mi.Float(np.ascontiguousarray(o[:, k], np.float32))
-                                for k in range(3))), probe.to_vectors(d))
+                                for k in range(3))), probe.to_vectors(d), 0.0,
+                   interaction(p).wavelengths)       # the reference lanes' wavelengths
     si = setup.scene.ray_intersect(ray)
     si.t = si.t + TRACE_OFFSET * setup.radius
     return si
@@ -109,9 +110,7 @@ def traced_radiance(setup: Setup, p: np.ndarray, d: np.ndarray):
         value = probe.to_numpy(setup.emitter.eval(si, si.is_valid()), n)
         t = np.where(valid, probe.to_numpy(si.t, n), np.inf)
         return value, t
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    if mi.is_spectral:
-        si.wavelengths = probe.interaction(np.array([0.0, 0.0, 1.0]), n=n).wavelengths
+    si = surface_interaction(n)
     si.wi = -probe.to_vectors(d)
     return probe.to_numpy(setup.emitter.eval(si), n), np.full(n, np.inf)
 

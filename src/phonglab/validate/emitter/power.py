@@ -22,6 +22,10 @@ same powers, ``Light::Phi``):
   r = 1;
 * directional (directional.cpp: weight = E π R²): Φ = E π R².
 
+In spectral variants Mitsuba's sample_ray draws the wavelengths too (weight L(λ)/p(λ), whose
+mean is ∫ L(λ) dλ over [MI_CIE_MIN, MI_CIE_MAX]); the expectation then evaluates L at
+wavelengths uniform over that range and multiplies by its width (:func:`~.setup.wavelengths`).
+
 The estimate is the mean of ``power_samples`` sample_ray weights (channels summed) with its
 standard error, the expectation's own Monte Carlo error (0 for a constant radiance) added in
 quadrature; the row passes when |mean − Φ| ≤ z · stderr + 2⁻¹⁰ |Φ| (float32 accumulation),
@@ -50,7 +54,8 @@ from ... import probe, stats
 from ..bsdf.config import REL_TOL, rel_diff
 from .config import rng
 from .identities import bounded
-from .setup import Setup, float_, interaction, point2, ref_groups, sphere_dirs
+from .setup import (Setup, float_, interaction, point2, ref_groups, sphere_dirs,
+                    surface_interaction, wavelengths)
 from .topics import Row
 
 
@@ -67,10 +72,11 @@ def sample_ray_mean(setup: Setup, opts) -> tuple[float, float]:
     return _mean(np.where(np.isfinite(x), x, 0.0))
 
 
-def intensity(setup: Setup, d: np.ndarray, r: float = 1.0) -> np.ndarray:
-    """I(ω) = weight · r² of sample_direction from P + r ω (channels summed)."""
+def intensity(setup: Setup, d: np.ndarray, r: float = 1.0, lam=None) -> np.ndarray:
+    """I(ω) = weight · r² of sample_direction from P + r ω (channels summed; wavelengths
+    ``lam`` in spectral variants)."""
     p = setup.center + r * d
-    it = interaction(p)
+    it = interaction(p, lam)
     _, w = setup.emitter.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
     return np.sum(probe.to_numpy(w, len(p)), axis=1) * r * r
 
@@ -90,14 +96,13 @@ def expected_power(setup: Setup, opts) -> tuple[float | None, float, str]:
     n = opts.power_samples
     r = rng(opts.seed, "power")
     e = setup.emitter
+    lam, width = wavelengths(n, r)
     if setup.kind == "surface":
         u = r.random((n, 2))
         ps = setup.shape.sample_position(float_(np.zeros(n)), point2(u))
-        si = mi.SurfaceInteraction3f(ps, probe.interaction(np.array([0.0, 0.0, 1.0]),
-                                                           n=n).wavelengths)
+        si = mi.SurfaceInteraction3f(ps, surface_interaction(n, lam).wavelengths)
         si.wi = mi.Vector3f(0.0, 0.0, 1.0)
-        L = np.sum(probe.to_numpy(e.eval(si), n), axis=1)
-        m, se = _mean(L)
+        m, se = _mean(width * np.sum(probe.to_numpy(e.eval(si), n), axis=1))
         A = float(np.ravel(setup.shape.surface_area())[0])
         return math.pi * A * m, math.pi * A * se, f"π·A·mean L, A = {A:.6g} (shape's area)"
     if setup.kind == "infinite":
@@ -105,32 +110,29 @@ def expected_power(setup: Setup, opts) -> tuple[float | None, float, str]:
             return None, 0.0, ("Mitsuba 3.9.1 never calls a Python emitter's set_scene: its "
                                "bounding sphere, on which its power depends, is unknown")
         d = sphere_dirs(r, n)
-        si = dr.zeros(mi.SurfaceInteraction3f, n)
-        if mi.is_spectral:
-            si.wavelengths = probe.interaction(np.array([0.0, 0.0, 1.0]), n=n).wavelengths
+        si = surface_interaction(n, lam)
         si.wi = -probe.to_vectors(d)
-        L = np.sum(probe.to_numpy(e.eval(si), n), axis=1)
-        m, se = _mean(L)
+        m, se = _mean(width * np.sum(probe.to_numpy(e.eval(si), n), axis=1))
         k = 4.0 * math.pi ** 2 * setup.bsphere_radius ** 2
         return k * m, k * se, f"4π²R²·mean L(ω), R = {setup.bsphere_radius:.6g}"
     if setup.kind == "direction":
         if setup.bsphere_radius is None:
             return None, 0.0, ("Mitsuba 3.9.1 never calls a Python emitter's set_scene: its "
                                "bounding sphere, on which its power depends, is unknown")
-        it = interaction(np.array([setup.center]))
-        _, w = e.sample_direction(it, point2(np.full((1, 2), 0.5)))
-        E = float(np.sum(probe.to_numpy(w, 1)))
-        return E * math.pi * setup.bsphere_radius ** 2, 0.0, \
-            f"E·π·R², E = {E:.6g}, R = {setup.bsphere_radius:.6g}"
+        it = interaction(np.tile(setup.center, (n, 1)), lam)
+        _, w = e.sample_direction(it, point2(np.full((n, 2), 0.5)))
+        E, se = _mean(width * np.sum(probe.to_numpy(w, n), axis=1))
+        k = math.pi * setup.bsphere_radius ** 2
+        return E * k, se * k, f"E·π·R², E = {E:.6g}, R = {setup.bsphere_radius:.6g}"
     if setup.axis is not None:
-        i0 = float(intensity(setup, setup.axis[None])[0])
+        i0, se0 = _mean(width * intensity(setup, np.tile(setup.axis, (n, 1)), lam=lam))
         k = 20000
         _, tc, tb = falloff(setup, setup.axis[None])
         th = (np.arange(k) + 0.5) * tc / k
         f = np.where(th <= tb, 1.0, (tc - th) / (tc - tb))
-        return (2.0 * math.pi * i0 * float(np.sum(f * np.sin(th)) * tc / k), 0.0,
-                f"2π I₀ ∫ f(θ) sin θ dθ, I₀ = {i0:.6g}")
-    m, se = _mean(intensity(setup, sphere_dirs(r, min(n, 1 << 16))))
+        lobe = 2.0 * math.pi * float(np.sum(f * np.sin(th)) * tc / k)
+        return lobe * i0, lobe * se0, f"2π I₀ ∫ f(θ) sin θ dθ, I₀ = {i0:.6g}"
+    m, se = _mean(width * intensity(setup, sphere_dirs(r, n), lam=lam))
     return 4.0 * math.pi * m, 4.0 * math.pi * se, "4π·mean I(ω) over uniform directions"
 
 
