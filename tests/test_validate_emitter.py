@@ -157,3 +157,13 @@ def test_builtin_emitters_pass_quick_spectral(variant_llvm_spectral, tmp_path, l
     report = validate_emitter(spec, shape=shape, known=known, quick=True)
     assert report.meta["variant"] == "llvm_ad_spectral"
     assert report.passed, report.table(report.failing)
+
+
+def test_assert_emitter_valid_names_the_failing_rows(variant_llvm_rgb):
+    from phonglab.testing import assert_emitter_valid
+
+    assert_emitter_valid("defect_point_control", plugins=[DEFECTS / "point_control.py"],
+                         quick=True, topics=["power"])
+    with pytest.raises(AssertionError, match="intensity law"):
+        assert_emitter_valid("defect_point_inverse_r", plugins=[DEFECTS / "point_inverse_r.py"],
+                             quick=True, topics=["power"])

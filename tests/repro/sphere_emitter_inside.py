@@ -1,8 +1,8 @@
 """Mitsuba 3.9.1 sphere emitter: sample_direction and pdf_direction decide "inside" differently.
 
 src/shapes/sphere.cpp (commit 478e193a): sample_direction samples by area (pdf = dist²/(A|cos|))
-when |p − c|² ≤ (r(1 + RayEpsilon))² (flip_normals; lines 255-259), pdf_direction returns the
-cone pdf 1/(2π(1 − cos θ_max)) unless r/|p − c| ≥ 1 − 2⁻²⁴ (lines 330-337).  Reference points
+when |p − c|² ≤ (r(1 + RayEpsilon))² (flip_normals; lines 256-259), pdf_direction returns the
+cone pdf 1/(2π(1 − cos θ_max)) unless r/|p − c| ≥ 1 − 2⁻²⁴ (lines 330-336).  Reference points
 on the sphere as a ray from its centre hits it (float32) fall between the two thresholds for
 a share of them: there ds.pdf ≠ pdf_direction(ds), which biases MIS next-event estimation
 with a camera inside an emitting sphere by about +0.25 % of Le per bounce (docs/checks.md).

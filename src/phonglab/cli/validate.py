@@ -1,4 +1,9 @@
-"""``phonglab validate``: physics conformance of one BSDF (or every built-in), as a table.
+"""``phonglab validate``: physics conformance of one BSDF (or every built-in) or one emitter, as
+a table.
+
+The kind is detected: the BSDF path runs first, unchanged; a spec that does not load as a BSDF
+and names an emitter (:func:`phonglab.validate.emitter.kind.is_emitter`) is validated on the
+emitter topics instead.
 
 Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed), 1 when a
 row fails, 2 on bad input (unknown plugin type, bad --set, missing file, unknown topic): one
@@ -23,6 +28,9 @@ EPILOG = """examples:
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
+  phonglab validate point --quick
+  phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
+  phonglab validate mylight --plugin mylight.py
   phonglab validate --all-builtins --quick --json out/conformance.json
   phonglab validate --all-builtins --scheduler tcp://10.0.0.5:8786 --json out/conformance.json
 """
@@ -42,14 +50,17 @@ def add_parser(sub) -> None:
                     "Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bsdf", nargs="?", metavar="BSDF",
-                   help="plugin type name (diffuse, roughplastic, lambert, ...) or an XML file")
+                   help="plugin type name (diffuse, roughplastic, lambert, ...; an emitter: "
+                        "point, area, constant, ...) or an XML file")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
-                   help="a Python file run after the variant is set; it calls mi.register_bsdf")
+                   help="a Python file run after the variant is set; it calls mi.register_bsdf "
+                        "(or mi.register_emitter)")
     p.add_argument("--variant", help="Mitsuba variant (default llvm_ad_rgb)")
     p.add_argument("--only", action="append", metavar="TOPIC",
-                   help=f"run only this topic (repeatable): {', '.join(TOPICS)}")
+                   help=f"run only this topic (repeatable): {', '.join(TOPICS)}; an emitter's: "
+                        f"{', '.join(EMITTER_TOPICS)}")
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
     add_seed(p)

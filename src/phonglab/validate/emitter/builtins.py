@@ -2,7 +2,7 @@ r"""Mitsuba 3.9.1's built-in emitters as validation cases, and the findings that
 their failing rows (matched by signature, :mod:`.signatures`).
 
 Finding ``sphere_emitter_inside`` (src/shapes/sphere.cpp at 478e193a, ``sample_direction``
-lines 255-259 and ``pdf_direction`` lines 330-337): sample_direction treats a reference point
+lines 256-259 and ``pdf_direction`` lines 330-336): sample_direction treats a reference point
 as outside when |p − c|² > (r(1 ∓ RayEpsilon))² (− without, + with flip_normals) and then
 samples the cone of directions to the sphere (pdf 1/(2π(1 − cos θ_max))), else it samples by
 area (pdf = dist²/(A |cos θ'|)); pdf_direction treats it as outside when r/|p − c| <
@@ -22,8 +22,8 @@ from .signatures import SphereSurfaceBand
 
 SPHERE_INSIDE = Known(
     "Mitsuba 3.9.1 sphere.cpp decides 'inside' differently in sample_direction "
-    "(|p − c| vs r(1 ∓ RayEpsilon), lines 255-259) and pdf_direction (r/|p − c| vs 1 − 2^-24, "
-    "lines 330-337): at points on the sphere ds.pdf ≠ pdf_direction (finding "
+    "(|p − c| vs r(1 ∓ RayEpsilon), lines 256-259) and pdf_direction (r/|p − c| vs 1 − 2^-24, "
+    "lines 330-336): at points on the sphere ds.pdf ≠ pdf_direction (finding "
     "sphere_emitter_inside; tests/repro/sphere_emitter_inside.py)",
     rows=("ds.pdf = pdf_direction(ds)", "direction sampling matches pdf_direction (min p-value)"),
     region=SphereSurfaceBand(), key="sphere_emitter_inside")

@@ -4,31 +4,32 @@ central finite difference, for every differentiable parameter ``mi.traverse`` ex
 
 AD side: the derivative of S(x) = Σ_lanes c_l Σ_channels weight_l, the weights of
 ``sample_direction`` from the reference points (:func:`~.setup.ref_groups`) with fixed sample
-values, c_l ∈ [0.5, 1.5] fixed -- the derivative an AD integrator uses for emitter sampling.
-FD side: the same sum with the samples held where they are at x, ds₀ (direction, point, pdf),
-and with them the sampling factor w₀/e₀ (the weight over the arriving radiance e₀ =
-eval_direction(ds₀) at x): Σ c_l w₀ eval_direction(ds₀)/e₀.  Mitsuba differentiates the radiance and detaches the
-sampling (envmap.cpp rebuilds its warp from the data in parameters_changed; the sampled
-direction and its pdf carry no derivative), so a difference quotient of the weights
-themselves would move the samples and the pdf with x and measure another quantity (envmap
-``data``: 168 of 512 lanes jump).  For emitters whose sampling does not depend on x (point,
-spot, area, constant) the two sides are the same function.  As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction
-v_i = |x_i| (max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
-D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2), with h = 2⁻⁷ halved (at most 16 times) until
-the sums Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound (a spectral variant's
-``radiance.value`` holds the polynomial coefficients of Mitsuba's RGB-to-spectrum model, the
-first multiplying λ² ≈ 2.5·10⁵: a step of 2⁻⁷ · 0.1 drives the sigmoid into saturation, and the
-quotients measure nothing; the step is chosen from the quotients alone, never from AD); lanes
-whose quotients do not
-converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the round-off bound: a jump moving with x), or
-whose one-sided quotients at h/2 disagree (|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within
-h/2 of x, e.g. a spot lane just outside its cutoff, lit for a larger cutoff_angle only, whose
-central quotient is half the one-sided slope at any step while AD gives the left one, 0),
-are left out and counted; tolerance on the kept sums
-4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  The weight is evaluated before the parameter
-update is undone, and x is written as an opaque value so the kernels compile once.  Holding
+values and c_l ∈ [0.5, 1.5] fixed -- the derivative an AD integrator uses for emitter
+sampling.  FD side: the same sum with the samples held where they are at x, ds₀ (direction,
+point, pdf), and with them the sampling factor w₀/e₀ (the weight over the arriving radiance
+e₀ = eval_direction(ds₀) at x): Σ c_l w₀ eval_direction(ds₀)/e₀.  Mitsuba differentiates the
+radiance and detaches the sampling (envmap.cpp rebuilds its warp from the data in
+parameters_changed; the sampled direction and its pdf carry no derivative), so a difference
+quotient of the weights themselves would move the samples and the pdf with x and measure
+another quantity (envmap ``data``: 168 of 512 lanes jump).  For emitters whose sampling does not
+depend on x (point, spot, area, constant) the two sides are the same function.  Holding
 w₀/e₀ keeps the topic apart from ``weight``: a weight wrong by a factor (that topic's defect)
 still has the derivative of that factor times the radiance's.
+
+As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction v_i = |x_i|
+(max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
+D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2).  h starts at 2⁻⁷ and is halved (at most 16
+times) until the sums Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound: a spectral
+variant's ``radiance.value`` holds the polynomial coefficients of Mitsuba's RGB-to-spectrum
+model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷ · 0.1 drives its sigmoid into
+saturation, where the quotients measure nothing (the step is chosen from the quotients alone,
+never from AD).  Lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the
+round-off bound: a jump moving with x), or whose one-sided quotients at h/2 disagree
+(|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within h/2 of x, e.g. a spot lane just outside
+its cutoff, lit for a larger cutoff_angle only, whose central quotient is half the one-sided
+slope at any step while AD gives the left one, 0) are left out and counted.  Tolerance on the
+kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  x is written as an opaque value so
+the kernels compile once, and restored after each parameter.
 """
 
 from __future__ import annotations
@@ -155,7 +156,8 @@ def _one(setup, params, key, it, u, c) -> Row:
     ok = np.isfinite(ad) and abs(ad - f2) <= tol
     return Row("gradient", key, ad, f2, abs(f1 - f2) / 3.0, tol, "pass" if ok else "fail",
                f"forward-mode AD of Σ c·(sample_direction weight) along v (v_i = |x_i|) vs the "
-               f"central difference of Σ c·w₀·eval_direction(ds₀)/e₀ (samples held), step {h / 2:.3g}·v ({halvings} halvings of 2^-7) over "
+               f"central difference of Σ c·w₀·eval_direction(ds₀)/e₀ (samples held), step "
+               f"{h / 2:.3g}·v ({halvings} halvings of 2^-7) over "
                f"{int(keep.sum())} lanes ({int(jumps.sum())} with a jump or kink, "
                f"{int(nonfinite.sum())} with a non-finite AD derivative left out); tolerance "
                f"4|D(h)−D(h/2)| + 64u(Σ|S|/h + Σ|∂S|)", details)

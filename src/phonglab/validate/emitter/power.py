@@ -31,10 +31,12 @@ standard error, the expectation's own Monte Carlo error (0 for a constant radian
 quadrature; the row passes when |mean − Φ| ≤ z · stderr + 2⁻¹⁰ |Φ| (float32 accumulation),
 z the two-sided normal quantile at the Šidák level of the emitter's m statistical tests.
 
-Laws of delta lights (identities at round-off, ``bsdf.config.REL_TOL``): the intensity
+Laws of delta lights (identities at round-off, ``bsdf.config.REL_TOL``, plus the weight's
+sensitivity to an 8u move of the reference point, ``bsdf.config.sensitivity``): the intensity
 I = weight · r² of a delta-position light is the same at r = 0.5, 1, 2 along each direction
 (the inverse-square law E = I cos θ / r²; a weight falling as 1/r fails here); a spot's
-I(θ)/I₀ equals f(θ) above, I₀ the weight · r² on its axis; a directional light's weight
+I(θ)/I₀ equals f(θ) above, I₀ the weight · r² on its axis (the law's own conditioning added:
+f at θ ± 16u/sin θ, the float32 error of spot.cpp's acos); a directional light's weight
 (its irradiance E) is the same at every reference point.
 
 Positions (surface emitters): ``pdf_position(ps)`` = ps.pdf, and for a radiance that is not
@@ -51,7 +53,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe, stats
-from ..bsdf.config import REL_TOL, rel_diff
+from ..bsdf.config import REL_TOL, rel_diff, sensitivity
 from .config import rng
 from .identities import bounded
 from .setup import (Setup, float_, interaction, point2, ref_groups, sphere_dirs,
@@ -81,14 +83,19 @@ def intensity(setup: Setup, d: np.ndarray, r: float = 1.0, lam=None) -> np.ndarr
     return np.sum(probe.to_numpy(w, len(p)), axis=1) * r * r
 
 
-def falloff(setup: Setup, d: np.ndarray) -> np.ndarray:
-    """spot.cpp's falloff_curve at directions d (from the light), from its cutoff and beam
-    width as mi.traverse reports them."""
+def falloff(setup: Setup, d: np.ndarray, dtheta=0.0) -> np.ndarray:
+    """spot.cpp's falloff_curve at directions d (from the light), their angle to the axis moved
+    by ``dtheta``, from its cutoff and beam width as mi.traverse reports them."""
     params = mi.traverse(setup.emitter)
     tc = math.radians(float(np.ravel(params["cutoff_angle"])[0]))
     tb = math.radians(float(np.ravel(params["beam_width"])[0]))
-    theta = np.arccos(np.clip(d @ setup.axis, -1.0, 1.0))
+    theta = np.arccos(np.clip(d @ setup.axis, -1.0, 1.0)) + dtheta
     return np.where(theta <= tb, 1.0, np.where(theta < tc, (tc - theta) / (tc - tb), 0.0)), tc, tb
+
+
+#: float32 error of θ = acos(cos θ) in spot.cpp's falloff_curve, times sin θ: cos θ of a
+#: normalized float32 vector is good to a few u, and acos divides that by sin θ (×4 margin).
+ACOS_ERROR = 16 * 2.0 ** -24
 
 
 def expected_power(setup: Setup, opts) -> tuple[float | None, float, str]:
@@ -204,27 +211,50 @@ def _positions(setup, opts) -> list[Row]:
     return rows
 
 
+def _intensity_sensitivity(setup, d, r, value, gen) -> np.ndarray:
+    """Per direction: the relative change of weight·r² when the reference point P + r d moves
+    by 8u per component (bsdf.config.sensitivity): a spot's I(θ) near its cutoff, where
+    f → 0 while its slope is 1/(θ_c − θ_b), is ill-conditioned in the point's rounding."""
+    def at(p, _):
+        it = interaction(p)
+        _, w = setup.emitter.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
+        return np.sum(probe.to_numpy(w, len(p)), axis=1) * r * r
+
+    return sensitivity(at, setup.center + r * d, d, gen, value=value)
+
+
 def _intensity_laws(setup, opts) -> list[Row]:
     groups = ref_groups(setup, opts.n_lanes, opts.seed)
     d = (groups[1].p - setup.center)                      # unit directions (r = 1)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
+    gen = rng(opts.seed, "power")
     i = {r: intensity(setup, d, r) for r in (0.5, 1.0, 2.0)}
-    rel = np.maximum(np.nan_to_num(rel_diff(i[0.5], i[1.0]), nan=np.inf),
-                     np.nan_to_num(rel_diff(i[2.0], i[1.0]), nan=np.inf))
-    worst = int(np.argmax(rel))
-    rows = [bounded("power", "intensity law: weight·r² the same at r = 0.5, 1, 2", rel, REL_TOL,
-                    f"max over {len(d)} directions of rel_diff(weight·r² at r = 0.5 or 2, at "
-                    f"r = 1): the inverse-square law E = I/r²; at the worst direction I = "
-                    f"{i[0.5][worst]:.6g}, {i[1.0][worst]:.6g}, {i[2.0][worst]:.6g}; "
-                    f"float32 round-off 2^-10", {"lanes": len(d)}, {"direction": d})]
+    sens = {r: _intensity_sensitivity(setup, d, r, i[r], gen) for r in i}
+    excess = np.maximum(
+        np.nan_to_num(rel_diff(i[0.5], i[1.0]), nan=np.inf) / (REL_TOL + sens[0.5] + sens[1.0]),
+        np.nan_to_num(rel_diff(i[2.0], i[1.0]), nan=np.inf) / (REL_TOL + sens[2.0] + sens[1.0]))
+    worst = int(np.argmax(excess))
+    rows = [bounded("power", "intensity law: weight·r² the same at r = 0.5, 1, 2", excess, 1.0,
+                    f"measured = max over {len(d)} directions of rel_diff(weight·r² at r = 0.5 "
+                    f"or 2, at r = 1) / (2^-10 + both sides' sensitivity to an 8u move of the "
+                    f"reference point), must be ≤ 1: the inverse-square law E = I/r²; at the "
+                    f"worst direction I = {i[0.5][worst]:.6g}, {i[1.0][worst]:.6g}, "
+                    f"{i[2.0][worst]:.6g}", {"lanes": len(d)}, {"direction": d})]
     if setup.axis is not None:
         f, _, _ = falloff(setup, d)
         i0 = float(intensity(setup, setup.axis[None])[0])
-        rel = np.nan_to_num(rel_diff(i[1.0], i0 * f), nan=np.inf)
-        rows.append(bounded("power", "spot falloff: I(θ) = I₀ f(θ)", rel, REL_TOL,
-                            f"max over {len(d)} directions of rel_diff(weight·r², I₀·f(θ)), "
-                            f"f from cutoff_angle and beam_width as spot.cpp:143-150, I₀ = "
-                            f"{i0:.6g} on the axis; float32 round-off 2^-10",
+        dtheta = ACOS_ERROR / np.maximum(np.sqrt(np.maximum(0.0, 1.0 - (d @ setup.axis) ** 2)),
+                                         1e-3)
+        law = np.max([np.nan_to_num(rel_diff(i0 * f, i0 * falloff(setup, d, k * dtheta)[0]),
+                                    nan=0.0) for k in (-1.0, 1.0)], axis=0)
+        excess = np.nan_to_num(rel_diff(i[1.0], i0 * f), nan=np.inf) / (REL_TOL + sens[1.0]
+                                                                         + law)
+        rows.append(bounded("power", "spot falloff: I(θ) = I₀ f(θ)", excess, 1.0,
+                            f"measured = max over {len(d)} directions of rel_diff(weight·r², "
+                            f"I₀·f(θ)) / (2^-10 + the weight's sensitivity to an 8u move of the "
+                            f"reference point + I₀f's to θ ± 16u/sin θ, spot.cpp's float32 acos), "
+                            f"must be ≤ 1; f from cutoff_angle and beam_width "
+                            f"as spot.cpp:143-150, I₀ = {i0:.6g} on the axis",
                             {"lanes": len(d)}, {"direction": d}))
     return rows
 

@@ -4,16 +4,16 @@ r"""The ``chi2`` topic: does ``sample_direction`` draw directions with the densi
 From each reference point p (:func:`~.setup.ref_groups`, the groups marked ``chi2``) N
 directions are drawn; those with a non-zero weight are histogrammed over (φ, cos θ) in a frame
 whose z axis points from p to the centre of the emitter's bounding box (an environment: the
-world's z).  cos θ spans [c₀, 1]: c₀ = √(1 − (R/|p − c|)²) where p lies outside the bounding
+world's z). cos θ spans [c₀, 1]: c₀ = √(1 − (R/|p − c|)²) where p lies outside the bounding
 sphere (centre c, radius R) of the shape -- no direction that leaves it can reach the emitter,
-so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π].  Bins are equal in
-(φ, cos θ), i.e. in solid angle (dω = dφ d cos θ).  The expected count of a bin is
-N ∫_bin pdf_direction dω by the midpoint rule on ``chi2_ires``² nodes per bin (the bins where the nodes disagree -- the emitter's silhouette, a steep
-pdf, a dark bin beside a lit one -- again on (4·ires)² nodes); at each node the
-direction is traced to the shape (``scene.ray_intersect``, the shape alone, from p moved 10⁻⁴ R along the
-direction, so that a point on the surface does not hit itself) and the DirectionSample3f built
-from the hit (``mi.DirectionSample3f(None, si, it)``, as an integrator's BSDF-sampled ray
-would), an environment's from the direction alone.
+so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π]. Bins are equal in (φ, cos θ),
+i.e. in solid angle (dω = dφ d cos θ). The expected count of a bin is N ∫_bin pdf_direction dω
+by the midpoint rule on ``chi2_ires``² nodes per bin (the bins where the nodes disagree -- the
+emitter's silhouette, a steep pdf, a dark bin beside a lit one -- again on (4·ires)² nodes); at
+each node the direction is traced to the shape (``scene.ray_intersect``, the shape alone, from
+p moved 10⁻⁴ R along the direction, so that a point on the surface does not hit itself) and the
+DirectionSample3f built from the hit (``mi.DirectionSample3f(None, si, it)``, as an
+integrator's BSDF-sampled ray would), an environment's from the direction alone.
 
 Pearson's χ² statistic over the bins, bins with expected count < 5 pooled into one (merged
 into the smallest remaining bin when the pool is itself < 5), p-value from the χ² distribution
@@ -35,14 +35,11 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 from scipy import stats as scipy_stats
 
 from ... import probe, stats
 from . import lanes as lanes_
-from .config import rng
 from .identities import bounded, lane_inputs
 from .setup import Setup, basis, interaction, point2, ref_groups
 from .topics import Row

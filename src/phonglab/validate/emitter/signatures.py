@@ -16,7 +16,8 @@ class SphereSurfaceBand:
     (r/|p − c| vs 1 − 2⁻²⁴) decide inside/outside differently."""
 
     limit = 2.0 * RAY_EPSILON
-    text = "reference points within 2·RayEpsilon of the sphere's surface (| |p − c|/r − 1 | ≤ 1.8e-4)"
+    text = ("reference points within 2·RayEpsilon of the sphere's surface "
+            "(| |p − c|/r − 1 | ≤ 1.8e-4)")
 
     def covers(self, row):
         lanes = row.failing_lanes or {}
