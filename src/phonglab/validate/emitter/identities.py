@@ -40,7 +40,7 @@ from ... import probe
 from ..bsdf.config import REL_TOL, rel_diff, sensitivity
 from . import lanes as lanes_
 from .config import rng
-from .setup import Setup, float_, point2
+from .setup import Setup, float_, point2, sphere_dirs
 from .topics import Row
 
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (bsdf.config.REL_TOL)"
@@ -108,7 +108,7 @@ def finite(setup: Setup, opts) -> list[Row]:
     rows.append(_count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
                            _first_bad(s, _bad(ev))))
     if not setup.delta:
-        d = s.d if setup.kind == "infinite" else lanes_.unit_rows(rng(opts.seed, "finite"), n)
+        d = s.d if setup.kind == "infinite" else sphere_dirs(rng(opts.seed, "finite"), n)
         value, _ = lanes_.traced_radiance(setup, s.p, d)
         rows.append(_count_row("eval along rays from the reference points", _bad(value), n,
                                "eval (radiance seen along a ray)"))

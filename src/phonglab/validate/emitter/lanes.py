@@ -62,9 +62,6 @@ class Lanes:
         return (np.all(np.isfinite(w), axis=1) & np.any(w != 0, axis=1)
                 & np.isfinite(self.pdf) & (self.pdf > 0))
 
-    def where(self) -> np.ndarray:
-        return np.array([self.groups[g].where for g in self.group])
-
 
 def sample(setup: Setup, opts, topic: str) -> Lanes:
     groups = ref_groups(setup, opts.n_lanes, opts.seed)
@@ -113,15 +110,6 @@ def traced_radiance(setup: Setup, p: np.ndarray, d: np.ndarray):
     si = surface_interaction(n)
     si.wi = -probe.to_vectors(d)
     return probe.to_numpy(setup.emitter.eval(si), n), np.full(n, np.inf)
-
-
-def normalize(d: np.ndarray) -> np.ndarray:
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-def unit_rows(r: np.random.Generator, n: int) -> np.ndarray:
-    """n uniform random directions (rows)."""
-    return normalize(r.normal(size=(n, 3)))
 
 
 def pdf_towards(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:

@@ -296,7 +296,3 @@ def point2(u: np.ndarray) -> mi.Point2f:
 def float_(x: np.ndarray) -> mi.Float:
     return mi.Float(np.ascontiguousarray(x, np.float32))
 
-
-def spectrum_sum(x, n: int) -> np.ndarray:
-    """A spectrum's channels summed per lane (unpolarized), (n,)."""
-    return np.sum(probe.to_numpy(x, n), axis=1)
