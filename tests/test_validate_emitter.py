@@ -37,7 +37,7 @@ PLANTED = {
 
 #: built-in cases expected to pass at --quick (see validate/emitter/builtins.py)
 PASSING = ["point", "spot", "directional", "area (rectangle)", "area (disk)", "area (cube)",
-           "area (sphere)", "area (sphere, flip_normals)", "constant", "envmap"]
+           "area (cylinder)", "area (sphere)", "area (sphere, flip_normals)", "constant", "envmap"]
 
 
 @pytest.fixture

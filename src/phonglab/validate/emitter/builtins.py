@@ -59,6 +59,7 @@ def cases(envmap_path=None) -> dict[str, tuple[dict, dict | None, dict]]:
         "area (rectangle)": ({"type": "area", "radiance": 2.0}, {"type": "rectangle"}, {}),
         "area (disk)": ({"type": "area", "radiance": 2.0}, {"type": "disk"}, {}),
         "area (cube)": ({"type": "area", "radiance": 2.0}, {"type": "cube"}, {}),
+        "area (cylinder)": ({"type": "area", "radiance": 2.0}, {"type": "cylinder"}, {}),
         "area (sphere)": ({"type": "area", "radiance": 2.0}, {"type": "sphere"}, known_sphere),
         "area (sphere, flip_normals)": ({"type": "area", "radiance": 2.0},
                                         {"type": "sphere", "flip_normals": True}, known_sphere),

@@ -30,7 +30,8 @@ class Options:
     n_lanes: int = 4096               #: sample values per reference point (finite/weight/pdf)
     chi2_samples: int = 1_000_000     #: directions per χ² reference point
     chi2_res: int = 40                #: cos θ bins (and 2× as many φ bins)
-    chi2_ires: int = 12               #: pdf midpoint nodes per bin and axis
+    chi2_ires: int = 12               #: pdf midpoint nodes per bin and axis (environments)
+    chi2_area_nodes: int = 32         #: m: F_m Fibonacci-lattice nodes on the shape (surface)
     power_samples: int = 1_000_000    #: sample_ray calls for the power estimate
     gradient_lanes: int = 4096
     cost_lanes: int = 1 << 18
@@ -43,5 +44,6 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
     if not quick:
         return Options(seed=seed, topics=tuple(topics))
     return Options(quick=True, seed=seed, topics=tuple(topics), n_lanes=1024,
-                   chi2_samples=200_000, chi2_res=24, chi2_ires=10, power_samples=200_000,
+                   chi2_samples=200_000, chi2_res=24, chi2_ires=10, chi2_area_nodes=30,
+                   power_samples=200_000,
                    gradient_lanes=1024, cost_lanes=1 << 16, cost_repeats=3)

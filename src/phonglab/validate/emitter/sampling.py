@@ -4,16 +4,22 @@ r"""The ``chi2`` topic: does ``sample_direction`` draw directions with the densi
 From each reference point p (:func:`~.setup.ref_groups`, the groups marked ``chi2``) N
 directions are drawn; those with a non-zero weight are histogrammed over (φ, cos θ) in a frame
 whose z axis points from p to the centre of the emitter's bounding box (an environment: the
-world's z). cos θ spans [c₀, 1]: c₀ = √(1 − (R/|p − c|)²) where p lies outside the bounding
+world's z).  cos θ spans [c₀, 1]: c₀ = √(1 − (R/|p − c|)²) where p lies outside the bounding
 sphere (centre c, radius R) of the shape -- no direction that leaves it can reach the emitter,
-so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π]. Bins are equal in (φ, cos θ),
-i.e. in solid angle (dω = dφ d cos θ). The expected count of a bin is N ∫_bin pdf_direction dω
-by the midpoint rule on ``chi2_ires``² nodes per bin (the bins where the nodes disagree -- the
-emitter's silhouette, a steep pdf, a dark bin beside a lit one -- again on (4·ires)² nodes); at
-each node the direction is traced to the shape (``scene.ray_intersect``, the shape alone, from
-p moved 10⁻⁴ R along the direction, so that a point on the surface does not hit itself) and the
-DirectionSample3f built from the hit (``mi.DirectionSample3f(None, si, it)``, as an
-integrator's BSDF-sampled ray would), an environment's from the direction alone.
+so the domain loses nothing -- and −1 elsewhere; φ spans [−π, π].  Bins are equal in
+(φ, cos θ), i.e. in solid angle (dω = dφ d cos θ).  The expected count of a bin is
+N ∫_bin pdf_direction dω:
+
+* surface emitters: over the shape's surface (:func:`area_integrals`: dω = |cos θ'| dA/dist²,
+  a shifted Fibonacci lattice on the shape's own sample_position parametrization, each node
+  added to its direction's bin, only nodes that are the first hit of the ray from p), where
+  the integrand stays bounded at a silhouette (an area-sampled pdf grows as 1/|cos θ'| there:
+  a midpoint rule over directions missed a cylinder's sides by 30 %); pdf_direction is
+  evaluated on a DirectionSample3f of the surface point, as an integrator's BSDF-sampled ray
+  would give it;
+* environments: the midpoint rule on ``chi2_ires``² nodes per bin, again on (4·ires)² in the
+  bins where the nodes disagree (:func:`bin_integrals`), pdf_direction from the direction
+  alone.
 
 Pearson's χ² statistic over the bins, bins with expected count < 5 pooled into one (merged
 into the smallest remaining bin when the pool is itself < 5), p-value from the χ² distribution
@@ -35,13 +41,14 @@ from __future__ import annotations
 
 import math
 
+import mitsuba as mi
 import numpy as np
 from scipy import stats as scipy_stats
 
 from ... import probe, stats
 from . import lanes as lanes_
 from .identities import bounded, lane_inputs
-from .setup import Setup, basis, interaction, point2, ref_groups
+from .setup import Setup, basis, float_, interaction, point2, ref_groups
 from .topics import Row
 
 #: Tolerance of a delta light's direction, per component of the unit vector.
@@ -130,6 +137,64 @@ def bin_integrals(setup, p, basis_, c0, nc, nphi, k) -> np.ndarray:
     return integral.reshape(nc, nphi)
 
 
+#: Consecutive Fibonacci numbers (F_m, F_{m−1}): the sizes and generators of the lattices.
+FIBONACCI = {m: (a, b) for m, a, b in ((28, 317811, 196418), (30, 832040, 514229),
+                                       (32, 2178309, 1346269))}
+
+
+def fibonacci_lattice(m: int, shift) -> np.ndarray:
+    """The Fibonacci lattice of F_m points in [0, 1)², u_i = (i/F_m, i F_{m−1}/F_m mod 1),
+    shifted by ``shift`` modulo 1 (Cranley-Patterson): a rank-1 lattice whose discrepancy is
+    O(log n / n), so the nodes a bin receives are its area to far better than a jittered grid's
+    n^(−3/4), and it aligns with no axis of a shape's parametrization."""
+    n, g = FIBONACCI[m]
+    i = np.arange(n, dtype=np.int64)
+    u = np.stack([(i + 0.5) / n, ((i * g) % n + 0.5) / n], axis=1)
+    return (u + np.asarray(shift)) % 1.0
+
+
+def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
+    """∫_bin pdf_direction dω for a surface emitter, over its shape's surface instead:
+    dω = |cos θ'| dA / dist², so ∫_bin pdf dω = ∫_{x visible, dir(x) ∈ bin} pdf(x) |cos θ'| /
+    dist² dA, integrated on the shifted Fibonacci lattice of F_k nodes (:func:`fibonacci_lattice`,
+    the shift from the seeded stream ``seed``) of the shape's own ``sample_position``
+    parametrization (dA = du / p_A, independent of the emitter's sampling), each node added to
+    the bin its direction falls in.  Not a regular grid, which aliases with the bins (1024 rows
+    of a sphere's z = 1 − 2u into 24 bin rows give some bins 42 rows and others 43, 2.3 %
+    apart), nor jittered cells, whose node counts per bin scatter by 0.46 % (+14 on a χ² of
+    1151 degrees of freedom from an off-centre point inside a sphere, over 60 seeds).  The integrand is smooth where the direction-space one
+    is not: at a silhouette an area-sampled pdf grows as 1/|cos θ'| (a cylinder's sides),
+    which a midpoint rule over directions misses by 30 % in the bins that hold it.  A point
+    counts where it is the first hit of the ray from p (the directions' own semantics)."""
+    u = fibonacci_lattice(k, np.random.default_rng(seed).random(2))
+    n = len(u)
+    ps = setup.shape.sample_position(float_(np.zeros(n)), point2(u))
+    x, nrm, p_area = (probe.to_numpy(ps.p, n), probe.to_numpy(ps.n, n),
+                      probe.to_numpy(ps.pdf, n))
+    v = x - p
+    dist = np.linalg.norm(v, axis=1)
+    d = v / np.where(dist > 0, dist, 1.0)[:, None]
+    hit = lanes_.trace(setup, np.tile(p, (n, 1)), d)
+    t_hit = probe.to_numpy(hit.t, n)
+    visible = np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius)
+    ds = mi.DirectionSample3f(ps)
+    ds.d, ds.dist = probe.to_vectors(d), mi.Float(np.ascontiguousarray(dist, np.float32))
+    ds.emitter = mi.EmitterPtr(setup.emitter)
+    it = interaction(np.tile(p, (n, 1)))
+    pdf = probe.to_numpy(setup.emitter.pdf_direction(it, ds), n)
+    cos = np.abs(np.sum(d * nrm, axis=1))
+    f = np.where(visible & np.isfinite(pdf) & (p_area > 0) & (dist > 0),
+                 pdf * cos / np.maximum(dist, 1e-30) ** 2 / np.where(p_area > 0, p_area, 1.0),
+                 0.0)
+    local = d @ basis_.T
+    ci = np.floor((local[:, 2] - c0) / (1.0 - c0) * nc).astype(int)
+    pi = np.floor((np.arctan2(local[:, 1], local[:, 0]) + np.pi) / (2 * np.pi) * nphi)
+    inside = ci >= 0                       # cos θ = 1 exactly falls in the last row
+    ci, pi = np.clip(ci, 0, nc - 1), np.clip(pi.astype(int), 0, nphi - 1)
+    out = np.bincount(ci * nphi + pi, weights=np.where(inside, f, 0.0), minlength=nc * nphi)
+    return out.reshape(nc, nphi) / n
+
+
 def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     """One χ² test from reference point p; its record (p-value, sums, verdict)."""
     basis_, c0 = frame(setup, p)
@@ -146,7 +211,11 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     nc, nphi, k = opts.chi2_res, 2 * opts.chi2_res, opts.chi2_ires
     outside = int(np.sum(cos < c0))
     hist, _, _ = np.histogram2d(cos, phi, bins=(nc, nphi), range=((c0, 1.0), (-np.pi, np.pi)))
-    integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k)
+    if setup.kind == "surface":
+        integral = area_integrals(setup, p, basis_, c0, nc, nphi, opts.chi2_area_nodes,
+                                  [*np.atleast_1d(seed), 1])
+    else:
+        integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k)
     expected = n * integral
     rec = {"ref": p.tolist(), "c0": c0, "hist_sum": float(keep.sum()) / n,
            "pdf_sum": float(integral.sum()), "outside_domain": outside}
