@@ -32,8 +32,8 @@ saw an impossible cell.  They differ in one rule: stats.pearson_chi2 rejects out
 sample in a bin whose integral is exactly 0, which the BSDF topic pairs with a re-integration
 of such slivers (sphere_bins); the lattice here has none yet, so the emitter topic keeps its
 pooling until the two are merged.  A reference point whose histogram is empty while
-∫pdf > 0 fails; one where both are empty (the back of a one-sided emitter) is not tested.  ``mi.chi2.EmitterAdapter``
-(mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
+∫pdf > 0 fails; one where both are empty (the back of a one-sided emitter) is not tested.
+``mi.chi2.EmitterAdapter`` (mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
 reference point is its own test and a sample counts only when its weight is not 0.
 
 Delta emitters have no density: for a delta-position light every ds.d must point from the
@@ -159,18 +159,19 @@ def fibonacci_lattice(m: int, shift) -> np.ndarray:
 
 
 def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
-    """∫_bin pdf_direction dω for a surface emitter, over its shape's surface instead:
-    dω = |cos θ'| dA / dist², so ∫_bin pdf dω = ∫_{x visible, dir(x) ∈ bin} pdf(x) |cos θ'| /
-    dist² dA, integrated on the shifted Fibonacci lattice of F_k nodes (:func:`fibonacci_lattice`,
+    """∫_bin pdf_direction dω for a surface emitter, over its shape's surface instead: dω = |cos
+    θ'| dA / dist², so ∫_bin pdf dω = ∫_{x visible, dir(x) ∈ bin} pdf(x) |cos θ'| / dist²
+    dA, integrated on the shifted Fibonacci lattice of F_k nodes (:func:`fibonacci_lattice`,
     the shift from the seeded stream ``seed``) of the shape's own ``sample_position``
-    parametrization (dA = du / p_A, independent of the emitter's sampling), each node added to
-    the bin its direction falls in.  Not a regular grid, which aliases with the bins (1024 rows
-    of a sphere's z = 1 − 2u into 24 bin rows give some bins 42 rows and others 43, 2.3 %
-    apart), nor jittered cells, whose node counts per bin scatter by 0.46 % (+14 on a χ² of
-    1151 degrees of freedom from an off-centre point inside a sphere, over 60 seeds).  The integrand is smooth where the direction-space one
-    is not: at a silhouette an area-sampled pdf grows as 1/|cos θ'| (a cylinder's sides),
-    which a midpoint rule over directions misses by 30 % in the bins that hold it.  A point
-    counts where it is the first hit of the ray from p (the directions' own semantics)."""
+    parametrization (dA = du / p_A, independent of the emitter's sampling), each node added
+    to the bin its direction falls in. Not a regular grid, which aliases with the bins (1024
+    rows of a sphere's z = 1 − 2u into 24 bin rows give some bins 42 rows and others 43, 2.3
+    % apart), nor jittered cells, whose node counts per bin scatter by 0.46 % (+14 on a χ²
+    of 1151 degrees of freedom from an off-centre point inside a sphere, over 60 seeds). The
+    integrand is smooth where the direction-space one is not: at a silhouette an
+    area-sampled pdf grows as 1/|cos θ'| (a cylinder's sides), which a midpoint rule over
+    directions misses by 30 % in the bins that hold it. A point counts where it is the first
+    hit of the ray from p (the directions' own semantics)."""
     u = fibonacci_lattice(k, np.random.default_rng(seed).random(2))
     n = len(u)
     ps = setup.shape.sample_position(float_(np.zeros(n)), point2(u))
