@@ -182,10 +182,15 @@ def _emitter(args, params, core, not_bsdf: ValidateError):
 
     if mi.variant() is None:
         register(args.variant)
-    if not emitter.is_emitter(args.bsdf):
+    if not args.plugin and not emitter.is_emitter(args.bsdf):
         raise not_bsdf
-    target = emitter.prepare(args.bsdf, variant=args.variant, params=params,
-                             plugins=args.plugin)
+    try:                 # plugin files are run here if the BSDF path stopped before them
+        target = emitter.prepare(args.bsdf, variant=args.variant, params=params,
+                                 plugins=args.plugin)
+    except ValidateError:
+        if emitter.is_emitter(args.bsdf):
+            raise        # an emitter's own bad input
+        raise not_bsdf from None
     report = core.run(emitter.EMITTER, target, topics=check_topics(args.only, emitter.TOPICS),
                       seed=args.seed, quick=args.quick)
     note = "" if args.no_sweep else ("\n\nan emitter is validated at the given parameter "
