@@ -1,4 +1,5 @@
-"""Helpers for the test suites of BSDF authors: one line validates a BSDF inside pytest.
+"""Helpers for the test suites of BSDF and emitter authors: one line validates a plugin inside
+pytest.
 
 ::
 
@@ -17,14 +18,18 @@ seed, quick, known, plugins); by default the BSDF is checked across its paramete
 (:mod:`phonglab.validate.sweep`; ``params`` are pinned), ``sweep=False`` checks the given point
 alone.  On failure the AssertionError's message is the table of the failing rows, grouped by
 the parameter point they failed at, so pytest shows what is wrong and where.
+:func:`assert_emitter_valid` does the same for an emitter, at the given point
+(:func:`phonglab.validate.validate_emitter`; ``shape`` attaches an area emitter to a shape)::
+
+    assert_emitter_valid("mylight", plugins=[HERE / "mylight.py"], quick=True)
 """
 
 from __future__ import annotations
 
-from .validate import validate_bsdf
+from .validate import validate_bsdf, validate_emitter
 from .verdict import point_label, table
 
-__all__ = ["assert_bsdf_valid"]
+__all__ = ["assert_bsdf_valid", "assert_emitter_valid"]
 
 
 def assert_bsdf_valid(spec, sweep: bool = True, **options):
@@ -41,4 +46,15 @@ def assert_bsdf_valid(spec, sweep: bool = True, **options):
         raise AssertionError(f"{report.meta.get('bsdf', spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
                              + text)
+    return report
+
+
+def assert_emitter_valid(spec, **options):
+    """Validate the emitter ``spec``; raise AssertionError listing the failing rows. Returns
+    the report."""
+    report = validate_emitter(spec, **options)
+    if not report.passed:
+        raise AssertionError(f"{report.meta.get('emitter', spec)} failed "
+                             f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
+                             + report.table(report.failing))
     return report

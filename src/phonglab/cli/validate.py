@@ -1,4 +1,9 @@
-"""``phonglab validate``: physics conformance of one BSDF (or every built-in), as a table.
+"""``phonglab validate``: physics conformance of one BSDF (or every built-in) or one emitter, as
+a table.
+
+The kind is detected: the BSDF path runs first, unchanged; a spec that does not load as a BSDF
+and names an emitter (:func:`phonglab.validate.emitter.kind.is_emitter`) is validated on the
+emitter topics instead.
 
 Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed), 1 when a
 row fails, 2 on bad input (unknown plugin type, bad --set, missing file, unknown topic): one
@@ -13,6 +18,7 @@ from pathlib import Path
 from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate.bsdf.topics import TOPICS
+from ..validate.emitter.topics import TOPICS as EMITTER_TOPICS
 from ..validate.inputs import ValidateError, check_topics
 from ..verdict import Report
 from .options import add_seed
@@ -22,6 +28,9 @@ EPILOG = """examples:
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
+  phonglab validate point --quick
+  phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
+  phonglab validate mylight --plugin mylight.py
   phonglab validate --all-builtins --quick --json out/conformance.json
   phonglab validate --all-builtins --scheduler tcp://10.0.0.5:8786 --json out/conformance.json
 """
@@ -34,17 +43,24 @@ def add_parser(sub) -> None:
         description="Validate a Mitsuba 3 BSDF (a registered plugin type, a Python plugin "
                     "registered by --plugin, or an XML file holding one <bsdf>) on every "
                     f"topic ({', '.join(TOPICS)}) and print one row per check. "
+                    "An emitter (a name, dict or XML that loads as one, or a --plugin file "
+                    "calling mi.register_emitter) is detected and validated on the emitter "
+                    f"topics ({', '.join(EMITTER_TOPICS)}); --set shape.type=sphere attaches an "
+                    "area emitter to a shape. "
                     "Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bsdf", nargs="?", metavar="BSDF",
-                   help="plugin type name (diffuse, roughplastic, lambert, ...) or an XML file")
+                   help="plugin type name (diffuse, roughplastic, lambert, ...; an emitter: "
+                        "point, area, constant, ...) or an XML file")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
-                   help="a Python file run after the variant is set; it calls mi.register_bsdf")
+                   help="a Python file run after the variant is set; it calls mi.register_bsdf "
+                        "(or mi.register_emitter)")
     p.add_argument("--variant", help="Mitsuba variant (default llvm_ad_rgb)")
     p.add_argument("--only", action="append", metavar="TOPIC",
-                   help=f"run only this topic (repeatable): {', '.join(TOPICS)}")
+                   help=f"run only this topic (repeatable): {', '.join(TOPICS)}; an emitter's: "
+                        f"{', '.join(EMITTER_TOPICS)}")
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
     add_seed(p)
@@ -67,7 +83,8 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     """Every check that needs no Mitsuba, in the order a user would fix them: the --set
     parameters and the topics to run."""
     from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
-    topics = check_topics(args.only)
+    topics = args.only and check_topics(args.only, TOPICS + tuple(
+        t for t in EMITTER_TOPICS if t not in TOPICS))
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
             raise ValidateError("--all-builtins takes no BSDF, --set or --plugin; drop them or "
@@ -140,8 +157,49 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
+def _bsdf(args, params, core, sweep, BSDF):
+    """(report, label, text) of a BSDF: its sweep, or the given point with --no-sweep."""
+    topics = check_topics(args.only)
+    if args.no_sweep:
+        target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
+                              plugins=args.plugin)
+        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
+        return report, target.label, report.table()
+    with runner_from_args(args) as runner:
+        report = sweep.validate(BSDF, args.bsdf, variant=args.variant, params=params,
+                                topics=topics, seed=args.seed, quick=args.quick,
+                                plugins=args.plugin, runner=runner)
+    return report, report.meta["bsdf"], sweep_text(report)
+
+
+def _emitter(args, params, core, not_bsdf: ValidateError):
+    """(report, label, text) of an emitter, at the given point (the sweep is the BSDF
+    kind's); raises the BSDF's error ``not_bsdf`` when ``args.bsdf`` names no emitter either."""
+    import mitsuba as mi
+
+    from ..registration import register
+    from ..validate.emitter import kind as emitter
+
+    if mi.variant() is None:
+        register(args.variant)
+    if not args.plugin and not emitter.is_emitter(args.bsdf):
+        raise not_bsdf
+    try:                 # plugin files are run here if the BSDF path stopped before them
+        target = emitter.prepare(args.bsdf, variant=args.variant, params=params,
+                                 plugins=args.plugin)
+    except ValidateError:
+        if emitter.is_emitter(args.bsdf):
+            raise        # an emitter's own bad input
+        raise not_bsdf from None
+    report = core.run(emitter.EMITTER, target, topics=check_topics(args.only, emitter.TOPICS),
+                      seed=args.seed, quick=args.quick)
+    note = "" if args.no_sweep else ("\n\nan emitter is validated at the given parameter "
+                                     "point (the parameter sweep is the BSDF kind's)")
+    return report, target.label, report.table() + note
+
+
 def run(args) -> int:
-    params, topics = _check_inputs(args)
+    params, _ = _check_inputs(args)       # topics again per kind, once it is known
     if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
@@ -150,19 +208,13 @@ def run(args) -> int:
     from ..validate import core, html, sweep   # lazy: Mitsuba and matplotlib load only for a run
     from ..validate.bsdf.kind import BSDF
 
-    if args.no_sweep:
-        target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
-                              plugins=args.plugin)
-        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
-        label = target.label
-        print(report.table())
-    else:
-        with runner_from_args(args) as runner:
-            report = sweep.validate(BSDF, args.bsdf, variant=args.variant, params=params,
-                                    topics=topics, seed=args.seed, quick=args.quick,
-                                    plugins=args.plugin, runner=runner)
-        label = report.meta["bsdf"]
-        print(sweep_text(report))
+    try:
+        report, label, text = _bsdf(args, params, core, sweep, BSDF)
+    except ValidateError as not_bsdf:
+        # Not a BSDF: an emitter is validated on its own topics (the plugin files have run,
+        # so a name they registered is known to Mitsuba's plugin manager by now).
+        report, label, text = _emitter(args, params, core, not_bsdf)
+    print(text)
     if args.json:
         report.write_json(args.json)
     if args.report:

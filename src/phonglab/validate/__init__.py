@@ -10,17 +10,29 @@ BSDF rows: :mod:`.bsdf.topics`.  Rows and reports: :mod:`phonglab.verdict`; user
 :mod:`.inputs` and :mod:`phonglab.settings`; Mitsuba's built-ins and their findings:
 :mod:`.builtins`; many cases as jobs: :mod:`.batch`.
 
-Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` does.
+The emitter kind (:mod:`.emitter`, :func:`validate_emitter`): ``finite``, ``weight``, ``pdf``,
+``chi2``, ``power``, ``gradient``, ``cost``.
+
+Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` and
+``validate_emitter`` do.
 """
 
 from ..verdict import Report
 from .bsdf.topics import TOPICS
 
-__all__ = ["TOPICS", "validate_bsdf"]
+__all__ = ["TOPICS", "validate_bsdf", "validate_emitter"]
 
 
 def validate_bsdf(spec, **options) -> Report:
     """Validate a BSDF on every topic; see :func:`phonglab.validate.bsdf.kind.validate_bsdf`."""
     from .bsdf.kind import validate_bsdf as run   # lazy: imports Mitsuba (seconds) only when called
+
+    return run(spec, **options)
+
+
+def validate_emitter(spec, **options) -> Report:
+    """Validate an emitter on every emitter topic; see
+    :func:`phonglab.validate.emitter.kind.validate_emitter`."""
+    from .emitter.kind import validate_emitter as run   # lazy, as validate_bsdf
 
     return run(spec, **options)

@@ -1,0 +1,184 @@
+r"""The ``gradient`` topic: Dr.Jit's derivative of the sampled radiance / intensity against a
+central finite difference, for every differentiable parameter ``mi.traverse`` exposes
+(radiance, intensity, irradiance, an envmap's data, a spot's cutoff_angle and beam_width).
+
+AD side: the derivative of S(x) = Σ_lanes c_l Σ_channels weight_l, the weights of
+``sample_direction`` from the reference points (:func:`~.setup.ref_groups`) with fixed sample
+values and c_l ∈ [0.5, 1.5] fixed -- the derivative an AD integrator uses for emitter
+sampling.  FD side: the same sum with the samples held where they are at x, ds₀ (direction,
+point, pdf), and with them the sampling factor w₀/e₀ (the weight over the arriving radiance
+e₀ = eval_direction(ds₀) at x): Σ c_l w₀ eval_direction(ds₀)/e₀.  Mitsuba differentiates the
+radiance and detaches the sampling (envmap.cpp rebuilds its warp from the data in
+parameters_changed; the sampled direction and its pdf carry no derivative), so a difference
+quotient of the weights themselves would move the samples and the pdf with x and measure
+another quantity (envmap ``data``: 168 of 512 lanes jump).  For emitters whose sampling does not
+depend on x (point, spot, area, constant) the two sides are the same function.  Holding
+w₀/e₀ keeps the topic apart from ``weight``: a weight wrong by a factor (that topic's defect)
+still has the derivative of that factor times the radiance's.
+
+As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction v_i = |x_i|
+(max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
+D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2).  h starts at 2⁻⁷ and is halved (at most 16
+times) until the sums Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound: a spectral
+variant's ``radiance.value`` holds the polynomial coefficients of Mitsuba's RGB-to-spectrum
+model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷ · 0.1 drives its sigmoid into
+saturation, where the quotients measure nothing (the step is chosen from the quotients alone,
+never from AD).  Lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the
+round-off bound: a jump moving with x), or whose one-sided quotients at h/2 disagree
+(|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within h/2 of x, e.g. a spot lane just outside
+its cutoff, lit for a larger cutoff_angle only, whose central quotient is half the one-sided
+slope at any step while AD gives the left one, 0) are left out and counted.  Tolerance on the
+kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  x is written as an opaque value so
+the kernels compile once, and restored after each parameter.
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ... import probe
+from ..bsdf.config import EPS32
+from .config import rng
+from .lanes import with_edges
+from .setup import Setup, interaction, point2, ref_groups
+from .topics import Row
+
+ROUND_OFF = 64 * EPS32
+#: The first finite-difference step (relative, along v), and how often it may be halved.
+H0 = 2.0 ** -7
+MAX_HALVINGS = 16
+
+
+def _lanes(setup: Setup, it, fixed, c) -> np.ndarray:
+    """Per lane: c · Σ_channels w₀ · eval_direction(ds₀) / e₀ at the fixed samples ds₀ (the
+    weight with its sampling factor w₀/e₀ held; 0 where e₀ = 0)."""
+    ds, ratio = fixed
+    x = probe.to_numpy(setup.emitter.eval_direction(it, ds), len(c)) * ratio
+    return c * np.sum(np.where(np.isfinite(x), x, 0.0), axis=1)
+
+
+def _fixed(setup: Setup, it, u, n: int):
+    """ds₀ = sample_direction at the current parameters (evaluated, no gradient) and the
+    sampling factor w₀/e₀ per channel, e₀ = eval_direction(ds₀)."""
+    ds, w = setup.emitter.sample_direction(it, u)
+    ds = dr.detach(ds)
+    dr.eval(ds)
+    w0 = probe.to_numpy(w, n)
+    e0 = probe.to_numpy(setup.emitter.eval_direction(it, ds), n)
+    return ds, np.where((e0 != 0) & np.isfinite(w0), w0 / np.where(e0 != 0, e0, 1.0), 0.0)
+
+
+def _set(params, key, value):
+    value = type(value)(value)
+    dr.make_opaque(value)
+    params[key] = value
+    params.update()
+
+
+def _ad(setup, params, key, v, it, u, c) -> np.ndarray:
+    """Per lane: the forward-mode derivative of c·Σ weight along v."""
+    x = params[key]
+    dr.enable_grad(x)
+    params.update()
+    try:
+        dr.set_grad(x, v)
+        _, w = setup.emitter.sample_direction(it, u)
+        dr.forward_to(w)
+        return c * np.sum(probe.to_numpy(dr.grad(w), len(c)), axis=1)
+    finally:                 # a parameter left tracked would add its derivative to the next's
+        dr.disable_grad(x)
+        params.update()
+
+
+def _quotients(setup, params, key, x0, v, h, it, fixed, c, s0):
+    """(D(h), D(h/2), D⁺(h/2), D⁻(h/2)) per lane; x is restored to x0."""
+    fd = []
+    for step in (h, h / 2):
+        s = []
+        for k in (1.0, -1.0):
+            _set(params, key, x0 + (k * step) * v)
+            s.append(_lanes(setup, it, fixed, c))
+        fd.append((s[0] - s[1]) / (2.0 * step))
+    _set(params, key, x0)
+    return fd[0], fd[1], (s[0] - s0) / (h / 2), (s0 - s[1]) / (h / 2)
+
+
+def _refused(key, h, exc) -> Row:
+    if "does not depend on the input" in str(exc):
+        return Row("gradient", key, None, None, None, None, "skipped",
+                   "sample_direction's weight does not depend on this parameter (Dr.Jit: the "
+                   "output does not depend on it; e.g. a spot's texture when none is given)", {})
+    return Row("gradient", key, None, None, None, None, "skipped",
+               f"the emitter refused the update x ± {h:g}·v: "
+               f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}", {})
+
+
+def _one(setup, params, key, it, u, c) -> Row:
+    x0 = params[key]
+    if not dr.is_diff_v(x0) or dr.type_v(x0) not in (dr.VarType.Float32, dr.VarType.Float64):
+        return Row("gradient", key, None, None, None, None, "skipped",
+                   f"{type(x0).__name__} is not a differentiable floating-point value", {})
+    x0 = type(x0)(x0)
+    values = np.array(x0).ravel() if dr.width(x0) else np.zeros(1)
+    fill = max(float(np.max(np.abs(values))), 0.1)
+    v = dr.detach(dr.select(x0 != 0, dr.abs(x0), fill))
+    h = H0
+    try:
+        g = _ad(setup, params, key, v, it, u, c)
+        fixed = _fixed(setup, it, u, len(c))
+        s0 = _lanes(setup, it, fixed, c)
+        s_abs = np.abs(s0)
+        for halvings in range(MAX_HALVINGS + 1):
+            h = H0 * 2.0 ** -halvings
+            d1, d2, forward, backward = _quotients(setup, params, key, x0, v, h, it, fixed, c,
+                                                   s0)
+            noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))
+            if abs(np.nansum(d1) - np.nansum(d2)) <= 0.01 * abs(np.nansum(d2)) + noise.sum():
+                break
+    except Exception as exc:
+        _set(params, key, x0)
+        return _refused(key, h, exc)
+    nonfinite = ~np.isfinite(g)
+    scale = 0.01 * np.maximum(np.abs(d2), np.abs(g))
+    jumps = ((np.abs(d1 - d2) > scale + 4.0 * noise)
+             | (np.abs(forward - backward) > scale + 8.0 * noise)) & ~nonfinite
+    keep = ~jumps & ~nonfinite & np.isfinite(d1) & np.isfinite(d2)
+    ad, f1, f2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
+    details = {"fd_h": f1, "fd_h2": f2, "h": h / 2, "halvings": halvings, "lanes": len(g),
+               "jump_lanes": int(jumps.sum()), "nonfinite_ad_lanes": int(nonfinite.sum())}
+    if keep.sum() < len(g) // 2:
+        return Row("gradient", key, ad, f2, None, None, "skipped",
+                   f"the difference quotients do not converge on {int(jumps.sum())} of {len(g)} "
+                   f"lanes: nothing to compare", details)
+    tol = 4.0 * abs(f1 - f2) + float(noise[keep].sum())
+    ok = np.isfinite(ad) and abs(ad - f2) <= tol
+    return Row("gradient", key, ad, f2, abs(f1 - f2) / 3.0, tol, "pass" if ok else "fail",
+               f"forward-mode AD of Σ c·(sample_direction weight) along v (v_i = |x_i|) vs the "
+               f"central difference of Σ c·w₀·eval_direction(ds₀)/e₀ (samples held), step "
+               f"{h / 2:.3g}·v ({halvings} halvings of 2^-7) over "
+               f"{int(keep.sum())} lanes ({int(jumps.sum())} with a jump or kink, "
+               f"{int(nonfinite.sum())} with a non-finite AD derivative left out); tolerance "
+               f"4|D(h)−D(h/2)| + 64u(Σ|S|/h + Σ|∂S|)", details)
+
+
+def gradient(setup: Setup, opts) -> list[Row]:
+    if not dr.is_diff_v(mi.Float):
+        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
+                    f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
+                    {})]
+    params = mi.traverse(setup.emitter)
+    keys = [k for k in params.keys()
+            if not params.properties[k][3] & int(mi.ParamFlags.NonDifferentiable)]
+    if not keys:
+        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
+                    "mi.traverse exposes no differentiable parameter", {})]
+    n = max(1, opts.gradient_lanes // 4)
+    groups = ref_groups(setup, n, opts.seed)
+    p = np.concatenate([g.p for g in groups])
+    r = rng(opts.seed, "gradient")
+    it = interaction(p)
+    u = point2(with_edges(r.random((len(p), 2)), n))
+    c = 0.5 + r.random(len(p))
+    return [_one(setup, params, key, it, u, c) for key in keys]

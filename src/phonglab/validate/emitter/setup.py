@@ -1,0 +1,298 @@
+r"""The emitter under test, placed where it can be sampled, and the reference points it is
+probed from.
+
+Mitsuba needs more than the emitter object (Mitsuba 3.9.1 sources, commit 478e193a):
+
+* an ``area`` emitter samples through its shape (src/emitters/area.cpp, ``sample_direction``:
+  ``m_shape->sample_direction``; without one it returns zeros in JIT variants).  An emitter
+  loaded without a shape is attached to one (:data:`DEFAULT_SHAPE`, or the ``shape`` the
+  caller gives, e.g. ``--set shape.type=sphere``) by loading the shape with the emitter object
+  inside it; rays are traced in a scene holding that shape alone (a mesh intersects rays only
+  through a scene's acceleration structure);
+* environment and directional emitters take their bounding sphere from the scene in
+  ``set_scene`` (constant.cpp, envmap.cpp, directional.cpp: radius r_scene(1 + RayEpsilon),
+  RayEpsilon = 1500·2⁻²⁴): they are loaded into a tiny scene (a unit sphere at the origin, so
+  r_scene = √3) and the radius their ``sample_ray`` weights use is that one.  Mitsuba 3.9.1 never
+  calls a Python emitter's ``set_scene``: for a Python plugin the radius is unknown and the
+  rows that need it say so;
+* a delta-position light (point, spot) has a position: found as ``ds.p`` of one sample.
+
+Reference points (:class:`RefGroup`, one point per lane): for a surface emitter outside its
+shape (at 3 and 1.5 bounding radii), on both sides of a one-sided flat shape (rectangle, disk),
+and for a closed shape (sphere, cube) on its surface as a ray from inside computes it (float32
+intersection points, where a renderer's next-event estimation starts) and inside it (the
+centre and an off-centre point); for an environment emitter the scene centre and points inside
+its bounding sphere; for a delta-position light points at distances 0.5, 1 and 2 over random
+directions (for a spot, half of them inside a cone of 1.3× its cutoff angle about its axis); for
+a directional light points inside and outside the scene's bounding sphere.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ... import probe
+from ..inputs import ValidateError
+from .config import rng
+
+#: The shape an area emitter loaded alone is attached to (Mitsuba's default rectangle, 2 × 2).
+DEFAULT_SHAPE = {"type": "rectangle"}
+#: Shapes that enclose a volume (reference points inside them make sense).
+CLOSED = ("Sphere", "Cube")
+#: Shapes emitting from one side only whose other side is probed too.
+FLAT = ("Rectangle", "Disk")
+#: math::RayEpsilon of float variants: 1500 · 2⁻²⁴ (include/mitsuba/core/math.h).
+RAY_EPSILON = 1500 * 2.0 ** -24
+
+
+@dataclass
+class RefGroup:
+    """Reference points of one kind: ``where`` ∈ outside/front/behind/on/inside/near, ``p``
+    (n, 3) one point per lane; ``chi2``: whether the χ² topic tests from ``p[0]``."""
+
+    label: str
+    where: str
+    p: np.ndarray
+    chi2: bool = True
+
+
+@dataclass
+class Setup:
+    """One emitter ready to be probed, with what the topics need to know of its geometry."""
+
+    emitter: object
+    kind: str                           #: "position", "direction", "surface" or "infinite"
+    python: bool                        #: a Python plugin (mi.register_emitter)
+    shape: object = None
+    shape_name: str = ""
+    flipped: bool = False
+    scene: object = None                #: an environment's scene, or the shape's alone
+    center: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    radius: float = 1.0                 #: the shape's or scene's bounding radius
+    bsphere_radius: float | None = None  #: the radius Mitsuba's set_scene gives the emitter
+    axis: np.ndarray | None = None      #: a spot's axis (to_world · +z)
+    cutoff_deg: float | None = None
+
+    @property
+    def delta(self) -> bool:
+        return self.kind in ("position", "direction")
+
+    @property
+    def sphere(self) -> tuple[np.ndarray, float] | None:
+        """(centre, radius) when the shape is a sphere (its bbox is centre ± r)."""
+        if self.shape_name != "Sphere":
+            return None
+        return self.center, self.radius / math.sqrt(3.0)
+
+
+def kind_of(emitter) -> str:
+    flags = int(emitter.flags())
+    if flags & int(mi.EmitterFlags.DeltaPosition):
+        return "position"
+    if flags & int(mi.EmitterFlags.DeltaDirection):
+        return "direction"
+    if flags & int(mi.EmitterFlags.Infinite):
+        return "infinite"
+    if flags & int(mi.EmitterFlags.Surface):
+        return "surface"
+    raise ValidateError(f"the emitter's flags {flags} name none of DeltaPosition, "
+                        f"DeltaDirection, Infinite, Surface; set m_flags in its constructor")
+
+
+def build(emitter, shape_spec: dict | None = None) -> Setup:
+    """The :class:`Setup` of a loaded emitter (attached to a shape or placed in a scene)."""
+    if not dr.is_jit_v(mi.Float):
+        raise ValidateError(f"the emitter validator runs in a JIT variant (llvm_ad_rgb, "
+                            f"cuda_ad_rgb, ...), not {mi.variant()}; pass --variant llvm_ad_rgb")
+    kind = kind_of(emitter)
+    python = type(emitter) is not mi.Emitter
+    if shape_spec is not None and kind != "surface":
+        raise ValidateError("--set shape.* attaches a surface emitter to a shape; this emitter "
+                            "is not a surface emitter, drop the shape")
+    setup = Setup(emitter, kind, python)
+    if kind == "surface":
+        _attach(setup, shape_spec)
+    elif kind in ("infinite", "direction"):
+        setup.scene = mi.load_dict({"type": "scene", "emitter": emitter,
+                                    "shape": {"type": "sphere"}})
+        bs = setup.scene.bbox().bounding_sphere()
+        setup.center, setup.radius = np.array(bs.center, np.float64).ravel(), float(bs.radius)
+        if not python:
+            setup.bsphere_radius = max(RAY_EPSILON, setup.radius * (1.0 + RAY_EPSILON))
+    else:
+        _locate(setup)
+    return setup
+
+
+def _attach(setup: Setup, shape_spec) -> None:
+    shape = setup.emitter.get_shape()
+    if shape is None:
+        spec = dict(shape_spec or DEFAULT_SHAPE)
+        try:
+            shape = mi.load_dict({**spec, "emitter": setup.emitter})
+        except Exception as exc:
+            raise ValidateError(f"cannot attach the emitter to the shape {spec!r} "
+                                f"({str(exc).splitlines()[-1][:200]}); give a shape type such "
+                                f"as rectangle, disk, sphere or cube") from exc
+    elif shape_spec is not None:
+        raise ValidateError("the emitter is already attached to a shape; drop --set shape.*")
+    setup.shape, setup.shape_name = shape, shape.class_name()
+    # a scene of the shape alone: meshes (cube, obj, ply) intersect rays only through one
+    setup.scene = mi.load_dict({"type": "scene", "shape": shape})
+    setup.flipped = bool(shape.has_flipped_normals())
+    bbox = shape.bbox()
+    lo, hi = np.array(bbox.min, np.float64).ravel(), np.array(bbox.max, np.float64).ravel()
+    setup.center, setup.radius = 0.5 * (lo + hi), float(0.5 * np.linalg.norm(hi - lo))
+
+
+def _locate(setup: Setup) -> None:
+    it = dr.zeros(mi.Interaction3f, 1)
+    it.p = mi.Point3f(3.0, 5.0, 7.0)
+    ds, _ = setup.emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
+    setup.center = probe.to_numpy(ds.p, 1)[0]
+    params = mi.traverse(setup.emitter)
+    if "to_world" in params.keys() and "cutoff_angle" in params.keys():
+        m = np.array(params["to_world"].matrix, np.float64).reshape(4, 4)
+        axis = m[:3, :3] @ np.array([0.0, 0.0, 1.0])
+        setup.axis = axis / np.linalg.norm(axis)
+        setup.cutoff_deg = float(np.ravel(params["cutoff_angle"])[0])
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def sphere_dirs(r: np.random.Generator, n: int) -> np.ndarray:
+    z = 2.0 * r.random(n) - 1.0
+    phi = 2.0 * np.pi * r.random(n)
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+
+
+def cone_dirs(r: np.random.Generator, n: int, axis: np.ndarray, cos_max: float) -> np.ndarray:
+    """n directions uniform in the cone of half-angle acos(cos_max) about ``axis``."""
+    z = 1.0 - r.random(n) * (1.0 - cos_max)
+    phi = 2.0 * np.pi * r.random(n)
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    local = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+    return local @ basis(axis)
+
+
+def basis(n: np.ndarray) -> np.ndarray:
+    """Rows s, t, n of an orthonormal frame with normal n (Duff et al. 2017, as
+    Mitsuba's coordinate_system)."""
+    n = np.asarray(n, np.float64) / np.linalg.norm(n)
+    sign = math.copysign(1.0, n[2])
+    a = -1.0 / (sign + n[2])
+    b = n[0] * n[1] * a
+    s = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
+    t = np.array([b, sign + n[1] * n[1] * a, -n[1]])
+    return np.array([s, t, n])
+
+
+def ref_groups(setup: Setup, n: int, seed: int) -> list[RefGroup]:
+    """The reference points of ``setup`` (see the module docstring), n lanes per group."""
+    r = rng(seed, "refs")
+    c, R = setup.center, setup.radius
+    if setup.kind == "position":
+        d = sphere_dirs(r, n)
+        if setup.axis is not None:
+            cos_max = math.cos(math.radians(min(89.0, 1.3 * setup.cutoff_deg)))
+            d[: n // 2] = cone_dirs(r, n // 2, setup.axis, cos_max)
+        return [RefGroup(f"at distance {k:g} from the light", "near", c + k * d, chi2=False)
+                for k in (0.5, 1.0, 2.0)]
+    if setup.kind == "direction":
+        inside = c + R * 0.9 * np.cbrt(r.random((n, 1))) * sphere_dirs(r, n)
+        return [RefGroup("inside the scene's bounding sphere", "inside", inside, chi2=False),
+                RefGroup("outside the scene's bounding sphere", "outside",
+                         c + 2.0 * R * sphere_dirs(r, n), chi2=False)]
+    if setup.kind == "infinite":
+        off = c + 0.5 * R * np.cbrt(r.random((n, 1))) * sphere_dirs(r, n)
+        off[0] = c + 0.5 * R * unit(np.array([0.3, -0.5, 0.8]))
+        return [RefGroup("the scene centre", "inside", np.tile(c, (n, 1))),
+                RefGroup("inside the bounding sphere", "inside", off)]
+    return _surface_refs(setup, n, r)
+
+
+def _surface_refs(setup: Setup, n: int, r) -> list[RefGroup]:
+    c, R, shape = setup.center, setup.radius, setup.shape
+    groups = [RefGroup("outside, 3 bounding radii", "outside",
+                       np.tile(c + 3.0 * R * unit(np.array([0.4, -0.3, 0.85])), (n, 1))),
+              RefGroup("outside, 1.5 bounding radii", "outside",
+                       np.tile(c + 1.5 * R * unit(np.array([-0.5, 0.6, 0.6])), (n, 1)))]
+    if setup.shape_name in FLAT:
+        ps = shape.sample_position(0.0, mi.Point2f(0.5, 0.5))
+        nrm = probe.to_numpy(ps.n, 1)[0]
+        t = unit(np.cross(nrm, [0.3, 0.5, 0.7]))
+        off = unit(nrm + 0.4 * t)
+        groups = [RefGroup("in front, 1.5 bounding radii", "front",
+                           np.tile(c + 1.5 * R * off, (n, 1))),
+                  RefGroup("in front, 0.3 bounding radii", "front",
+                           np.tile(c + 0.3 * R * off, (n, 1))),
+                  RefGroup("behind, 1.5 bounding radii", "behind",
+                           np.tile(c - 1.5 * R * off, (n, 1)))]
+    if setup.shape_name in CLOSED:
+        d = sphere_dirs(r, n)
+        d[0] = unit(np.array([0.2, 0.7, -0.4]))
+        si = setup.scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, c)),
+                                                probe.to_vectors(d)))
+        hit = probe.to_numpy(si.p, n)
+        ok = np.array(si.is_valid(), bool).reshape(-1)
+        hit[~ok] = hit[ok][0] if ok.any() else c
+        inner = R / math.sqrt(3.0)
+        groups += [RefGroup("on the surface, as a ray from inside hits it", "on", hit),
+                   RefGroup("inside, the centre", "inside", np.tile(c, (n, 1))),
+                   RefGroup("inside, off-centre", "inside",
+                            np.tile(c + 0.4 * inner * unit(np.array([0.6, -0.2, 0.3])),
+                                    (n, 1)))]
+    return groups
+
+
+def interaction(p: np.ndarray, wavelengths=None) -> mi.SurfaceInteraction3f:
+    """An interaction of len(p) lanes at points p; in spectral variants ``wavelengths`` (nm,
+    (n, C)), by default probe.default_wavelengths on every lane."""
+    it = probe.interaction(np.array([0.0, 0.0, 1.0]), n=len(p), wavelengths=wavelengths)
+    it.p = mi.Point3f(*(mi.Float(np.ascontiguousarray(p[:, k], np.float32)) for k in range(3)))
+    return it
+
+
+def wavelengths(n: int, r: np.random.Generator | None = None):
+    """(the wavelengths of n lanes, the width they are uniform over).
+
+    Spectral variants: with ``r``, uniform on [MI_CIE_MIN, MI_CIE_MAX] per lane and channel,
+    and the width MI_CIE_MAX − MI_CIE_MIN (Mitsuba's sample_wavelengths weight L(λ)/p(λ) has
+    the mean ∫ L(λ) dλ over that range: measured 592.8 for constant radiance 1.5, against
+    470 · mean L(uniform λ) = 592.9); without ``r`` the fixed probe.default_wavelengths and 1.
+    Other variants: (None, 1.0), the wavelengths being RGB channels.
+    """
+    if not mi.is_spectral:
+        return None, 1.0
+    k = dr.size_v(mi.UnpolarizedSpectrum)
+    if r is None:
+        return np.tile(probe.default_wavelengths(), (n, 1)), 1.0
+    lo, hi = float(mi.MI_CIE_MIN), float(mi.MI_CIE_MAX)
+    return lo + (hi - lo) * r.random((n, k)), hi - lo
+
+
+def surface_interaction(n: int, lam=None) -> mi.SurfaceInteraction3f:
+    """n zeroed lanes carrying the wavelengths ``lam`` ((n, C), spectral variants)."""
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    if mi.is_spectral:
+        si.wavelengths = probe.interaction(np.array([0.0, 0.0, 1.0]), n=n,
+                                           wavelengths=lam).wavelengths
+    return si
+
+
+def point2(u: np.ndarray) -> mi.Point2f:
+    return mi.Point2f(mi.Float(np.ascontiguousarray(u[:, 0], np.float32)),
+                      mi.Float(np.ascontiguousarray(u[:, 1], np.float32)))
+
+
+def float_(x: np.ndarray) -> mi.Float:
+    return mi.Float(np.ascontiguousarray(x, np.float32))
+

@@ -1,0 +1,169 @@
+"""The emitter validator: Mitsuba's built-in emitters pass (the sphere finding KNOWN by its
+signature), each planted defect fails its own topic and no other, the controls pass, and the
+command line detects an emitter.
+
+Quick sizes and seed 0; the statistical rows (chi2 per reference point, the power estimate)
+run at the family-wise level ALPHA = 0.01 per emitter (Šidák), so a correct emitter fails a
+run with probability ≤ 1 %; the defects are off by far more (a factor π in power, a 1/r law,
+a density in the wrong measure).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from phonglab.validate.emitter.topics import TOPICS
+
+DEFECTS = Path(__file__).parent / "defects_emitter"
+REPRO = Path(__file__).parent / "repro"
+SRC = Path(__file__).parents[1] / "src"
+
+#: defect file -> the topics it must fail (empty: a control)
+PLANTED = {
+    "point_control": set(),
+    "point_inverse_r": {"power"},
+    "area_control": set(),
+    "area_pdf_measure": {"chi2"},
+    "area_ray_missing_pi": {"power"},
+    "area_nan_edge": {"finite"},
+    "area_weight_noise": {"weight"},
+    "area_stale_pdf": {"pdf"},
+    "area_wrong_gradient": {"gradient"},
+}
+
+#: built-in cases expected to pass at --quick (see validate/emitter/builtins.py)
+PASSING = ["point", "spot", "directional", "area (rectangle)", "area (disk)", "area (cube)",
+           "area (cylinder)", "area (sphere)", "area (sphere, flip_normals)", "constant", "envmap"]
+
+
+@pytest.fixture
+def builtin_cases(variant_llvm_rgb, tmp_path):
+    from phonglab.validate.emitter import builtins
+
+    return builtins.cases(builtins.envmap_file(tmp_path / "env.exr"))
+
+
+@pytest.mark.parametrize("name", sorted(PLANTED))
+def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
+    from phonglab.validate.emitter.kind import validate_emitter
+
+    report = validate_emitter(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
+    assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
+    assert {r.topic for r in report.rows} == set(TOPICS)
+
+
+def test_every_topic_but_cost_has_a_planted_defect():
+    assert set().union(*PLANTED.values()) | {"cost"} == set(TOPICS)
+
+
+@pytest.mark.parametrize("label", PASSING)
+def test_builtin_emitters_pass_quick(builtin_cases, label):
+    from phonglab.validate.emitter.kind import validate_emitter
+
+    spec, shape, known = builtin_cases[label]
+    report = validate_emitter(spec, shape=shape, known=known, quick=True)
+    assert report.passed, report.table(report.failing)
+
+
+def test_sphere_inside_finding_is_a_failing_pdf_row_without_its_signature(builtin_cases):
+    from phonglab.validate.emitter.kind import validate_emitter
+
+    spec, shape, known = builtin_cases["area (sphere, flip_normals)"]
+    plain = validate_emitter(spec, shape=shape, quick=True, topics=["pdf"])
+    assert [r.name for r in plain.failing] == ["ds.pdf = pdf_direction(ds)"]
+    marked = validate_emitter(spec, shape=shape, quick=True, topics=["pdf"], known=known)
+    assert marked.passed and marked.rows[0].status == "KNOWN"
+    assert marked.rows[0].details["known_by"] == ["sphere_emitter_inside"]
+
+
+def test_signature_does_not_cover_points_off_the_surface(variant_llvm_rgb):
+    import numpy as np
+
+    from phonglab.validate.emitter.signatures import SphereSurfaceBand
+    from phonglab.validate.emitter.topics import Row
+
+    row = Row("pdf", "ds.pdf = pdf_direction(ds)", 1.0, 0.0, None, 1.0, "fail", "", {})
+    row.failing_lanes = {"rel_radius": np.array([1e-7, -0.5])}
+    assert SphereSurfaceBand().covers(row).tolist() == [True, False]
+
+
+def test_sphere_reproducer_exits_1_while_present():
+    proc = subprocess.run([sys.executable, str(REPRO / "sphere_emitter_inside.py")],
+                          capture_output=True, text=True, env={"PYTHONPATH": str(SRC),
+                                                               "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "ds.pdf != pdf_direction" in proc.stdout
+
+
+def test_cli_detects_an_emitter(tmp_path):
+    out = tmp_path / "point.json"
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point", "--quick",
+                           "--json", str(out), "--report", str(tmp_path / "p.html")],
+                          capture_output=True, text=True,
+                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    import json
+
+    data = json.loads(out.read_text())
+    assert data["meta"]["emitter"] == "point"
+    assert {r["topic"] for r in data["results"]} == set(TOPICS)
+    assert "phonglab validate: point" in (tmp_path / "p.html").read_text()
+
+
+def test_cli_runs_a_defect_plugin_and_fails_it(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate",
+                           "defect_point_inverse_r", "--plugin",
+                           str(DEFECTS / "point_inverse_r.py"), "--quick", "--only", "power"],
+                          capture_output=True, text=True,
+                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "intensity law" in proc.stdout
+
+
+def test_unknown_emitter_topic_is_bad_input():
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point",
+                           "--only", "energy"], capture_output=True, text=True,
+                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 2
+    assert "unknown topic 'energy'" in proc.stderr
+
+
+@pytest.fixture
+def variant_llvm_spectral():
+    """llvm_ad_spectral for one test, the variant before it restored afterwards."""
+    import mitsuba as mi
+
+    import phonglab
+
+    before = mi.variant()
+    yield phonglab.register("llvm_ad_spectral")
+    if before:
+        phonglab.register(before)
+
+
+@pytest.mark.parametrize("label", ["point", "area (rectangle)", "area (sphere, flip_normals)",
+                                   "constant", "envmap"])
+def test_builtin_emitters_pass_quick_spectral(variant_llvm_spectral, tmp_path, label):
+    # spectral: sample_ray draws the wavelengths too, radiance.value holds rgb2spec
+    # coefficients (a λ² term): the power and gradient topics handle both
+    from phonglab.validate.emitter import builtins
+    from phonglab.validate.emitter.kind import validate_emitter
+
+    spec, shape, known = builtins.cases(builtins.envmap_file(tmp_path / "env.exr"))[label]
+    report = validate_emitter(spec, shape=shape, known=known, quick=True)
+    assert report.meta["variant"] == "llvm_ad_spectral"
+    assert report.passed, report.table(report.failing)
+
+
+def test_assert_emitter_valid_names_the_failing_rows(variant_llvm_rgb):
+    from phonglab.testing import assert_emitter_valid
+
+    assert_emitter_valid("defect_point_control", plugins=[DEFECTS / "point_control.py"],
+                         quick=True, topics=["power"])
+    with pytest.raises(AssertionError, match="intensity law"):
+        assert_emitter_valid("defect_point_inverse_r", plugins=[DEFECTS / "point_inverse_r.py"],
+                             quick=True, topics=["power"])
