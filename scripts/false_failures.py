@@ -10,6 +10,13 @@ cases · N · 0.01 failing runs in all; the script prints P(≥ that many | ALPH
 and ``lambert`` sample the same cosine density from the same random numbers at one seed, so
 their χ² outcomes coincide.
 
+With ``--sweep`` each run is a parameter sweep (issue #29): ``diffuse``, ``lambert``, ``phong``,
+GGX ``roughconductor`` and GGX ``roughplastic`` (the Beckmann pdfs are a Mitsuba finding) across
+their parameters, with every documented cause of the conformance table's cases of that plugin
+(``builtins.known_for_plugin``: each explains only its own signature); the Šidák family is the
+points, so each sweep still fails by chance with probability ≤ ALPHA.  Its planted defects are
+``tests/defects/sweep`` (firing only at a parameter edge).
+
 False passes: the planted-defect plugins of ``tests/defects`` (each with one defect a
 correct run must catch), the same seeds: a run that passes is a false pass.
 
@@ -17,7 +24,7 @@ The runs are ``phonglab.validate.batch.false_failures`` (``validate_bsdf`` over 
 topic but ``cost``).
 
     python scripts/false_failures.py [--seeds 20] [--sizes default quick] [--only LABEL ...]
-        [--defect-seeds 10] [--json out.json]
+        [--defect-seeds 10] [--sweep] [--json out.json]
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ from scipy import stats as scipy_stats
 
 from phonglab import stats
 from phonglab.validate.batch import false_failures
+from phonglab.validate.builtins import known_for_plugin
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFECTS = ROOT / "tests" / "defects"
@@ -53,9 +61,21 @@ CORRECT = {
 }
 
 
-def run(spec, params, seeds, quick, plugins=()) -> list[dict]:
+#: label -> (plugin, params): correct BSDFs swept across their parameters (``--sweep``).
+SWEPT = {
+    "diffuse": ("diffuse", {}),
+    "lambert": ("lambert", {}),
+    "phong": ("phong", {}),
+    "roughconductor ggx": ("roughconductor", {"distribution": "ggx"}),
+    "roughplastic ggx": ("roughplastic", {"distribution": "ggx"}),
+}
+
+
+def run(spec, params, seeds, quick, plugins=(), sweep=False) -> list[dict]:
     """One record per seed: the failing topics."""
-    ((_, runs),) = false_failures({"case": (spec, params)}, seeds, quick, plugins).items()
+    known = known_for_plugin(spec) if sweep else None
+    ((_, runs),) = false_failures({"case": (spec, params, known)}, seeds, quick, plugins,
+                                  sweep=sweep).items()
     return [{"seed": seed, "failing": failing} for seed, failing in runs]
 
 
@@ -75,19 +95,25 @@ def main() -> int:
     ap.add_argument("--no-defects", action="store_true")
     ap.add_argument("--defects", type=Path, default=DEFECTS,
                     help="the folder of planted-defect plugins (default tests/defects)")
+    ap.add_argument("--sweep", action="store_true",
+                    help="each run across the parameter sweep: the SWEPT cases and the "
+                         "defects in tests/defects/sweep")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
-    chosen = {k: v for k, v in CORRECT.items() if not args.only or k in args.only}
+    if args.sweep and args.defects == DEFECTS:
+        args.defects = DEFECTS / "sweep"
+    chosen = {k: v for k, v in (SWEPT if args.sweep else CORRECT).items()
+              if not args.only or k in args.only}
     defects = [] if args.no_defects else sorted(
         p for p in args.defects.glob("*.py") if not args.only or p.stem in args.only)
-    result = {"alpha": stats.ALPHA, "seeds": args.seeds, "defect_seeds": args.defect_seeds,
+    result = {"alpha": stats.ALPHA, "sweep": args.sweep, "seeds": args.seeds, "defect_seeds": args.defect_seeds,
               "correct": {}, "defects": {}}
     t_all = time.perf_counter()
     for size in args.sizes:
         quick = size == "quick"
         failures = runs = 0
         for label, (spec, params) in chosen.items():
-            recs = run(spec, params, args.seeds, quick)
+            recs = run(spec, params, args.seeds, quick, sweep=args.sweep)
             result["correct"].setdefault(label, {})[size] = recs
             bad = [(r["seed"], r["failing"]) for r in recs if r["failing"]]
             failures, runs = failures + len(bad), runs + len(recs)
@@ -98,7 +124,8 @@ def main() -> int:
                   f"{runs * stats.ALPHA:.2f} at ALPHA = {stats.ALPHA}; "
                   f"P(≥ {failures} | ALPHA) = {tail_p(failures, runs):.3f}", flush=True)
         for path in defects:
-            recs = run(f"defect_{path.stem}", None, args.defect_seeds, quick, [path])
+            recs = run(f"defect_{path.stem}", None, args.defect_seeds, quick, [path],
+                       sweep=args.sweep)
             result["defects"].setdefault(path.stem, {})[size] = recs
             missed = [r["seed"] for r in recs if not r["failing"]]
             topics = sorted({t for r in recs for t in r["failing"]})

@@ -130,3 +130,17 @@ def test_every_finding_has_a_signature():
         assert f.rows, f.key
         k = f.known()
         assert k.key == f.key and k.cause.startswith(f.source)
+
+
+def test_known_for_plugin_unites_the_causes_of_every_case_of_that_plugin_once():
+    """A sweep of a built-in meets the findings of all of its table cases: each cause once,
+    and only causes of that plugin's cases (each still matches only its own signature)."""
+    from phonglab.validate.builtins import cases, known_for_plugin
+    known = known_for_plugin("roughplastic")
+    for topic in {t for case in cases() if case.plugin == "roughplastic" for t in case.known}:
+        expected = [c for case in cases() if case.plugin == "roughplastic"
+                    for c in case.known.get(topic, ())]
+        assert len(known[topic]) == len(set(known[topic])) == len(set(expected))
+        assert set(known[topic]) == set(expected)
+    assert "gradient" in known and "finite" in known      # the detached alpha, the 0/0 when black
+    assert known_for_plugin("no-such-plugin") == {}

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from ..parallel import Job, Runner
 from ..outputs import jsonable
-from ..verdict import Report
+from ..verdict import Report, point_label
 from . import builtins
 from .bsdf.kind import validate_bsdf
 from .bsdf.topics import TOPICS, Row
@@ -138,12 +138,15 @@ def run_all(cases=None, options: dict | None = None, progress=None,
             "reports": reports}
 
 
-def false_failures(cases, seeds: int, quick: bool = False, plugins=()) -> dict:
+def false_failures(cases, seeds: int, quick: bool = False, plugins=(), sweep=False) -> dict:
     """Run each case over seeds 0..seeds−1: {label: [(seed, failing topics), ...]}, one pair
-    per seed (an empty list: the run passed).
+    per seed (an empty list: the run passed; in a sweep a topic is named with its point,
+    ``chi2 at exponent=1``).
 
-    ``cases``: plugin names, or {label: (spec, params)}; ``plugins``: files that register
-    them.  ``cost`` is left out (informational, it never fails).  For a correct plugin every
+    ``cases``: plugin names, or {label: (spec, params)} or {label: (spec, params, known)}
+    (``known``: the documented causes, as for :func:`validate_bsdf`); ``plugins``: files that
+    register them; ``sweep``: each run across the plugin's parameter sweep (``params``
+    pinned).  ``cost`` is left out (informational, it never fails).  For a correct plugin every
     failing run is a false failure and each run fails with probability ≤ ALPHA by
     construction; for a planted defect every passing run (no failing topic) is a false pass.
     """
@@ -151,10 +154,13 @@ def false_failures(cases, seeds: int, quick: bool = False, plugins=()) -> dict:
     if not isinstance(cases, dict):
         cases = {name: (name, None) for name in cases}
     out = {}
-    for label, (spec, params) in cases.items():
+    for label, (spec, params, *known) in cases.items():
         out[label] = []
         for seed in range(seeds):
             report = validate_bsdf(spec, params=params or None, seed=seed, quick=quick,
-                                   topics=topics, plugins=list(plugins))
-            out[label].append((seed, sorted({r.topic for r in report.failing})))
+                                   topics=topics, plugins=list(plugins), sweep=sweep,
+                                   known=known[0] if known else None)
+            out[label].append((seed, sorted({r.topic if r.point is None
+                                              else f"{r.topic} at {point_label(r.point)}"
+                                              for r in report.failing})))
     return out

@@ -5,13 +5,14 @@ behind failing rows, and the validator's own issues) and the writer of docs/conf
 tests use.
 """
 
-from .catalogue import (LEFT_OUT, POLARIZED, SPECTRAL, Case, bump_texture, cases, load,
-                        normal_texture)
+from .catalogue import (LEFT_OUT, POLARIZED, SPECTRAL, Case, bump_texture, cases,
+                        known_for_plugin, load, normal_texture)
 from .findings import (FINDINGS, MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL, VALIDATOR_ISSUES,
                        Finding, ValidatorIssue, known_causes, validator_issues)
 from .markdown import PLOT_ONLY, cell_status, render_markdown, without_plot_data
 
 __all__ = ["Case", "FINDINGS", "Finding", "LEFT_OUT", "MITSUBA_COMMIT", "MITSUBA_VERSION",
            "PLOT_ONLY", "POLARIZED", "SOURCE_URL", "SPECTRAL", "VALIDATOR_ISSUES",
-           "ValidatorIssue", "bump_texture", "cases", "cell_status", "known_causes", "load",
+           "ValidatorIssue", "bump_texture", "cases", "cell_status", "known_causes",
+           "known_for_plugin", "load",
            "normal_texture", "render_markdown", "validator_issues", "without_plot_data"]

@@ -251,6 +251,19 @@ def cases() -> list[Case]:
                  c.note) for c in out]
 
 
+def known_for_plugin(plugin: str) -> dict[str, tuple]:
+    """topic -> every documented cause of the cases of ``plugin`` (a type name), for that
+    plugin validated away from the table's points (a sweep): each cause still holds only
+    inside its own signature, so a failure outside all of them stays a fail."""
+    out: dict[str, tuple] = {}
+    for case in cases():
+        if case.plugin == plugin:
+            for topic, causes in case.known.items():
+                out[topic] = out.get(topic, ()) + tuple(c for c in causes
+                                                        if c not in out.get(topic, ()))
+    return out
+
+
 #: Mitsuba 3.9.1 BSDF plugins (src/bsdfs/*.cpp) that are not in :func:`cases`, and why.
 LEFT_OUT: dict[str, str] = {
     "measured": "needs a measured data file (RGL .bsdf, `filename`), none ships with Mitsuba",
