@@ -191,3 +191,16 @@ def test_scalar_rgb_quick_passes(bsdf, tmp_path):
     d = json.loads(out.read_text())
     chi2 = [r for r in d["results"] if r["topic"] == "chi2"]
     assert chi2 and chi2[0]["status"] == "pass" and len(chi2[0]["details"]["cells"]) == 3
+
+
+def test_a_pdf_nan_wherever_it_is_not_zero_is_the_finite_topics_not_a_chi2_verdict(
+        variant_llvm_rgb):
+    """plastic with both reflectances 0 (plastic.cpp:206, 0/0): its pdf is NaN above the
+    horizon and 0 below; χ² has no density to test against and says so (skipped), while
+    finite fails -- the plugin fails once, on the topic that owns NaN."""
+    report = validate_bsdf("plastic", params={"diffuse_reflectance": 0.0,
+                                              "specular_reflectance": 0.0},
+                           quick=True, topics=["finite", "chi2"])
+    (chi2,) = [r for r in report.rows if r.topic == "chi2"]
+    assert chi2.status == "skipped" and "not finite wherever it is not 0" in chi2.reason
+    assert {r.name for r in report.failing} >= {"pdf: NaN/Inf/negative values"}

@@ -144,3 +144,12 @@ def test_known_for_plugin_unites_the_causes_of_every_case_of_that_plugin_once():
         assert set(known[topic]) == set(expected)
     assert "gradient" in known and "finite" in known      # the detached alpha, the 0/0 when black
     assert known_for_plugin("no-such-plugin") == {}
+
+
+def test_a_cause_at_a_parameter_interval_holds_inside_it_only():
+    """plastic's F_dr-fit energy gain is documented for int_ior in [2, 3]: a failing energy
+    row at int_ior 1.49 is not explained by it."""
+    cause = Known("fit", rows=("directional albedo ≤ 1",), at=(("int_ior", (2.0, 3.0)),))
+    assert cause.holds_at({"int_ior": 3.0}) and cause.holds_at({"int_ior": 2.0})
+    assert not cause.holds_at({"int_ior": 1.49}) and not cause.holds_at({})
+    assert "int_ior in [2, 3]" in cause.describe()

@@ -175,15 +175,20 @@ class Known:
     rows: tuple[str, ...] = ()
     region: Any = None
     key: str = ""                  #: the finding's id, if it is one
-    #: parameter values the cause holds at ((name, value), ...): it explains nothing at a
-    #: point where a named parameter has another value or none (() -- at every point)
-    at: tuple[tuple[str, float], ...] = ()
+    #: parameter values the cause holds at ((name, value) or (name, (lo, hi)), ...): it
+    #: explains nothing at a point where a named parameter has another value (outside
+    #: [lo, hi]) or none (() -- at every point)
+    at: tuple[tuple[str, Any], ...] = ()
 
     def holds_at(self, values: dict | None) -> bool:
         """Whether the plugin's parameter ``values`` (name -> float) meet :attr:`at`."""
         for name, v in self.at:
             got = (values or {}).get(name)
-            if not isinstance(got, (int, float)) or abs(got - v) > 1e-6 * max(1.0, abs(v)):
+            if not isinstance(got, (int, float)):
+                return False
+            lo, hi = v if isinstance(v, tuple) else (v, v)
+            slack = 1e-6 * max(1.0, abs(lo), abs(hi))
+            if not lo - slack <= got <= hi + slack:
                 return False
         return True
 
@@ -201,8 +206,14 @@ class Known:
         if self.region is not None:
             where.append(self.region.text)
         if self.at:
-            where.append("at " + ", ".join(f"{n} = {v:g}" for n, v in self.at))
+            where.append("at " + at_text(self.at))
         return self.cause + (f" [signature: {'; '.join(where)}]" if where else "")
+
+
+def at_text(at) -> str:
+    """``int_ior in [2, 3], diffuse_reflectance = 1``: the parameter values a cause holds at."""
+    return ", ".join(f"{n} in [{v[0]:g}, {v[1]:g}]" if isinstance(v, tuple) else f"{n} = {v:g}"
+                     for n, v in at)
 
 
 def known_entries(value) -> tuple[Known, ...]:

@@ -113,6 +113,11 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     if not kept.any() and pdf_sum < 1e-6:
         return {"wi": wi.tolist(), "status": "empty", "hist_sum": 0.0, "pdf_sum": pdf_sum,
                 "integration": integration}
+    if pdf_sum == 0 and integration["nonfinite_pdf_dropped"]:
+        # no density to test against: the pdf is NaN/Inf wherever it is not 0 (the finite
+        # topic's failure; plastic with both reflectances 0, plastic.cpp:206)
+        return {"wi": wi.tolist(), "status": "nonfinite", "hist_sum": float(kept.mean()),
+                "pdf_sum": pdf_sum, "integration": integration}
     hist = grid.histogram(s.wo[kept])
     expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
                                    integration)
@@ -172,7 +177,7 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
         rec = chi2_cell(bsdf, probe.direction(theta, phi), opts, level, r)
         rec.update(theta_deg=math.degrees(theta), phi=phi)
         records.append(rec)
-    tested = [r for r in records if r["status"] != "empty"]
+    tested = [r for r in records if r["status"] not in ("empty", "nonfinite")]
     failed = [r for r in tested if r["status"] == "fail"]
     p_min = min((r["p_value"] for r in tested), default=1.0)
     where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f}" for r in failed)
@@ -182,11 +187,20 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
               f"to {sphere_bins.EPS:g} of its Poisson error) at {len(tested)} incidence cells, "
               f"each at the Šidák level {level:.2e} of the BSDF's {m_tests} statistical tests; "
               f"delta samples excluded") + (f"; rejected at {where}" if failed else "")
+    untestable = sum(r["status"] == "nonfinite" for r in records)
+    if untestable and tested:
+        reason += (f"; {untestable} cells not tested: the pdf is not finite wherever it is "
+                   f"not 0 there (the finite topic's)")
     if not tested:
         nonfinite = sum(r["integration"]["nonfinite_pdf_dropped"] for r in records)
-        why = ("the BSDF sampled nothing and has zero pdf at every tested incidence" +
-               (f" where its pdf is finite: it is not finite at {nonfinite} quadrature nodes "
-                f"(the finite topic's; dropped here)" if nonfinite else ""))
+        if any(r["status"] == "nonfinite" for r in records):
+            why = (f"the pdf is not finite wherever it is not 0 at every tested incidence "
+                   f"({nonfinite} quadrature nodes; the finite topic's failure), so there is no "
+                   f"density to test the samples against")
+        else:
+            why = ("the BSDF sampled nothing and has zero pdf at every tested incidence" +
+                   (f" where its pdf is finite: it is not finite at {nonfinite} quadrature "
+                    f"nodes (the finite topic's; dropped here)" if nonfinite else ""))
         return [Row("chi2", "sampling matches pdf", None, None, None, None, "skipped", why,
                     {"cells": records, "nonfinite_pdf_dropped": nonfinite})]
     details = {"cells": records, "level": level}

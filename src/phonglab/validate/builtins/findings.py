@@ -12,6 +12,7 @@ traced to the validator (it stays a fail in the JSON); one with ``fixed_by`` is 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
                                Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence,
@@ -44,8 +45,8 @@ class Finding:
     rows: tuple[str, ...] = ()
     #: the failing lanes it explains (:mod:`phonglab.validate.bsdf.signatures`); None: all
     region: Region | None = None
-    #: parameter values it holds at ((name, value), ...; () -- every point of a sweep)
-    at: tuple[tuple[str, float], ...] = ()
+    #: parameter values it holds at ((name, value) or (name, (lo, hi)), ...; () -- every point)
+    at: tuple[tuple[str, Any], ...] = ()
 
     def known_text(self) -> str:
         """The ``known`` entry of a case: ``file:line: cause``."""
@@ -72,6 +73,7 @@ CHI2_ROW = "sampling matches pdf (min p-value)"
 SAMPLE_ROW = "sample: NaN/Inf/negative values"
 NAN_ROWS = ("pdf: NaN/Inf/negative values", "eval_pdf: NaN/Inf/negative values")
 NORM_ROW = "∫ pdf dω_o = P(sample counted)"
+ENERGY_ROW = "directional albedo ≤ 1"
 ONE_TYPE_ROW = "one sampled_type per component"
 AGREE_ROW = "sampled_component/sampled_type agree with the flags"
 RESTRICTED_ROW = "restricted context samples only its component"
@@ -84,6 +86,8 @@ _ROUGHPLASTIC = ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
                  "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear",
                  "roughplastic/black")
 BLACK_PLASTIC = (("diffuse_reflectance", 0.0), ("specular_reflectance", 0.0))
+#: The plastic cases (a sweep reaches both reflectances 0 and int_ior 3 from the default).
+_PLASTIC = ("plastic/default", "plastic/nonlinear-ior1.9")
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
 FINDINGS: tuple[Finding, ...] = (
@@ -132,6 +136,28 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = nan at 40 deg (eval = 0)",
             "a finite pdf (e.g. the diffuse lobe's, or 0)",
             "tests/repro/roughplastic_black_nan.py", rows=NAN_ROWS, at=BLACK_PLASTIC),
+    Finding("plastic-black-nan-pdf", "finite", _PLASTIC, "src/bsdfs/plastic.cpp:206",
+            "`m_specular_sampling_weight = s_mean / (d_mean + s_mean)` is 0/0 = NaN when both "
+            "reflectances are 0 (roughplastic.cpp:229's line), so prob_specular (lines 229, "
+            "235, 315, 353) and with it pdf(), eval_pdf() and the sample() weight are NaN "
+            "above the horizon; Mitsuba's path tracer is unaffected (path.cpp:363 drops a "
+            "non-finite MIS weight, a NaN throughput fails its != 0 test)",
+            "pdf = nan, sample weight = nan at 40 deg (eval = 0)",
+            "a finite pdf and weight (e.g. the diffuse lobe's, or 0)",
+            "tests/repro/plastic_black_nan.py", rows=NAN_ROWS + (SAMPLE_ROW,),
+            at=BLACK_PLASTIC),
+    Finding("plastic-fdr-fit-energy", "energy", _PLASTIC,
+            "include/mitsuba/render/fresnel.h:341",
+            "plastic's diffuse term divides by 1 − F_dr(1/η) (plastic.cpp:196, 290-294), and "
+            "fresnel_diffuse_reflectance() takes F_dr for η < 1 from Egan and Hilgeman's fit "
+            "(lines 341-343; its comment: 9.5 % maximum error for IOR 2-5): at int_ior 3 the "
+            "fit is 0.9355 for an exact 0.9196, so the diffuse albedo is 25 % high and the "
+            "directional albedo of a white plastic exceeds 1 (4 % high at 2.5, < 0.15 % "
+            "below 2)",
+            "albedo 1.185 at normal incidence (int_ior 3, both reflectances 1)",
+            "albedo <= 1: eta^2 (1 - F_dr(1/eta)) = 1 - F_dr(eta) for the exact F_dr",
+            "tests/repro/plastic_fdr_fit_energy.py", rows=(ENERGY_ROW,),
+            at=(("int_ior", (2.0, 3.0)),)),
     Finding("roughplastic-gradient-detached", "gradient",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),

@@ -11,6 +11,7 @@ that JSON only.
 from __future__ import annotations
 
 from ...verdict import point_label
+from ..core import at_text
 from ..bsdf.topics import TOPICS
 from . import findings
 from .catalogue import LEFT_OUT
@@ -151,7 +152,7 @@ def _findings_section(data: dict) -> list[str]:
 
 def _signature(f) -> str:
     rows = ", ".join(f"`{r}`" for r in f.rows)
-    at = ("; at " + ", ".join(f"{n} = {v:g}" for n, v in f.at)) if f.at else ""
+    at = ("; at " + at_text(f.at)) if f.at else ""
     return f"{f.topic} rows {rows}; " + (f.region.text if f.region is not None
                                          else "every failing lane of those rows") + at
 
