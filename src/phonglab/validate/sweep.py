@@ -9,7 +9,8 @@ derives (:func:`points`):
   where formulas break: 0, 1e-4, a huge exponent, equal IORs), the others as given;
 * two corners: every parameter at its minimum, every one at its maximum.
 
-Values equal to the given one are not repeated.  ``--quick`` keeps the ends only.  A parameter
+Values equal to the given one are not repeated (a value the plugin neither exposes nor was
+given is unknown, and every range value is tried).  ``--quick`` keeps the ends only.  A parameter
 the caller pins (``--set NAME=VALUE``, or a key of the dict the plugin is loaded from) keeps
 its value at every point.  A point the plugin refuses at load time (phong's k_d + k_s > 1 at
 "all at maximum") is outside its range: it is reported as such, not run and not a failure.
@@ -56,7 +57,7 @@ def points(parameters, quick: bool = False) -> list[Point]:
     out = [Point({})]
     for p in parameters:
         for v in p.range.values(quick):
-            if v != p.value:
+            if p.value is None or v != p.value:
                 out.append(Point({p.name: v}))
     if len(parameters) >= 2:
         out.append(Point({p.name: p.range.lo for p in parameters}))

@@ -121,7 +121,7 @@ class Parameter:
     range came from (``declared``, ``mitsuba``, ``probed``)."""
 
     name: str
-    value: float
+    value: float | None        #: None: not exposed by the plugin and not in its spec
     range: Range
     source: str
 
@@ -171,8 +171,10 @@ def parameters(plugin, spec, pinned=(), probe: bool = True) -> list[Parameter]:
     for name, rng in table.items():
         if name in pinned:
             continue
-        value = values.get(name, _spec_value(spec, name))
-        out.append(Parameter(name, value if value is not None else rng.lo, rng, source))
+        # None: the plugin neither exposes nor was given it (roughplastic's int_ior, its
+        # absent specular_reflectance texture): the given value is unknown, so no range value
+        # is taken for it and skipped
+        out.append(Parameter(name, values.get(name, _spec_value(spec, name)), rng, source))
     if source == "probed" and probe:
         for name, value in values.items():
             if name not in pinned:

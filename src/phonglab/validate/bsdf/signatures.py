@@ -86,6 +86,20 @@ class BelowHorizon(Region):
 
 
 @dataclass(frozen=True)
+class MaskedReflection(Region):
+    """Pairs a reflection-only plugin masks off: cos θ_i ≤ 0 or cos θ_o ≤ 0 (its eval is 0
+    there; a pdf computed from the masked-off lanes' garbage and returned unmasked is not)."""
+
+    def covers(self, row):
+        got = _lanes(row, "wi", "wo")
+        return None if got is None else (got[0][:, 2] <= 0.0) | (got[1][:, 2] <= 0.0)
+
+    @property
+    def text(self):
+        return "pairs outside a reflection lobe's support, cos θ_i ≤ 0 or cos θ_o ≤ 0"
+
+
+@dataclass(frozen=True)
 class SamplePoint(Region):
     """sample2 at one point of [0, 1)² (a warp's singular point), to :data:`SAMPLE_TOL`."""
 

@@ -16,7 +16,7 @@ from typing import Any
 
 from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
                                Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence,
-                               ParameterAt, Region,
+                               MaskedReflection, ParameterAt, Region,
                                SampleEdgeAtNormalIncidence, SamplePoint, Union)
 from ..core import Known
 
@@ -126,6 +126,17 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = 0 for an inactive lane",
             "tests/repro/roughplastic_pdf_below_horizon.py",
             rows=NAN_ROWS, region=GrazingIncidence()),
+    Finding("roughplastic-pdf-nan-specular0", "finite", _ROUGHPLASTIC,
+            "src/bsdfs/roughplastic.cpp:422",
+            "the same unmasked `return result;`: with specular_reflectance 0 the sampling "
+            "weight is 0, and on a masked-off lane (cos_theta_o <= 0) lerp_gather returns "
+            "t_i = 0 (lines 396-397), so prob_specular / (prob_specular + prob_diffuse) "
+            "(line 406) is 0/0 and pdf() (eval_pdf() likewise, line 501) returns NaN for wo "
+            "below the horizon, at any int_ior",
+            "pdf = nan for wo below the horizon (0.2546 above; wi at 45 deg, alpha 0.5)",
+            "pdf = 0 below the horizon",
+            "tests/repro/roughplastic_pdf_nan_specular0.py", rows=NAN_ROWS,
+            region=MaskedReflection(), at=(("specular_reflectance", 0.0),)),
     Finding("roughplastic-black-nan-pdf", "finite", _ROUGHPLASTIC,
             "src/bsdfs/roughplastic.cpp:229",
             "`m_specular_sampling_weight = s_mean / (d_mean + s_mean)` is 0/0 = NaN when both "
