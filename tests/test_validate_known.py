@@ -153,3 +153,26 @@ def test_a_cause_at_a_parameter_interval_holds_inside_it_only():
     assert cause.holds_at({"int_ior": 3.0}) and cause.holds_at({"int_ior": 2.0})
     assert not cause.holds_at({"int_ior": 1.49}) and not cause.holds_at({})
     assert "int_ior in [2, 3]" in cause.describe()
+
+
+def test_principled_sweep_findings_hold_only_at_their_points():
+    """The principled findings of the sweep (#29) explain their points and no others: the
+    shifted component numbering needs spec_trans on and clearcoat off, the by-design energy
+    gains a white base_color or roughness 0.1, the metal's diffuse reflectance metallic 1
+    and specular 0, principledthin's grazing NaN and transmission asymmetry spec_trans > 0."""
+    by_key = {f.key: f.known() for f in FINDINGS}
+    shifted = by_key["principled-component-ids-shifted"]
+    assert shifted.holds_at({"spec_trans": 1.0, "clearcoat": 0.0})
+    assert not shifted.holds_at({"spec_trans": 1.0, "clearcoat": 1.0})
+    assert not shifted.holds_at({"spec_trans": 0.0, "clearcoat": 0.0})
+    for key in ("principledthin-pdf-nan-grazing", "principledthin-transmission-reciprocity"):
+        assert by_key[key].holds_at({"spec_trans": 0.3}) and by_key[key].holds_at({"spec_trans": 1e-4})
+        assert not by_key[key].holds_at({"spec_trans": 0.0})
+    assert by_key["principled-diffuse-retro-energy"].holds_at({"base_color": 1.0})
+    assert not by_key["principled-diffuse-retro-energy"].holds_at({"base_color": 0.5})
+    assert not by_key["principled-specular-uncoupled-energy"].holds_at({"roughness": 0.5})
+    metal = by_key["principled-metal-diffuse-reflectance"]
+    assert metal.holds_at({"metallic": 1.0, "specular": 0.0})
+    assert not metal.holds_at({"metallic": 1.0, "specular": 0.5})
+    energy = {f.key for f in FINDINGS if f.topic == "energy" and not f.bug}
+    assert {"principled-diffuse-retro-energy", "principled-specular-uncoupled-energy"} <= energy

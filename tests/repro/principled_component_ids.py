@@ -34,4 +34,14 @@ bs, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(rng.random(n)),
 ids = sorted(set(np.array(bs.sampled_component).tolist()))
 count = bsdf.component_count()
 print(f"component_count() = {count}, sampled_component values = {ids}")
-sys.exit(1 if max(ids) >= count else 0)
+# spec_trans on, clearcoat off: m_components = [diffuse, spec_trans, specular], but the
+# transmission samples report index 2 (principled.cpp:440), the specular component.
+thru = mi.load_dict({"type": "principled", "spec_trans": 1.0})
+bs2, _ = thru.sample(mi.BSDFContext(), si, mi.Float(rng.random(n)),
+                     mi.Point2f(rng.random(n), rng.random(n)))
+comp2, type2 = np.array(bs2.sampled_component), np.array(bs2.sampled_type)
+trans = (type2 & int(mi.BSDFFlags.GlossyTransmission)) != 0
+shifted = sorted(set(comp2[trans].tolist()))
+print(f"spec_trans 1: transmission samples report components {shifted}; "
+      f"flags(2) has GlossyReflection: {bool(thru.flags(2) & mi.BSDFFlags.GlossyReflection)}")
+sys.exit(1 if max(ids) >= count or 2 in shifted else 0)

@@ -86,6 +86,9 @@ _ROUGHPLASTIC = ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
                  "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear",
                  "roughplastic/black")
 BLACK_PLASTIC = (("diffuse_reflectance", 0.0), ("specular_reflectance", 0.0))
+#: Where principled's and principledthin's specular-transmission lobe is on (spec_trans > 0;
+#: 1e-4 is the sweep's smallest non-zero value).
+SPEC_TRANS_ON = (("spec_trans", (1e-4, 1.0)),)
 #: The plastic cases (a sweep reaches both reflectances 0 and int_ior 3 from the default).
 _PLASTIC = ("plastic/default", "plastic/nonlinear-ior1.9")
 
@@ -182,7 +185,8 @@ FINDINGS: tuple[Finding, ...] = (
             "AD equal to the central difference within its error",
             "tests/repro/roughplastic_gradient_detached.py",
             rows=("alpha", "eta")),
-    Finding("principledthin-pdf-nan-grazing", "finite", ("principledthin/all-lobes",),
+    Finding("principledthin-pdf-nan-grazing", "finite",
+            ("principledthin/default", "principledthin/all-lobes"),
             "src/bsdfs/principledthin.cpp:704",
             "pdf() sets `active &= cos_theta_i != 0` (line 606) but returns `pdf` unmasked, so a "
             "lane at exactly grazing incidence (cos_theta_i = 0, a measure-zero input) gets "
@@ -191,7 +195,7 @@ FINDINGS: tuple[Finding, ...] = (
             "pdf = NaN for wi = (1, 0, 0) next to a valid lane",
             "pdf = 0 for an inactive lane",
             "tests/repro/principledthin_pdf_nan_grazing.py",
-            rows=NAN_ROWS, region=GrazingIncidence()),
+            rows=NAN_ROWS, region=GrazingIncidence(), at=SPEC_TRANS_ON),
     Finding("principledthin-pdf-grazing-normalization", "normalization",
             ("principledthin/default", "principledthin/all-lobes"),
             "src/bsdfs/principledthin.cpp:704",
@@ -269,6 +273,72 @@ FINDINGS: tuple[Finding, ...] = (
             "sampled_component < component_count() and flags(i) containing sampled_type",
             "tests/repro/principled_component_ids.py",
             rows=(AGREE_ROW,), region=ComponentOutOfRange()),
+    Finding("principled-component-ids-shifted", "component", ("principled/default",),
+            "src/bsdfs/principled.cpp:440",
+            "the same hard-coded indices: with spec_trans on and clearcoat off m_components is "
+            "[diffuse, spec_trans, specular] (lines 241-265), so the transmission samples' "
+            "index 2 (line 440) names the specular-reflection component",
+            "spec_trans 1: GlossyTransmission samples report component 2 (flags(2) = "
+            "GlossyReflection), the specular ones component 3 with component_count() = 3",
+            "component 1 for the transmission samples",
+            "tests/repro/principled_component_ids.py",
+            rows=(AGREE_ROW,), region=ComponentOfAnotherLobe(),
+            at=SPEC_TRANS_ON + (("clearcoat", 0.0),)),
+    Finding("principled-diffuse-retro-energy", "energy",
+            ("principled/default", "principledthin/default"),
+            "src/bsdfs/principled.cpp:655",
+            "by design: Burley's diffuse term f_diff + f_retro (line 655; principledthin.cpp:539) "
+            "raises the grazing response of a rough surface (Burley 2012, sec. 5.3: 'up to 2.5' "
+            "for rough surfaces), so a white base_color's diffuse lobe alone reflects more "
+            "than it receives, and principled adds its specular lobe on top of it without "
+            "(1 - F) (lines 677-679)",
+            "base_color 1, roughness 0.5: diffuse lobe alone (principledthin; principled at "
+            "specular 0) 1.006, 1.005, 1.019, 1.017, 1.006 at 0, 45.6, 72.5, 87.1, 90 deg; "
+            "principled adds its specular 0.037 to 0.185: 1.043 to 1.191 (half-vector grid "
+            "check: the same to 1e-5)",
+            "albedo <= 1 for a passive surface",
+            "tests/repro/principled_energy_by_design.py", bug=False, rows=(ENERGY_ROW,),
+            at=(("base_color", 1.0),)),
+    Finding("principled-specular-uncoupled-energy", "energy", ("principled/default",),
+            "src/bsdfs/principled.cpp:677",
+            "by design: the diffuse lobe is weighted by brdf = (1 - metallic)(1 - spec_trans) "
+            "(lines 515, 677-679), not by the (1 - F) the specular lobe (line 599-600) leaves, "
+            "so at grazing incidence, where the smooth specular lobe reflects most of the "
+            "light, the sum exceeds 1",
+            "roughness 0.1, base_color 0.5: diffuse 0.340 + specular 0.713 = 1.053 at 87.1 deg, "
+            "0.295 + 0.768 = 1.063 at 90 deg",
+            "albedo <= 1 for a passive surface",
+            "tests/repro/principled_energy_by_design.py", bug=False, rows=(ENERGY_ROW,),
+            at=(("roughness", 0.1),)),
+    Finding("principled-clearcoat-missing-denominator", "energy", ("principled/metal",),
+            "src/bsdfs/principled.cpp:639",
+            "the clearcoat term is `(clearcoat * 0.25) * Fcc * Dcc * G_cc * |cos_theta_o|` "
+            "without the microfacet 1 / (4 cos_theta_i cos_theta_o) of the specular lobe "
+            "(line 600; Burley's reference code folds it into its smithG_GGX, Mitsuba's "
+            "smith_ggx1 in clearcoat_G, principledhelpers.h:79, is the plain G1), so near "
+            "normal incidence the clearcoat reflects about 4x its microfacet value and a "
+            "white metal under a full clearcoat exceeds 1",
+            "metallic 1, base_color 1, clearcoat 1, gloss 1 (the all-max corner): albedo 1.0251 "
+            "at normal incidence, 0.9901 without the clearcoat: the clearcoat adds 0.0350, "
+            "more than 0.25 x F0 = 0.01, the bound for any microfacet lobe with G <= 1",
+            "a clearcoat adding at most 0.25 x 0.04 = 0.01 at normal incidence",
+            "tests/repro/principled_clearcoat_energy.py", rows=(ENERGY_ROW,),
+            at=(("clearcoat", 1.0), ("metallic", 1.0), ("base_color", 1.0))),
+    Finding("principled-metal-diffuse-reflectance", "eval_diffuse_reflectance",
+            ("principled/metal",),
+            "src/bsdfs/principled.cpp:841",
+            "eval_diffuse_reflectance() returns base_color without the diffuse weight "
+            "brdf = (1 - metallic)(1 - spec_trans) that eval() applies (lines 515, 568), so a "
+            "metal, which has no diffuse lobe, reports base_color; the row is measurable at "
+            "specular 0 because there the whole metal is black: eta = 1 (line 230) makes "
+            "F_spec_dielectric 0 and the specular mask `F_spec_dielectric > 0` (line 555) "
+            "switches off the metallic lobe too",
+            "metallic 1, specular 0: eval_diffuse_reflectance = 0.5, eval = 0 for every "
+            "direction (diffuse albedo 0)",
+            "the diffuse albedo (0 for a metal)",
+            "tests/repro/principled_metal_diffuse_reflectance.py",
+            rows=("eval_diffuse_reflectance = diffuse albedo",),
+            at=(("metallic", 1.0), ("specular", 0.0))),
     Finding("principled-ignores-component", "component",
             ("principled/default", "principled/all-lobes", "principled/metal",
              "principledthin/default", "principledthin/all-lobes"),
@@ -383,17 +453,19 @@ FINDINGS: tuple[Finding, ...] = (
             rows=("clearcoat.value", "sheen.value", "spec_trans.value", "metallic.value",
                   "diff_trans.value"), region=ParameterAt((0.0, 1.0))),
     Finding("principledthin-transmission-reciprocity", "reciprocity",
-            ("principledthin/all-lobes",),
+            ("principledthin/default", "principledthin/all-lobes"),
             "src/bsdfs/principledthin.cpp:463",
             "the specular-transmission mask `mac_mic_compatibility(wh, wi, wo_t, wi.z(), false)` "
             "tests the unmirrored wo_t against the half vector built from the mirrored wo_r "
-            "(lines 451-454), so whether the lobe is on depends on which direction is the "
-            "grazing one; the lobe value (lines 522-524) is symmetric",
+            "(lines 451-454), so whether the lobe is on depends on which of the two directions "
+            "is wi; the lobe value (lines 522-524) is symmetric",
             "f(a, b) = 0 vs f(b, a) = 10.67 for a = (-0.49, 0.85, 0.2), b = (0.49, -0.87, "
-            "-0.0216)",
+            "-0.0216) (roughness 0.4, spec_trans 0.3); f(c, d) = 0.004108 vs f(d, c) = 0 for "
+            "c = (-0.404, 0.691, 0.6), d = (0.275, 0.505, -0.818) (defaults, spec_trans 1; "
+            "proportional to spec_trans down to 1e-4)",
             "f(a, b) = f(b, a) (a thin sheet transmits with eta = 1)",
             "tests/repro/principledthin_transmission_reciprocity.py",
-            rows=(TRANSMISSION_ROW,)),
+            rows=(TRANSMISSION_ROW,), at=SPEC_TRANS_ON),
     Finding("pplastic-polarized-grazing", "reciprocity", ("pplastic/default", "pplastic/rough-ggx"),
             "src/bsdfs/pplastic.cpp:377",
             "the polarized diffuse term evaluates the second Fresnel transmission from the "
