@@ -27,18 +27,18 @@ class Options:
     quick: bool = False
     seed: int = 0
     res: int = 16                      #: film width = height of the analytic scenes
-    finite_spp: int = 16               #: one pass per scene
-    bias_spp: int = 64                 #: per pass
-    bias_passes: int = 16
+    finite_spp: int = 32               #: one pass per scene
+    bias_spp: int = 512                #: per pass
+    bias_passes: int = 20
     convergence_res: int = 32
-    convergence_spp: tuple = (4, 16, 64, 256)
-    agreement_res: int = 16
+    convergence_spp: tuple = (8, 64, 512, 4096)
+    agreement_res: int = 32
     agreement_block: int = 4           #: block-mean tests over block × block pixels
-    agreement_spp: int = 64            #: per pass, each side
-    agreement_passes: int = 16
-    gradient_spp: int = 64             #: per pass
-    gradient_passes: int = 8
-    cost_spp: int = 64
+    agreement_spp: int = 256           #: per pass, each side
+    agreement_passes: int = 20
+    gradient_spp: int = 256            #: per pass
+    gradient_passes: int = 16
+    cost_spp: int = 256
     cost_repeats: int = 3
     topics: tuple = field(default_factory=tuple)
 
@@ -47,7 +47,7 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
     """The default sizes (≤ 5 min per integrator on 2 cores) or the quick ones (≤ 60 s)."""
     if not quick:
         return Options(seed=seed, topics=tuple(topics))
-    return Options(quick=True, seed=seed, topics=tuple(topics), finite_spp=8, bias_spp=32,
-                   bias_passes=10, convergence_spp=(2, 8, 32, 128), agreement_spp=32,
-                   agreement_passes=10, gradient_spp=32, gradient_passes=6, cost_spp=32,
-                   cost_repeats=2)
+    return Options(quick=True, seed=seed, topics=tuple(topics), finite_spp=16, bias_spp=128,
+                   bias_passes=12, convergence_spp=(4, 16, 64, 256), agreement_res=16,
+                   agreement_spp=128, agreement_passes=12, gradient_spp=64, gradient_passes=10,
+                   cost_spp=64, cost_repeats=2)

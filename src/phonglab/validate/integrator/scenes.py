@@ -49,7 +49,7 @@ from typing import Callable
 import numpy as np
 
 #: The enclosure's emitted radiance.
-LE = 1.0
+LE = 2.0
 #: Plane: albedo, light intensity, light height, camera height and field of view (degrees).
 PLANE_RHO, PLANE_I, PLANE_H, CAMERA_H, PLANE_FOV = 0.5, 4.0, 1.0, 2.0, 40.0
 #: Glass: index of refraction, environment radiance.
@@ -182,7 +182,7 @@ def box(res: int) -> dict:
             "light": {"type": "rectangle",
                       "to_world": T().translate([0, 0.99, 0]).rotate([1, 0, 0], 90).scale(0.5),
                       "bsdf": {"type": "diffuse", "reflectance": _gray(0.0)},
-                      "emitter": {"type": "area", "radiance": _gray(2.0)}},
+                      "emitter": {"type": "area", "radiance": _gray(0.5)}},
             "ball": {"type": "sphere", "center": [-0.3, -0.6, -0.1], "radius": 0.4,
                      "bsdf": {"type": "roughplastic", "alpha": 0.2,
                               "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.3, 0.6]}}}}
