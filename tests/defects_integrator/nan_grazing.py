@@ -1,5 +1,5 @@
-"""Planted defect: the camera vertex's contribution is scaled by √(c − ε)/√(c − ε), c = cos θ
-of the camera ray at the hit and ε = 10⁻⁴: 1 everywhere except at grazing incidence
+"""Planted defect: the camera vertex's contribution is scaled by √(c − ε)/√(c − ε), c =
+cos θ of the camera ray at the hit and ε = 10⁻⁴: 1 everywhere except at grazing incidence
 (c < ε), where the square root of a negative number is NaN.
 
 A normalization by a cosine without a guard for the grazing case.  Only the grazing plane
