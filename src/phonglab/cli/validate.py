@@ -184,8 +184,7 @@ def _other_kind(args, params, core, not_bsdf: ValidateError):
     """(report, label, text) of an emitter or an integrator, at the given point (the sweep is
     the BSDF kind's): the first kind whose detection function (``is_emitter``,
     ``is_integrator``) accepts ``args.bsdf``; raises the BSDF's error ``not_bsdf`` when it
-    names neither.  The plugin files have run on the BSDF path, so a name they registered is
-    known to Mitsuba's plugin manager."""
+    names neither."""
     import mitsuba as mi
 
     from ..registration import register
@@ -196,12 +195,23 @@ def _other_kind(args, params, core, not_bsdf: ValidateError):
         register(args.variant)
     kinds = ((emitter.is_emitter, emitter.prepare, emitter.EMITTER),
              (integrator.is_integrator, integrator.prepare, integrator.INTEGRATOR))
+    target = None
     for detect, prepare, kind in kinds:
         if detect(args.bsdf):
+            target = prepare(args.bsdf, variant=args.variant, params=params, plugins=args.plugin)
             break
     else:
-        raise not_bsdf
-    target = prepare(args.bsdf, variant=args.variant, params=params, plugins=args.plugin)
+        # The BSDF path can stop before the plugin files run (a topic of another kind): each
+        # kind's prepare runs them and refuses a file that registers none of its kind.
+        for _, prepare, kind in kinds if args.plugin else ():
+            try:
+                target = prepare(args.bsdf, variant=args.variant, params=params,
+                                 plugins=args.plugin)
+                break
+            except ValidateError:
+                continue
+        if target is None:
+            raise not_bsdf
     report = core.run(kind, target, topics=check_topics(args.only, kind.topics),
                       seed=args.seed, quick=args.quick)
     note = "" if args.no_sweep else (f"\n\nan {kind.word} is validated at the given parameter "
