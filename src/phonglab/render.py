@@ -336,7 +336,7 @@ class UniformPasses:
         named = {} if channels in exr.SHAPE_NAMED else {"channels": channels}
         return result, {"spp": int(sum(result.pass_spp)), "passes": passes, "seed": seed,
                         "sampler": sensor.sampler().class_name(), "integrator": name,
-                        "max_depth": _max_depth(integrator), **named}
+                        "max_depth": max_depth_of(integrator), **named}
 
     def extra_files(self, out: Path, result) -> list:
         """Files beyond the image set (none)."""
@@ -462,7 +462,9 @@ def preflight(scene, path: str | Path, sensor: int | mi.Sensor = 0):
     return sensors[sensor]
 
 
-def _max_depth(integrator) -> int | None:
+def max_depth_of(integrator) -> int | None:
+    """The max_depth an integrator was built with (its traversed parameter, else the value its
+    description prints), or None when it has none."""
     try:
         params = mi.traverse(integrator)
         if "max_depth" in params:

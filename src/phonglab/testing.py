@@ -1,5 +1,5 @@
-"""Helpers for the test suites of BSDF and emitter authors: one line validates a plugin inside
-pytest.
+"""Helpers for the test suites of BSDF, emitter and integrator authors: one line validates a
+plugin inside pytest.
 
 ::
 
@@ -22,14 +22,19 @@ the parameter point they failed at, so pytest shows what is wrong and where.
 (:func:`phonglab.validate.validate_emitter`; ``shape`` attaches an area emitter to a shape)::
 
     assert_emitter_valid("mylight", plugins=[HERE / "mylight.py"], quick=True)
+
+:func:`assert_integrator_valid` does the same for an integrator
+(:func:`phonglab.validate.validate_integrator`)::
+
+    assert_integrator_valid("mypath", plugins=[HERE / "mypath.py"], quick=True)
 """
 
 from __future__ import annotations
 
-from .validate import validate_bsdf, validate_emitter
+from .validate import validate_bsdf, validate_emitter, validate_integrator
 from .verdict import point_label, table
 
-__all__ = ["assert_bsdf_valid", "assert_emitter_valid"]
+__all__ = ["assert_bsdf_valid", "assert_emitter_valid", "assert_integrator_valid"]
 
 
 def assert_bsdf_valid(spec, sweep: bool = True, **options):
@@ -55,6 +60,17 @@ def assert_emitter_valid(spec, **options):
     report = validate_emitter(spec, **options)
     if not report.passed:
         raise AssertionError(f"{report.meta.get('emitter', spec)} failed "
+                             f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
+                             + report.table(report.failing))
+    return report
+
+
+def assert_integrator_valid(spec, **options):
+    """Validate the integrator ``spec``; raise AssertionError listing the failing rows. Returns
+    the report."""
+    report = validate_integrator(spec, **options)
+    if not report.passed:
+        raise AssertionError(f"{report.meta.get('integrator', spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
                              + report.table(report.failing))
     return report

@@ -1,9 +1,10 @@
-"""``phonglab validate``: physics conformance of one BSDF (or every built-in) or one emitter, as
-a table.
+"""``phonglab validate``: physics conformance of one BSDF (or every built-in), one emitter or one
+integrator, as a table.
 
 The kind is detected: the BSDF path runs first, unchanged; a spec that does not load as a BSDF
 and names an emitter (:func:`phonglab.validate.emitter.kind.is_emitter`) is validated on the
-emitter topics instead.
+emitter topics, one that names an integrator
+(:func:`phonglab.validate.integrator.kind.is_integrator`) on the integrator topics.
 
 Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed), 1 when a
 row fails, 2 on bad input (unknown plugin type, bad --set, missing file, unknown topic): one
@@ -19,6 +20,7 @@ from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate.bsdf.topics import TOPICS
 from ..validate.emitter.topics import TOPICS as EMITTER_TOPICS
+from ..validate.integrator.topics import TOPICS as INTEGRATOR_TOPICS
 from ..validate.inputs import ValidateError, check_topics
 from ..verdict import Report
 from .options import add_seed
@@ -31,6 +33,8 @@ EPILOG = """examples:
   phonglab validate point --quick
   phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
   phonglab validate mylight --plugin mylight.py
+  phonglab validate path --quick
+  phonglab validate myint --plugin myint.py --json out/myint.json
   phonglab validate --all-builtins --quick --json out/conformance.json
   phonglab validate --all-builtins --scheduler tcp://10.0.0.5:8786 --json out/conformance.json
 """
@@ -46,21 +50,25 @@ def add_parser(sub) -> None:
                     "An emitter (a name, dict or XML that loads as one, or a --plugin file "
                     "calling mi.register_emitter) is detected and validated on the emitter "
                     f"topics ({', '.join(EMITTER_TOPICS)}); --set shape.type=sphere attaches an "
-                    "area emitter to a shape. "
+                    "area emitter to a shape. An integrator (path, direct, ptracer, prb, ... or a "
+                    "--plugin file calling mi.register_integrator) on the integrator topics "
+                    f"({', '.join(INTEGRATOR_TOPICS)}). "
                     "Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bsdf", nargs="?", metavar="BSDF",
                    help="plugin type name (diffuse, roughplastic, lambert, ...; an emitter: "
-                        "point, area, constant, ...) or an XML file")
+                        "point, area, constant, ...; an integrator: path, direct, ...) or an XML "
+                        "file")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
                    help="a Python file run after the variant is set; it calls mi.register_bsdf "
-                        "(or mi.register_emitter)")
+                        "(or mi.register_emitter, mi.register_integrator)")
     p.add_argument("--variant", help="Mitsuba variant (default llvm_ad_rgb)")
     p.add_argument("--only", action="append", metavar="TOPIC",
                    help=f"run only this topic (repeatable): {', '.join(TOPICS)}; an emitter's: "
-                        f"{', '.join(EMITTER_TOPICS)}")
+                        f"{', '.join(EMITTER_TOPICS)}; an integrator's: "
+                        f"{', '.join(INTEGRATOR_TOPICS)}")
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
     add_seed(p)
@@ -83,8 +91,8 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     """Every check that needs no Mitsuba, in the order a user would fix them: the --set
     parameters and the topics to run."""
     from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
-    topics = args.only and check_topics(args.only, TOPICS + tuple(
-        t for t in EMITTER_TOPICS if t not in TOPICS))
+    every = tuple(dict.fromkeys(TOPICS + EMITTER_TOPICS + INTEGRATOR_TOPICS))
+    topics = args.only and check_topics(args.only, every)
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
             raise ValidateError("--all-builtins takes no BSDF, --set or --plugin; drop them or "
@@ -172,29 +180,42 @@ def _bsdf(args, params, core, sweep, BSDF):
     return report, report.meta["bsdf"], sweep_text(report)
 
 
-def _emitter(args, params, core, not_bsdf: ValidateError):
-    """(report, label, text) of an emitter, at the given point (the sweep is the BSDF
-    kind's); raises the BSDF's error ``not_bsdf`` when ``args.bsdf`` names no emitter either."""
+def _other_kind(args, params, core, not_bsdf: ValidateError):
+    """(report, label, text) of an emitter or an integrator, at the given point (the sweep is
+    the BSDF kind's): the first kind whose detection function (``is_emitter``,
+    ``is_integrator``) accepts ``args.bsdf``; raises the BSDF's error ``not_bsdf`` when it
+    names neither."""
     import mitsuba as mi
 
     from ..registration import register
     from ..validate.emitter import kind as emitter
+    from ..validate.integrator import kind as integrator
 
     if mi.variant() is None:
         register(args.variant)
-    if not args.plugin and not emitter.is_emitter(args.bsdf):
-        raise not_bsdf
-    try:                 # plugin files are run here if the BSDF path stopped before them
-        target = emitter.prepare(args.bsdf, variant=args.variant, params=params,
+    kinds = ((emitter.is_emitter, emitter.prepare, emitter.EMITTER),
+             (integrator.is_integrator, integrator.prepare, integrator.INTEGRATOR))
+    target = None
+    for detect, prepare, kind in kinds:
+        if detect(args.bsdf):
+            target = prepare(args.bsdf, variant=args.variant, params=params, plugins=args.plugin)
+            break
+    else:
+        # The BSDF path can stop before the plugin files run (a topic of another kind): each
+        # kind's prepare runs them and refuses a file that registers none of its kind.
+        for _, prepare, kind in kinds if args.plugin else ():
+            try:
+                target = prepare(args.bsdf, variant=args.variant, params=params,
                                  plugins=args.plugin)
-    except ValidateError:
-        if emitter.is_emitter(args.bsdf):
-            raise        # an emitter's own bad input
-        raise not_bsdf from None
-    report = core.run(emitter.EMITTER, target, topics=check_topics(args.only, emitter.TOPICS),
+                break
+            except ValidateError:
+                continue
+        if target is None:
+            raise not_bsdf
+    report = core.run(kind, target, topics=check_topics(args.only, kind.topics),
                       seed=args.seed, quick=args.quick)
-    note = "" if args.no_sweep else ("\n\nan emitter is validated at the given parameter "
-                                     "point (the parameter sweep is the BSDF kind's)")
+    note = "" if args.no_sweep else (f"\n\nan {kind.word} is validated at the given parameter "
+                                     f"point (the parameter sweep is the BSDF kind's)")
     return report, target.label, report.table() + note
 
 
@@ -211,9 +232,8 @@ def run(args) -> int:
     try:
         report, label, text = _bsdf(args, params, core, sweep, BSDF)
     except ValidateError as not_bsdf:
-        # Not a BSDF: an emitter is validated on its own topics (the plugin files have run,
-        # so a name they registered is known to Mitsuba's plugin manager by now).
-        report, label, text = _emitter(args, params, core, not_bsdf)
+        # Not a BSDF: an emitter or an integrator is validated on its own topics.
+        report, label, text = _other_kind(args, params, core, not_bsdf)
     print(text)
     if args.json:
         report.write_json(args.json)

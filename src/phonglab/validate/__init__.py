@@ -11,16 +11,18 @@ BSDF rows: :mod:`.bsdf.topics`.  Rows and reports: :mod:`phonglab.verdict`; user
 :mod:`.builtins`; many cases as jobs: :mod:`.batch`.
 
 The emitter kind (:mod:`.emitter`, :func:`validate_emitter`): ``finite``, ``weight``, ``pdf``,
-``chi2``, ``power``, ``gradient``, ``cost``.
+``chi2``, ``power``, ``gradient``, ``cost``.  The integrator kind (:mod:`.integrator`,
+:func:`validate_integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
+``gradient``, ``cost``.
 
 Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` and
-``validate_emitter`` do.
+``validate_emitter`` and ``validate_integrator`` do.
 """
 
 from ..verdict import Report
 from .bsdf.topics import TOPICS
 
-__all__ = ["TOPICS", "validate_bsdf", "validate_emitter"]
+__all__ = ["TOPICS", "validate_bsdf", "validate_emitter", "validate_integrator"]
 
 
 def validate_bsdf(spec, **options) -> Report:
@@ -34,5 +36,13 @@ def validate_emitter(spec, **options) -> Report:
     """Validate an emitter on every emitter topic; see
     :func:`phonglab.validate.emitter.kind.validate_emitter`."""
     from .emitter.kind import validate_emitter as run   # lazy, as validate_bsdf
+
+    return run(spec, **options)
+
+
+def validate_integrator(spec, **options) -> Report:
+    """Validate an integrator on every integrator topic; see
+    :func:`phonglab.validate.integrator.kind.validate_integrator`."""
+    from .integrator.kind import validate_integrator as run   # lazy, as validate_bsdf
 
     return run(spec, **options)

@@ -21,3 +21,14 @@ def check_topics(topics, table=TOPICS) -> tuple[str, ...]:
     if bad:
         raise ValidateError(f"unknown topic {bad[0]!r}; choose from {', '.join(table)}")
     return tuple(t for t in table if t in topics)
+
+
+def xml_head(path: str) -> str:
+    """The first 200 characters of an XML file after its declaration ("" when unreadable):
+    enough to see which element (``<bsdf``, ``<emitter``, ``<integrator``) it holds."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            text = f.read(4096)
+    except OSError:
+        return ""
+    return text.split("?>", 1)[-1].lstrip()[:200]

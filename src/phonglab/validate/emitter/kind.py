@@ -14,7 +14,7 @@ import mitsuba as mi
 from ...settings import Loaded
 from ...verdict import Report
 from .. import core
-from ..inputs import ValidateError, check_topics
+from ..inputs import ValidateError, check_topics, xml_head
 from . import setup as setup_
 from .config import options
 from .cost import cost
@@ -99,7 +99,7 @@ def is_emitter(spec) -> bool:
     if isinstance(spec, mi.Emitter):
         return True
     if isinstance(spec, str) and spec.endswith(".xml"):
-        return "<emitter" in _head(spec)
+        return "<emitter" in xml_head(spec)
     name = spec.get("type") if isinstance(spec, dict) else spec
     if not isinstance(name, str):
         return False
@@ -114,12 +114,3 @@ def is_emitter(spec) -> bool:
             return False
     return kind == mi.ObjectType.Emitter
 
-
-def _head(path: str) -> str:
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            text = f.read(4096)
-    except OSError:
-        return ""
-    body = text.split("?>", 1)[-1].lstrip()
-    return body[:200]

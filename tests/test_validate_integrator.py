@@ -1,0 +1,100 @@
+"""The integrator validator: the control path tracer passes, each planted defect fails its own
+topic (bias or finite; the double count also agreement: its box has an area light, which any
+scene testing MIS must have), the analytic values hold, and the command line detects an
+integrator.  Quick sizes, seed 0; α = 0.01 per integrator (Šidák)."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+DEFECTS = Path(__file__).parent / "defects_integrator"
+SRC = Path(__file__).parents[1] / "src"
+
+#: defect file -> the topics it must fail (empty: the control)
+PLANTED = {
+    "path_control": set(),
+    "rr_forgets_q": {"bias"},
+    "throughput_clamp": {"bias"},
+    "nan_grazing": {"finite"},
+    "direct_double_count": {"bias", "agreement"},
+}
+
+
+#: the default tier runs these two (~6 s); the slow tier every defect
+FAST = {"path_control", "nan_grazing"}
+
+
+@pytest.mark.parametrize("name", [n if n in FAST else pytest.param(n, marks=pytest.mark.slow)
+                                  for n in sorted(PLANTED)])
+def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
+    from phonglab.validate.integrator.kind import validate_integrator
+
+    report = validate_integrator(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
+    assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
+
+
+def test_plane_values_are_the_solid_angle():
+    from phonglab.validate.integrator import scenes
+
+    assert scenes.plane_pixels(32).mean() == pytest.approx(scenes.plane_value(), rel=1e-12)
+    assert scenes.plane_value() < scenes.PLANE_RHO * scenes.PLANE_I / math.pi
+    assert scenes.enclosure_value(0.5, 2) == pytest.approx(scenes.LE * 1.5)
+    assert scenes.glass_deficit(64, 16) < 1e-5 < scenes.glass_deficit(4, 16)
+
+
+def test_depth_detection(variant_llvm_rgb):
+    from phonglab.validate.integrator.kind import prepare
+
+    t = {n: prepare(n).plugin for n in ("path", "direct", "direct_projective", "ptracer")}
+    assert t["path"].depth == "settable"
+    assert (t["direct"].depth, t["direct"].fixed_depth) == ("fixed", 2)
+    assert (t["direct_projective"].depth, t["direct_projective"].fixed_depth) == ("fixed", 2)
+    assert t["ptracer"].splatting and t["direct_projective"].ad
+    aov = prepare({"type": "aov", "aovs": "nn:sh_normal"}).plugin
+    assert aov.aov
+
+
+def test_aov_is_checked_for_finite_only(variant_llvm_rgb):
+    from phonglab.validate.integrator.kind import validate_integrator
+
+    report = validate_integrator({"type": "aov", "aovs": "nn:sh_normal"}, quick=True,
+                                 topics=["finite", "bias"])
+    assert report.passed, report.table(report.failing)
+    assert {r.status for r in report.rows if r.topic == "bias"} == {"skipped"}
+
+
+def test_cli_detects_an_integrator_and_fails_a_defect(tmp_path):
+    env = {"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}
+    out = tmp_path / "path.json"
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "path", "--quick",
+                           "--only", "bias", "--json", str(out)], capture_output=True,
+                          text=True, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    import json
+    assert json.loads(out.read_text())["meta"]["integrator"] == "path"
+    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate",
+                           "defect_rr_forgets_q", "--plugin", str(DEFECTS / "rr_forgets_q.py"),
+                           "--quick", "--only", "bias"], capture_output=True, text=True, env=env)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+
+
+def test_assert_integrator_valid(variant_llvm_rgb):
+    from phonglab.testing import assert_integrator_valid
+
+    with pytest.raises(AssertionError, match="enclosure"):
+        assert_integrator_valid("defect_rr_forgets_q", plugins=[DEFECTS / "rr_forgets_q.py"],
+                                quick=True, topics=["bias"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["path", "direct", "volpath", "ptracer", "prb"])
+def test_builtins_pass_default(variant_llvm_rgb, name):
+    from phonglab.validate.integrator.kind import validate_integrator
+
+    report = validate_integrator(name)
+    assert report.passed, report.table(report.failing)
