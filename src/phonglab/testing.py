@@ -57,20 +57,19 @@ def assert_bsdf_valid(spec, sweep: bool = True, **options):
 def assert_emitter_valid(spec, **options):
     """Validate the emitter ``spec``; raise AssertionError listing the failing rows. Returns
     the report."""
-    report = validate_emitter(spec, **options)
-    if not report.passed:
-        raise AssertionError(f"{report.meta.get('emitter', spec)} failed "
-                             f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
-                             + report.table(report.failing))
-    return report
+    return _passed_or_raise(validate_emitter(spec, **options), "emitter", spec)
 
 
 def assert_integrator_valid(spec, **options):
     """Validate the integrator ``spec``; raise AssertionError listing the failing rows. Returns
     the report."""
-    report = validate_integrator(spec, **options)
+    return _passed_or_raise(validate_integrator(spec, **options), "integrator", spec)
+
+
+def _passed_or_raise(report, word: str, spec):
+    """``report`` when it passed; else AssertionError listing its failing rows."""
     if not report.passed:
-        raise AssertionError(f"{report.meta.get('integrator', spec)} failed "
+        raise AssertionError(f"{report.meta.get(word, spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
                              + report.table(report.failing))
     return report

@@ -36,7 +36,7 @@ import numpy as np
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import Report, Row
-from .inputs import ValidateError, check_topics
+from .inputs import ValidateError, check_topics, xml_head
 
 
 @dataclass(frozen=True)
@@ -158,6 +158,29 @@ def _guarded(topic: str, runner) -> list[Row]:
         return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
                     "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
                     {"traceback": traceback.format_exc()[-3000:]})]
+
+
+def names_plugin(spec, cls, object_type, tag: str) -> bool:
+    """Whether ``spec`` (a type name, a dict with 'type', an XML file or an object) names a
+    plugin of class ``cls`` (``mi.Emitter``; ``object_type`` its ``mi.ObjectType``, ``tag`` its
+    XML element); Mitsuba's variant must be set and the plugin files run."""
+    if isinstance(spec, cls):
+        return True
+    if isinstance(spec, str) and spec.endswith(".xml"):
+        return f"<{tag}" in xml_head(spec)
+    name = spec.get("type") if isinstance(spec, dict) else spec
+    if not isinstance(name, str):
+        return False
+    try:
+        kind = mi.PluginManager.instance().plugin_type(name)
+    except Exception:
+        return False
+    if kind == mi.ObjectType.Unknown:       # a Python plugin (mi.register_*): load it
+        try:
+            return isinstance(mi.load_dict({"type": name}), cls)
+        except Exception:
+            return False
+    return kind == object_type
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ import mitsuba as mi
 from ...settings import Loaded
 from ...verdict import Report
 from .. import core
-from ..inputs import ValidateError, check_topics, xml_head
+from ..inputs import ValidateError, check_topics
 from . import setup as setup_
 from .config import options
 from .cost import cost
@@ -94,23 +94,6 @@ def validate_emitter(spec, *, variant=None, params=None, topics=None, seed=0, qu
 
 
 def is_emitter(spec) -> bool:
-    """Whether ``spec`` (a type name, a dict with 'type', an XML file or an object) names an
-    emitter plugin; Mitsuba's variant must be set and the plugin files run."""
-    if isinstance(spec, mi.Emitter):
-        return True
-    if isinstance(spec, str) and spec.endswith(".xml"):
-        return "<emitter" in xml_head(spec)
-    name = spec.get("type") if isinstance(spec, dict) else spec
-    if not isinstance(name, str):
-        return False
-    try:
-        kind = mi.PluginManager.instance().plugin_type(name)
-    except Exception:
-        return False
-    if kind == mi.ObjectType.Unknown:       # a Python plugin (mi.register_emitter): load it
-        try:
-            return isinstance(mi.load_dict({"type": name}), mi.Emitter)
-        except Exception:
-            return False
-    return kind == mi.ObjectType.Emitter
+    """Whether ``spec`` names an emitter plugin (:func:`phonglab.validate.core.names_plugin`)."""
+    return core.names_plugin(spec, mi.Emitter, mi.ObjectType.Emitter, "emitter")
 

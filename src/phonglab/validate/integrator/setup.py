@@ -32,7 +32,7 @@ import mitsuba as mi
 
 from ...render import max_depth_of
 from ...settings import Loaded
-from ..inputs import xml_head
+from .. import core
 
 #: Built-ins without ``max_depth`` and the depth their estimator computes.
 FIXED_DEPTHS = {"direct": 2}
@@ -124,22 +124,5 @@ def build(loaded: Loaded, spec, params: dict | None) -> Target:
 
 
 def is_integrator(spec) -> bool:
-    """Whether ``spec`` (a type name, a dict with 'type', an XML file or an object) names an
-    integrator plugin; Mitsuba's variant must be set and the plugin files run."""
-    if isinstance(spec, mi.Integrator):
-        return True
-    if isinstance(spec, str) and spec.endswith(".xml"):
-        return "<integrator" in xml_head(spec)
-    name = spec.get("type") if isinstance(spec, dict) else spec
-    if not isinstance(name, str):
-        return False
-    try:
-        kind = mi.PluginManager.instance().plugin_type(name)
-    except Exception:
-        return False
-    if kind == mi.ObjectType.Unknown:       # a Python plugin (mi.register_integrator): load it
-        try:
-            return isinstance(mi.load_dict({"type": name}), mi.Integrator)
-        except Exception:
-            return False
-    return kind == mi.ObjectType.Integrator
+    """Whether ``spec`` names an integrator plugin (:func:`phonglab.validate.core.names_plugin`)."""
+    return core.names_plugin(spec, mi.Integrator, mi.ObjectType.Integrator, "integrator")
