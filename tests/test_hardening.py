@@ -384,6 +384,84 @@ def test_ctrl_c_at_any_point_of_a_render_is_one_line(tmp_path, delay):
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
+CTRL_C_INSIDE_A_RENDER = """
+import ctypes, os, signal, sys, threading, time
+# As in the console script, no thread exists before cli.main routes SIGINT: Dr.Jit's own
+# threads, started by this import, must not take it either.
+signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+import mitsuba as mi
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+from phonglab import cli
+libc = ctypes.CDLL(None)
+class Sigaction(ctypes.Structure):      # glibc's struct sigaction (Linux)
+    _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16),
+                ("flags", ctypes.c_int), ("restorer", ctypes.c_void_p)]
+def c_handler():
+    sa = Sigaction()
+    libc.sigaction(signal.SIGINT, None, ctypes.byref(sa))
+    return sa.handler
+real = mi.render
+def render(*args, **kwargs):            # Ctrl-C while Mitsuba's own C handler is installed
+    if not getattr(render, "fired", False):
+        render.fired = True
+        python_handler = c_handler()
+        def fire():
+            while c_handler() == python_handler:
+                time.sleep(0.0005)
+            os.kill(os.getpid(), signal.SIGINT)
+        threading.Thread(target=fire, daemon=True).start()
+    integrator = kwargs.get("integrator") or args[0].integrator()
+    try:
+        return real(*args, **kwargs)
+    finally:                            # Mitsuba's handler cancels the integrator it guards
+        print("cancelled by Mitsuba's handler:", integrator.should_stop(), flush=True)
+mi.render = render
+sys.exit(cli.main(["render", "cornell_phong", "--spp", "256", "-o", sys.argv[1]]))
+"""
+
+
+def test_ctrl_c_inside_a_render_never_runs_mitsubas_signal_handler(tmp_path):
+    """Mitsuba 3.9.1 installs a C SIGINT handler for each render that logs ("Received interrupt
+    signal, winding down..") from inside the handler (integrator_v.cpp:30-49): not
+    async-signal-safe, it hung `phonglab render` for good in CI (the slow Ctrl-C test at
+    0.5 s), and a Ctrl-C in the instant before it stores the previous handler kills the
+    process with SIG_DFL.  phonglab takes SIGINT on a thread of its own
+    (runtime.interrupts_routed): Mitsuba's handler never runs, the command says one line and
+    exits 130.  Without the routing the handler runs and cancels the integrator (checked)."""
+    out = tmp_path / "x.exr"
+    proc = subprocess.run([sys.executable, "-c", CTRL_C_INSIDE_A_RENDER, str(out)],
+                          capture_output=True, text=True, timeout=120,
+                          start_new_session=True)
+    both = proc.stdout + proc.stderr
+    assert "cancelled by Mitsuba's handler: False" in proc.stdout, both[-2000:]
+    assert "cancelled by Mitsuba's handler: True" not in proc.stdout, both[-2000:]
+    lines = [ln.strip() for ln in proc.stderr.replace("\r", "\n").splitlines()
+             if ln.strip() and not ln.strip().startswith("rendering")]
+    assert proc.returncode == 130 and lines == [INTERRUPT_MESSAGE], (proc.returncode, both[-2000:])
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_sigint_reproducer_shows_mitsubas_handler():
+    """tests/repro/sigint_handler_logs.py exits 1 while Mitsuba 3.9.1's render handler runs
+    Log from signal context (the reason for runtime.interrupts_routed)."""
+    script = Path(__file__).parent / "repro" / "sigint_handler_logs.py"
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 1, done.stdout + done.stderr
+
+
+def test_routing_restores_the_signal_mask_and_handler():
+    """After a command, in-process callers (notebooks, pytest) get Ctrl-C as before."""
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, set())
+    assert cli.main(["doctor"]) in (0, 1)
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == before
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with pytest.raises(KeyboardInterrupt):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)
+
+
 # --- seeds: Mitsuba's 32-bit range, refused outside it before any work -------------------------
 
 @pytest.mark.parametrize("command", [["render", "gray_direct"], ["check", "--only", "snell"],

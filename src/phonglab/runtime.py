@@ -197,6 +197,59 @@ def deferred_interrupt():
         raise KeyboardInterrupt
 
 
+@contextlib.contextmanager
+def interrupts_routed():
+    """Take Ctrl-C (SIGINT) on a thread of phonglab's own for the block: Mitsuba never sees it.
+
+    Mitsuba 3.9.1's ``Integrator.render`` binding installs a C signal handler for the length
+    of each render (``ScopedSignalHandler``, src/render/python/integrator_v.cpp:30-49) that
+    calls ``Log`` -- a mutex, string formatting, ``malloc`` -- from inside the handler, which
+    POSIX forbids (not async-signal-safe).  A Ctrl-C that lands on a thread holding one of
+    those locks hangs the process for good (``phonglab render`` stuck at "rendering 0%", seen
+    in CI); one that lands before ``sigint_handler_prev`` is assigned (line 36) restores
+    ``SIG_DFL`` and kills the process outright (exit -2, no message).  So for the block SIGINT
+    is blocked in the main thread -- and so in every thread started inside it (Dr.Jit's and
+    Mitsuba's workers, tqdm's, Dask's), which inherit the mask -- and a listener thread takes
+    it with ``sigwait`` and hands it to the main thread as ``_thread.interrupt_main()``: no C
+    handler runs at all, and Python raises ``KeyboardInterrupt`` at the main thread's next
+    bytecode, or calls the Python handler then installed (:func:`deferred_interrupt`'s).
+
+    Costs, stated: a render pass in a JIT variant was never interruptible from Python anyway
+    (the kernel runs to its end); a ``scalar_*`` pass is no longer cancelled midway by
+    Mitsuba, it ends first.  A main thread blocked in a system call (``time.sleep``, waiting
+    for a child) is not woken: the interrupt is raised when the call returns.  Children started
+    inside the block inherit the blocked mask (phonglab's own commands route it again; embedded
+    Dask workers ignore SIGINT anyway).  Only in the main thread, and only where Python's own
+    handler is installed.
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+    import _thread
+
+    sigint = {signal.SIGINT}
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, sigint)   # the listener inherits it
+    done = threading.Event()
+
+    def listen():
+        while True:
+            signal.sigwait(sigint)
+            if done.is_set():
+                return
+            _thread.interrupt_main()
+
+    listener = threading.Thread(target=listen, name="phonglab-interrupts", daemon=True)
+    listener.start()
+    try:
+        yield
+    finally:
+        done.set()
+        signal.pthread_kill(listener.ident, signal.SIGINT)      # wakes sigwait, not main
+        listener.join()
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def set_variant(variant: str | None = None) -> str:
     """Set a Mitsuba variant, the default one when ``variant`` is None.
 

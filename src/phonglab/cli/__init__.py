@@ -66,6 +66,13 @@ def interrupted(exc: BaseException) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # Ctrl-C is taken by a thread of phonglab's own, never by the C handler Mitsuba installs
+    # during a render, which can hang the process (runtime.interrupts_routed).
+    with runtime.interrupts_routed():
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
     debug = "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
         # Importing the subcommands loads Dr.Jit and Mitsuba: a Ctrl-C inside those C++
