@@ -27,6 +27,7 @@ from .options import add_seed
 
 EPILOG = """examples:
   phonglab validate diffuse
+  phonglab validate roughconductor          # Mitsuba's documented findings are KNOWN rows
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
@@ -79,6 +80,10 @@ def add_parser(sub) -> None:
                    help="check the given parameter point alone (by default every parameter "
                         "is swept across its range: its ends, middle and edge values, one at "
                         "a time, plus all at minimum and all at maximum; --set pins one)")
+    p.add_argument("--no-known", action="store_true",
+                   help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
+                        "as fails; by default a built-in BSDF named by its type carries them, "
+                        "each only inside its own signature, as KNOWN rows")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.builtins); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
@@ -165,19 +170,41 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
+def builtin_known(args) -> dict | None:
+    """The documented causes of a Mitsuba built-in BSDF named by its type (the conformance
+    table's findings of that plugin, ``known_for_plugin``), None for anything else (an XML
+    file, a ``--plugin`` file, which may register the same name, or ``--no-known``)."""
+    if args.no_known or args.plugin or args.bsdf.endswith(".xml"):
+        return None
+    from ..validate.builtins import known_for_plugin   # lazy: the catalogue loads Mitsuba
+    return known_for_plugin(args.bsdf) or None
+
+
+def known_note(report: Report, label: str) -> str:
+    """The line under a table with KNOWN rows from a built-in's documented findings."""
+    if not any(r.status == "KNOWN" for r in report.rows):
+        return ""
+    return (f"\n\nKNOWN rows: documented findings of Mitsuba's {label} (docs/conformance.md), "
+            f"each matched by its signature (a lane outside it stays a fail); --no-known "
+            f"reports them as fails")
+
+
 def _bsdf(args, params, core, sweep, BSDF):
     """(report, label, text) of a BSDF: its sweep, or the given point with --no-sweep."""
     topics = check_topics(args.only)
+    known = builtin_known(args)
     if args.no_sweep:
         target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
                               plugins=args.plugin)
-        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick)
-        return report, target.label, report.table()
+        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick,
+                                  known=known)
+        return report, target.label, report.table() + known_note(report, args.bsdf)
     with runner_from_args(args) as runner:
         report = sweep.validate(BSDF, args.bsdf, variant=args.variant, params=params,
                                 topics=topics, seed=args.seed, quick=args.quick,
-                                plugins=args.plugin, runner=runner)
-    return report, report.meta["bsdf"], sweep_text(report)
+                                plugins=args.plugin, runner=runner, known=known)
+    return (report, report.meta["bsdf"],
+            sweep_text(report) + known_note(report, args.bsdf))
 
 
 def _other_kind(args, params, core, not_bsdf: ValidateError):
