@@ -12,6 +12,7 @@ Each test names the defect it pins (they failed before the fix):
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import signal
@@ -384,32 +385,26 @@ def test_ctrl_c_at_any_point_of_a_render_is_one_line(tmp_path, delay):
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
-CTRL_C_INSIDE_A_RENDER = """
-import ctypes, os, signal, sys, threading, time
+def _load_repro(name: str):
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).parent / "repro" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+CTRL_C_INSIDE_A_RENDER = _load_repro("sigint_handler_logs").FIRE_DURING_RENDER + """
+import sys
 # As in the console script, no thread exists before cli.main routes SIGINT: Dr.Jit's own
 # threads, started by this import, must not take it either.
 signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
 import mitsuba as mi
 signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 from phonglab import cli
-libc = ctypes.CDLL(None)
-class Sigaction(ctypes.Structure):      # glibc's struct sigaction (Linux)
-    _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16),
-                ("flags", ctypes.c_int), ("restorer", ctypes.c_void_p)]
-def c_handler():
-    sa = Sigaction()
-    libc.sigaction(signal.SIGINT, None, ctypes.byref(sa))
-    return sa.handler
 real = mi.render
 def render(*args, **kwargs):            # Ctrl-C while Mitsuba's own C handler is installed
     if not getattr(render, "fired", False):
         render.fired = True
-        python_handler = c_handler()
-        def fire():
-            while c_handler() == python_handler:
-                time.sleep(0.0005)
-            os.kill(os.getpid(), signal.SIGINT)
-        threading.Thread(target=fire, daemon=True).start()
+        fire_during_render()
     integrator = kwargs.get("integrator") or args[0].integrator()
     try:
         return real(*args, **kwargs)

@@ -19,8 +19,29 @@ import subprocess
 import sys
 import textwrap
 
-CHILD = textwrap.dedent('''
+#: Python source: ``fire_during_render()`` starts a thread that sends SIGINT to the process
+#: the moment the C handler of SIGINT is no longer the one installed when it was called, i.e.
+#: while a render's own handler is installed (glibc's struct sigaction, Linux).
+FIRE_DURING_RENDER = textwrap.dedent('''
     import ctypes, os, signal, threading, time
+    libc = ctypes.CDLL(None)
+    class Sigaction(ctypes.Structure):
+        _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16),
+                    ("flags", ctypes.c_int), ("restorer", ctypes.c_void_p)]
+    def c_handler():
+        sa = Sigaction()
+        libc.sigaction(signal.SIGINT, None, ctypes.byref(sa))
+        return sa.handler
+    def fire_during_render():
+        before = c_handler()
+        def fire():
+            while c_handler() == before:
+                time.sleep(0.0005)
+            os.kill(os.getpid(), signal.SIGINT)
+        threading.Thread(target=fire, daemon=True).start()
+''')
+
+CHILD = FIRE_DURING_RENDER + textwrap.dedent('''
     try:                                   # phonglab pins a libLLVM that Dr.Jit can use
         import phonglab.runtime
         phonglab.runtime.configure()
@@ -29,21 +50,8 @@ CHILD = textwrap.dedent('''
     import drjit as dr
     import mitsuba as mi
     mi.set_variant("llvm_ad_rgb")
-    libc = ctypes.CDLL(None)
-    class Sigaction(ctypes.Structure):     # glibc's struct sigaction (Linux)
-        _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16),
-                    ("flags", ctypes.c_int), ("restorer", ctypes.c_void_p)]
-    def c_handler():
-        sa = Sigaction()
-        libc.sigaction(signal.SIGINT, None, ctypes.byref(sa))
-        return sa.handler
     scene = mi.load_dict(mi.cornell_box())
-    python_handler = c_handler()
-    def fire():                            # Ctrl-C while the render's own handler is installed
-        while c_handler() == python_handler:
-            time.sleep(0.0005)
-        os.kill(os.getpid(), signal.SIGINT)
-    threading.Thread(target=fire, daemon=True).start()
+    fire_during_render()
     try:
         dr.eval(mi.render(scene, spp=64))
     except BaseException as exc:          # KeyboardInterrupt, or Dr.Jit's wrapper of it
