@@ -183,12 +183,16 @@ def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
     hit = lanes_.trace(setup, np.tile(p, (n, 1)), d)
     t_hit = probe.to_numpy(hit.t, n)
     visible = np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius)
+    # dω = |cos θ'| dA / dist² with the GEOMETRIC normal of the surface (si.n of the ray's own
+    # hit, which is x where visible): ps.n is a mesh's interpolated vertex normal
+    # (mesh.cpp:907), a shading normal, not the surface's orientation
+    geo_n = probe.to_numpy(hit.n, n)
     ds = mi.DirectionSample3f(ps)
     ds.d, ds.dist = probe.to_vectors(d), mi.Float(np.ascontiguousarray(dist, np.float32))
     ds.emitter = mi.EmitterPtr(setup.emitter)
     it = interaction(np.tile(p, (n, 1)))
     pdf = probe.to_numpy(setup.emitter.pdf_direction(it, ds), n)
-    cos = np.abs(np.sum(d * nrm, axis=1))
+    cos = np.abs(np.sum(d * np.where(visible[:, None], geo_n, nrm), axis=1))
     f = np.where(visible & np.isfinite(pdf) & (p_area > 0) & (dist > 0),
                  pdf * cos / np.maximum(dist, 1e-30) ** 2 / np.where(p_area > 0, p_area, 1.0),
                  0.0)
@@ -212,6 +216,17 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     d = probe.to_numpy(ds.d, n)
     keep = (np.all(np.isfinite(weight), axis=1) & np.any(weight != 0, axis=1)
             & np.all(np.isfinite(d), axis=1) & (pdf > 0))
+    occluded = 0
+    if setup.kind == "surface" and keep.any():
+        # the expectation counts a surface point only where it is the first hit of the ray
+        # from p (area_integrals); a sample of a point behind another part of the shape (a
+        # non-convex mesh, or one whose shading normals face p on its far side) is one an
+        # integrator's shadow ray drops: it leaves the histogram too, and is counted
+        dist = probe.to_numpy(ds.dist, n)
+        t_hit = probe.to_numpy(lanes_.trace(setup, np.tile(p, (n, 1)),
+                                            np.where(keep[:, None], d, [0.0, 0.0, 1.0])).t, n)
+        hidden = keep & ~(np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius))
+        occluded, keep = int(hidden.sum()), keep & ~hidden
     local = d[keep] @ basis_.T
     cos, phi = np.clip(local[:, 2], -1.0, 1.0), np.arctan2(local[:, 1], local[:, 0])
     nc, nphi, k = opts.chi2_res, 2 * opts.chi2_res, opts.chi2_ires
@@ -224,7 +239,8 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
         integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k)
     expected = n * integral
     rec = {"ref": p.tolist(), "c0": c0, "hist_sum": float(keep.sum()) / n,
-           "pdf_sum": float(integral.sum()), "outside_domain": outside}
+           "pdf_sum": float(integral.sum()), "outside_domain": outside,
+           "occluded": occluded / n}
     if keep.sum() == 0 and integral.sum() < 1e-6:
         return {**rec, "status": "empty"}
     if keep.sum() == 0 or outside > 0:
