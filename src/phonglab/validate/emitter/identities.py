@@ -105,8 +105,11 @@ def finite(setup: Setup, opts) -> list[Row]:
     rows.append(_count_row("pdf_direction at the sampled ds", _bad(pdf), n, "pdf_direction",
                            _first_bad(s, _bad(pdf))))
     ev = probe.to_numpy(e.eval_direction(s.it, s.ds), n)
-    rows.append(_count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
-                           _first_bad(s, _bad(ev))))
+    row = _count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
+                     _first_bad(s, _bad(ev)))
+    if row.status == "fail":           # for documented causes' signatures (the sample's pdf)
+        row.failing_lanes = {"pdf": s.pdf[_bad(ev)], "ref": s.p[_bad(ev)]}
+    rows.append(row)
     if not setup.delta:
         d = s.d if setup.kind == "infinite" else sphere_dirs(rng(opts.seed, "finite"), n)
         value, _ = lanes_.traced_radiance(setup, s.p, d)
