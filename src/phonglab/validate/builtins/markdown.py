@@ -135,10 +135,14 @@ def _findings_name(cat: Catalogue) -> str:
 
 def _findings_section(data: dict, cat: Catalogue) -> list[str]:
     seen = {_label(r) for r in data["reports"]}
+    tests = ("tests/test_builtins_catalog.py" if cat.kind == "bsdf"
+             else "tests/test_conformance_kinds.py")
+    own = ("" if cat.kind == "bsdf" else " (a `plugins/...` source is phonglab's own plugin: "
+           "a *by design* entry documents the scope of its model)")
     out = ["## Findings", "",
            "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
-           f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
-           "while the behaviour is present (`pytest -m slow tests/test_builtins_catalog.py` runs "
+           f"`{MITSUBA_COMMIT[:12]}`){own} and has a minimal reproducer in `tests/repro/` that "
+           f"exits 1 while the behaviour is present (`pytest -m slow {tests}` runs "
            "them all).  A finding explains a *signature*: the rows it names and the region of "
            "inputs it says fails.  A failing row is KNOWN only when every one of its failing "
            "lanes (or χ² cells) lies in the signature of a finding; a lane outside keeps it a "
