@@ -140,7 +140,8 @@ def run_all(cases=None, options: dict | None = None, progress=None,
     added to it as it finishes.
     """
     if cases is None:
-        cases = builtins.kinds.catalogue((options or {}).get("kind", "bsdf")).cases()
+        kind = (options or {}).get("kind", "bsdf")
+        cases = builtins.cases() if kind == "bsdf" else builtins.kinds.catalogue(kind).cases()
     results = dict(log.done) if log is not None else {}
     todo = [case for case in cases if case.label not in results]
 
