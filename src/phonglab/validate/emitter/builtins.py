@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from ..builtins.findings import Finding, ValidatorIssue
 from ..builtins.kinds import Catalogue, KindCase, with_known
-from .signatures import InvalidSample, SphereSurfaceBand
+from .signatures import InvalidSample, NegativeOnly, SphereSurfaceBand
 from .topics import TOPICS
 
 _SPHERES = ("area (sphere)", "area (sphere, flip_normals)")
@@ -76,6 +76,21 @@ FINDINGS: tuple[Finding, ...] = (
             "samples that do (flat triangles: 0.375 and 0.500, the chi2 passes)",
             "tests/repro/mesh_vertex_normal_emitter_pdf.py",
             rows=("direction sampling matches pdf_direction (min p-value)",)),
+    Finding("timed_sunsky-negative-rgb", "finite", ("timed_sunsky",),
+            "src/emitters/timed_sunsky.cpp:171",
+            "by design, as its documentation says (lines 171-176): the sun's radiance is "
+            "ill-represented in linear sRGB and negative values are left un-clamped; the sky's "
+            "Hosek-Wilkie fit (include/mitsuba/render/sunsky.h:642-655) and the sun's RGB "
+            "(:580-581) have a negative blue channel close to the horizon -- the sky within "
+            "~0.07 deg, the sun disc while it is under ~1 deg high, where timed_sunsky's "
+            "default day puts it part of the time.  A render gets negative blue light from a "
+            "low sun (an RGB film keeps it)",
+            "36 % of sample_direction's lanes are sun samples with weight (0.73, 0.20, -0.011) "
+            "(radiance (3819, 1032, -58)); eval -0.00089 at 0.01-0.07 deg elevation",
+            "radiance >= 0", "tests/repro/timed_sunsky_negative_rgb.py", bug=False,
+            rows=("sample_direction: ds.pdf, ds.d, weight", "eval_direction at the sampled ds",
+                  "eval along rays from the reference points", "sample_ray: weight, ray"),
+            region=NegativeOnly()),
     Finding("projector-eval-direction-unmasked", "finite", ("projector",),
             "src/emitters/projector.cpp:272",
             "eval_direction (lines 272-295) evaluates the texture at ds.uv and divides by "
@@ -267,6 +282,26 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         fixed_by="commit 7eb35bf (emitter/power: a cone of PEAK_CONE/pdf_max sr about "
                  "sample_direction's most probable direction is integrated apart when that "
                  "density exceeds PEAK_RATIO/4π)"),
+    ValidatorIssue(
+        "chi2-env-feature-between-nodes", "chi2", ("sunsky", "timed_sunsky"),
+        "an environment's chi2 expectation integrated pdf_direction per bin on 12 x 12 nodes "
+        "(48 x 48 in bins whose nodes disagree); sunsky's 0.53 deg sun fell between the nodes "
+        "of its bin, which therefore looked smooth: ∫ pdf = 0.951 over the sphere and "
+        "χ² = 1.5e7 on 1599 degrees of freedom at default sizes (timed_sunsky: 0.971, "
+        "p = 1e-239); --quick sizes passed",
+        fixed_by="commit 4e48694 (emitter/sampling: a bin where a sample saw a density above "
+                 "all its nodes is refined, and refined bins are subdivided until two levels "
+                 "agree to 0.02 of the bin's Poisson error: ∫ pdf = 1.002, p = 0.47 and 0.10)"),
+    ValidatorIssue(
+        "weight-sun-edge-conditioning", "weight", ("timed_sunsky",),
+        "'weight x ds.pdf = eval_direction(ds)' had no allowance for the radiance's "
+        "conditioning: a sun direction sampled on the edge of its cone (sunsky.h:903, u -> 1) "
+        "is a sun hit to sample_direction, which takes it for granted (sunsky.h:430), and "
+        "rounds outside the cone in eval's test dot(sun, d) >= cos(aperture) (sunsky.h:946): "
+        "7 of 8188 lanes differ by the sun's whole radiance (3819 against 0.217)",
+        fixed_by="commit 4e48694 (emitter/identities: where the two differ the row adds the "
+                 "radiance's sensitivity to an 8u move of the ray, as the traced-point row "
+                 "does)"),
     ValidatorIssue(
         "gradient-read-only-parameter", "gradient", ("sunsky",),
         "the gradient topic took every parameter not flagged NonDifferentiable, including "

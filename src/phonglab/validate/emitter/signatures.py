@@ -40,3 +40,16 @@ class InvalidSample:
         if "pdf" not in lanes:
             return None
         return np.asarray(lanes["pdf"], np.float64) == 0.0
+
+
+class NegativeOnly:
+    """Failing lanes of a ``finite`` row whose values are all finite, some negative (no NaN,
+    no infinity): a radiance or weight below zero, not a broken computation."""
+
+    text = "failing lanes whose values are finite and only negative (no NaN or infinity)"
+
+    def covers(self, row):
+        lanes = row.failing_lanes or {}
+        if "negative_only" not in lanes:
+            return None
+        return np.asarray(lanes["negative_only"], bool)
