@@ -137,8 +137,9 @@ def _findings_section(data: dict, cat: Catalogue) -> list[str]:
     seen = {_label(r) for r in data["reports"]}
     tests = ("tests/test_builtins_catalog.py" if cat.kind == "bsdf"
              else "tests/test_conformance_kinds.py")
-    own = ("" if cat.kind == "bsdf" else " (a `plugins/...` source is phonglab's own plugin: "
-           "a *by design* entry documents the scope of its model)")
+    own = ("" if not any(f.source.startswith("plugins/") for f in cat.findings)
+           else " (a `plugins/...` source is phonglab's own plugin: a *by design* entry "
+           "documents the scope of its model)")
     out = ["## Findings", "",
            "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
            f"`{MITSUBA_COMMIT[:12]}`){own} and has a minimal reproducer in `tests/repro/` that "
