@@ -1,11 +1,13 @@
-"""Regenerate docs/conformance.json and docs/conformance.md (``make conformance``).
+"""Regenerate docs/conformance.json and docs/conformance.md (``make conformance``), and with
+``--kind emitter|integrator`` docs/conformance-emitters.* and docs/conformance-integrators.*.
 
-    python scripts/conformance.py [--quick] [--seed S] [--only LABEL ...]
+    python scripts/conformance.py [--kind bsdf] [--quick] [--seed S] [--only LABEL ...]
         [--json docs/conformance.json] [--markdown docs/conformance.md]
     python scripts/conformance.py --from-json docs/conformance.json   # markdown only
 
-The cases, the findings and the markdown renderer live in phonglab.validate.builtins; this
-driver only runs them and writes the two files.  Each finished case is kept in
+The cases, the findings and the markdown renderer live in phonglab.validate.builtins (a
+kind's catalogue: phonglab.validate.builtins.kind_catalogue(kind)); this driver only runs them and
+writes the two files.  Each finished case is kept in
 ``<json>.partial.jsonl`` at once (phonglab.validate.batch.CaseLog): an interrupted run loses
 none, and the same command resumes from them.
 """
@@ -24,21 +26,26 @@ from phonglab.outputs import write_json
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kind", choices=builtins.kinds.KINDS, default="bsdf",
+                    help="which table: built-in BSDFs (default), emitters or integrators")
     ap.add_argument("--quick", action="store_true", help="the validator's --quick sizes")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--sweep", action="store_true",
                     help="each case across its parameter sweep (default: its own point only)")
     ap.add_argument("--only", nargs="+", metavar="LABEL", help="validate only these cases")
-    ap.add_argument("--json", type=Path, default=Path("docs/conformance.json"))
-    ap.add_argument("--markdown", type=Path, default=Path("docs/conformance.md"))
+    ap.add_argument("--json", type=Path, help="default: the kind's docs/conformance*.json")
+    ap.add_argument("--markdown", type=Path, help="default: the kind's docs/conformance*.md")
     ap.add_argument("--from-json", type=Path, metavar="JSON",
                     help="render the markdown from this JSON instead of validating")
     args = ap.parse_args(argv)
-    labels = {c.label for c in builtins.cases()}
+    cat = builtins.kind_catalogue(args.kind)
+    args.json = args.json or Path(cat.json)
+    args.markdown = args.markdown or Path(cat.markdown)
+    labels = {c.label for c in cat.cases()}
     unknown = sorted(set(args.only or ()) - labels)
     if unknown:
         ap.error(f"unknown case {unknown[0]!r}; the labels are listed by "
-                 f"phonglab.validate.builtins.cases()")
+                 f"{cat.cases_name}")
     if args.from_json:
         data = json.loads(args.from_json.read_text())
     else:
@@ -47,8 +54,10 @@ def main(argv=None) -> int:
                           if r["status"] in ("fail", "KNOWN")})
             print(f"{d['meta']['case']:42s} {d['meta']['wall_seconds']:6.1f} s  "
                   f"{', '.join(bad) or 'ok'}", flush=True)
-        chosen = [c for c in builtins.cases() if not args.only or c.label in args.only]
+        chosen = [c for c in cat.cases() if not args.only or c.label in args.only]
         options = {"seed": args.seed, "quick": args.quick, "sweep": args.sweep}
+        if args.kind != "bsdf":                  # the BSDF JSON keeps its options as they were
+            options = {"kind": args.kind, "seed": args.seed, "quick": args.quick}
         log = batch.CaseLog(args.json, options)     # an interrupted run resumes from it
         if log.done:
             print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
@@ -61,7 +70,7 @@ def main(argv=None) -> int:
         log.remove()
         print(f"wrote {args.json} ({data['meta']['seconds']} s)")
     args.markdown.parent.mkdir(parents=True, exist_ok=True)
-    args.markdown.write_text(builtins.render_markdown(data))
+    args.markdown.write_text(builtins.render_markdown(data, cat))
     print(f"wrote {args.markdown}")
     return 0
 

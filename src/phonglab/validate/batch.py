@@ -20,42 +20,67 @@ from pathlib import Path
 from ..parallel import Job, Runner
 from ..outputs import jsonable
 from ..verdict import Report, point_label
+from ..verdict import Row as VRow
 from . import builtins
 from .bsdf.kind import validate_bsdf
 from .bsdf.topics import TOPICS, Row
 
 
-def find_case(case):
-    """A :class:`~phonglab.validate.builtins.Case` from itself or its label."""
+def find_case(case, kind: str = "bsdf"):
+    """A case of ``kind``'s catalogue (:func:`~phonglab.validate.builtins.kinds.catalogue`)
+    from itself or its label."""
     if not isinstance(case, str):
         return case
+    if kind != "bsdf":
+        return builtins.kinds.catalogue(kind).find(case)
     for c in builtins.cases():
         if c.label == case:
             return c
     raise KeyError(f"no built-in case labelled {case!r}")
 
 
+def _validate(case, kind: str, options: dict) -> Report:
+    """The kind's validator on one case (an emitter or integrator case: its own options, e.g.
+    an area emitter's shape; a case with ``skip`` set: one skipped row saying why)."""
+    common = dict(variant=case.resolved_variant(), known=case.known,
+                  seed=options.get("seed", 0), quick=options.get("quick", False),
+                  topics=options.get("topics"))
+    if kind == "bsdf":
+        return validate_bsdf(case.spec, **common, sweep=options.get("sweep", False))
+    if case.skip:
+        return Report({kind: case.plugin, "variant": case.resolved_variant()},
+                      [VRow("finite", "the case loads and runs", None, None, None, None,
+                            "skipped", case.skip)])
+    from .. import registration                  # phonglab's own plugins (whitted) in it
+    registration.register(common["variant"])
+    from . import validate_emitter, validate_integrator
+    run = validate_emitter if kind == "emitter" else validate_integrator
+    return run(case.spec, **common, **case.options)
+
+
 def run_case(case, options: dict | None = None) -> dict:
-    """Validate one case (a Case or its label); ``options``: seed, quick, topics, and
-    ``sweep`` (True: across the case's parameter sweep, the keys of its spec pinned, so the
-    case is the sweep's given point; default: the case's point alone).
+    """Validate one case (a Case or its label); ``options``: seed, quick, topics, ``kind``
+    (the catalogue: "bsdf", the default, "emitter" or "integrator") and ``sweep`` (BSDFs;
+    True: across the case's parameter sweep, the keys of its spec pinned, so the case is the
+    sweep's given point; default: the case's point alone).
 
     Returns ``Report.to_dict()`` with ``meta["case"]`` set to the label.
     """
     options = dict(options or {})
-    case = find_case(case)
+    kind = options.get("kind", "bsdf")
+    case = find_case(case, kind)
     t0 = time.perf_counter()
     try:
-        report = validate_bsdf(case.spec, variant=case.resolved_variant(), known=case.known,
-                               seed=options.get("seed", 0), quick=options.get("quick", False),
-                               topics=options.get("topics"), sweep=options.get("sweep", False))
+        report = _validate(case, kind, options)
     except Exception as exc:      # one broken case is a result, not the end of the batch
-        report = Report({"bsdf": case.plugin, "variant": case.variant, "error": repr(exc)},
-                        [Row("finite", "the case loads and runs", None, None, None, None, "fail",
+        row = Row if kind == "bsdf" else VRow
+        report = Report({kind: case.plugin, "variant": case.variant, "error": repr(exc)},
+                        [row("finite", "the case loads and runs", None, None, None, None, "fail",
                              f"{type(exc).__name__}: {str(exc).splitlines()[0][:300] if str(exc) else ''}",
                              {"traceback": traceback.format_exc()[-2000:]})])
     d = report.to_dict()
-    d["meta"].update(case=case.label, note=case.note, delta=case.delta,
+    extra = {"delta": case.delta} if kind == "bsdf" else {}
+    d["meta"].update(case=case.label, note=case.note, **extra,
                      wall_seconds=round(time.perf_counter() - t0, 3))
     return d
 
@@ -114,7 +139,9 @@ def run_all(cases=None, options: dict | None = None, progress=None,
     ``log`` (:class:`CaseLog`): cases it already holds are not run again, each new one is
     added to it as it finishes.
     """
-    cases = builtins.cases() if cases is None else cases
+    if cases is None:
+        kind = (options or {}).get("kind", "bsdf")
+        cases = builtins.cases() if kind == "bsdf" else builtins.kinds.catalogue(kind).cases()
     results = dict(log.done) if log is not None else {}
     todo = [case for case in cases if case.label not in results]
 

@@ -647,10 +647,11 @@ def validator_issues() -> dict[tuple[str, str], ValidatorIssue]:
     return {(label, v.topic): v for v in VALIDATOR_ISSUES if not v.fixed for label in v.labels}
 
 
-def known_causes() -> dict[str, dict[str, tuple[Known, ...]]]:
-    """label -> {topic: (Known, ...)} from :data:`FINDINGS`, each with its signature."""
+def known_causes(findings=None) -> dict[str, dict[str, tuple[Known, ...]]]:
+    """label -> {topic: (Known, ...)} from ``findings`` (default :data:`FINDINGS`), each with
+    its signature."""
     out: dict[str, dict[str, tuple[Known, ...]]] = {}
-    for f in FINDINGS:
+    for f in FINDINGS if findings is None else findings:
         for label in f.labels:
             topics = out.setdefault(label, {})
             topics[f.topic] = topics.get(f.topic, ()) + (f.known(),)

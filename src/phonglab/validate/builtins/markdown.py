@@ -12,10 +12,8 @@ from __future__ import annotations
 
 from ...verdict import point_label
 from ..core import at_text
-from ..bsdf.topics import TOPICS
-from . import findings
-from .catalogue import LEFT_OUT
 from .findings import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL
+from .kinds import Catalogue, catalogue as catalogue_of
 
 #: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
 PLOT_ONLY = ("lobes", "histogram", "pdf", "expected")
@@ -65,7 +63,11 @@ def _md(text) -> str:
 
 
 def _source_link(source: str) -> str:
+    """A link to Mitsuba 3.9.1's source line, or to phonglab's own file (``plugins/...``,
+    relative to docs/)."""
     path, _, line = source.partition(":")
+    if path.startswith(("plugins/", "src/phonglab/")):
+        return f"[`{source}`](../{path}#L{line})"
     return f"[`{source}`]({SOURCE_URL}{path}#L{line})"
 
 
@@ -73,8 +75,9 @@ def _label(report: dict) -> str:
     return report["meta"]["case"]
 
 
-def _table(data: dict) -> list[str]:
+def _table(data: dict, cat: Catalogue) -> list[str]:
     """One line per case: the worst status of each topic over the case's sweep points."""
+    TOPICS = cat.topics
     head = "| case | variant | points | " + " | ".join(TOPICS) + " |"
     lines = [head, "|" + "---|" * (len(TOPICS) + 3)]
     for report in data["reports"]:
@@ -88,7 +91,7 @@ def _table(data: dict) -> list[str]:
     return lines
 
 
-def _case_section(report: dict) -> list[str]:
+def _case_section(report: dict, cat: Catalogue) -> list[str]:
     """The fail and KNOWN rows of one case, with their documented causes."""
     bad = [r for r in report["results"] if r["status"] in ("fail", "KNOWN")]
     if not bad:
@@ -106,13 +109,13 @@ def _case_section(report: dict) -> list[str]:
         out.append(f"{where}| {r['status']} | {r['topic']} | {_md(r['name'])} "
                    f"| {_num(r['measured'])} | {_num(r['expected'])} | {_num(r['tolerance'])} "
                    f"| {_md(r['reason'])} |")
-    causes = [f for f in findings.FINDINGS
+    causes = [f for f in cat.findings
               if label in f.labels and any(r["topic"] == f.topic for r in bad)]
     for f in causes:
         out.append("")
         out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
                    f"`{f.reproducer}`")
-    issues = findings.validator_issues()
+    issues = cat.open_issues()
     by_validator = {issues[(label, r["topic"])].key: issues[(label, r["topic"])]
                     for r in bad if r["status"] == "fail" and (label, r["topic"]) in issues}
     for v in by_validator.values():
@@ -121,22 +124,32 @@ def _case_section(report: dict) -> list[str]:
     unexplained = sorted({r["topic"] for r in bad if r["status"] == "fail"} - explained)
     if unexplained:
         out += ["", f"* **Unexplained fail** ({', '.join(unexplained)}): no documented cause "
-                "in `phonglab.validate.builtins.FINDINGS` yet."]
+                f"in `{_findings_name(cat)}` yet."]
     return out + [""]
 
 
-def _findings_section(data: dict) -> list[str]:
+def _findings_name(cat: Catalogue) -> str:
+    return ("phonglab.validate.builtins.FINDINGS" if cat.kind == "bsdf"
+            else f"phonglab.validate.{cat.kind}.builtins.FINDINGS")
+
+
+def _findings_section(data: dict, cat: Catalogue) -> list[str]:
     seen = {_label(r) for r in data["reports"]}
+    tests = ("tests/test_builtins_catalog.py" if cat.kind == "bsdf"
+             else "tests/test_conformance_kinds.py")
+    own = ("" if not any(f.source.startswith("plugins/") for f in cat.findings)
+           else " (a `plugins/...` source is phonglab's own plugin: a *by design* entry "
+           "documents the scope of its model)")
     out = ["## Findings", "",
            "Each is pinned to the line of Mitsuba 3.9.1's source (tag v3.9.1, commit "
-           f"`{MITSUBA_COMMIT[:12]}`) and has a minimal reproducer in `tests/repro/` that exits 1 "
-           "while the behaviour is present (`pytest -m slow tests/test_builtins_catalog.py` runs "
+           f"`{MITSUBA_COMMIT[:12]}`){own} and has a minimal reproducer in `tests/repro/` that "
+           f"exits 1 while the behaviour is present (`pytest -m slow {tests}` runs "
            "them all).  A finding explains a *signature*: the rows it names and the region of "
            "inputs it says fails.  A failing row is KNOWN only when every one of its failing "
            "lanes (or χ² cells) lies in the signature of a finding; a lane outside keeps it a "
            "fail.  The *measured* lines are what the reproducer (or the named mi.chi2 run) "
            "prints; the rows above are the JSON's.", ""]
-    for f in findings.FINDINGS:
+    for f in cat.findings:
         labels = [label for label in f.labels if label in seen]
         if not labels:
             continue
@@ -157,13 +170,13 @@ def _signature(f) -> str:
                                          else "every failing lane of those rows") + at
 
 
-def _validator_section(data: dict) -> list[str]:
+def _validator_section(data: dict, cat: Catalogue) -> list[str]:
     """Open validator issues whose rows show in this run, then every fixed one (history)."""
     shown = {(_label(rep), r["topic"], r["status"]) for rep in data["reports"]
              for r in rep["results"]}
     issues = [(v, [label for label in v.labels
                    if any((label, v.topic, st) in shown for st in v.statuses)])
-              for v in findings.VALIDATOR_ISSUES if not v.fixed]
+              for v in cat.validator_issues if not v.fixed]
     issues = [(v, labels) for v, labels in issues if labels]
     out = []
     if issues:
@@ -173,7 +186,7 @@ def _validator_section(data: dict) -> list[str]:
         for v, labels in issues:
             out += [f"### {v.key}", "", f"*{v.topic}* -- {v.explanation}.", "",
                     f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
-    fixed = [v for v in findings.VALIDATOR_ISSUES if v.fixed]
+    fixed = [v for v in cat.validator_issues if v.fixed]
     if fixed:
         out += ["## Validator mistakes found and fixed", "",
                 "Rows of earlier conformance runs that failed (or were skipped) because of the "
@@ -196,9 +209,11 @@ def _validator_section(data: dict) -> list[str]:
     return out
 
 
-def render_markdown(data: dict) -> str:
+def render_markdown(data: dict, cat: Catalogue | None = None) -> str:
     """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
-    (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``)."""
+    (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``);
+    ``cat``: the kind's :class:`~.kinds.Catalogue` (default: the JSON's ``options["kind"]``,
+    else the BSDFs')."""
     meta = data.get("meta", {})
     options = meta.get("options") or {}
     counts: dict[str, int] = {}
@@ -211,11 +226,14 @@ def render_markdown(data: dict) -> str:
         took = (f"{_num(float(sum(r['meta'].get('wall_seconds', 0) for r in data['reports'])))}"
                 " s (sum of the cases' wall times)")
     mode = "--quick" if options.get("quick") else "default settings"
+    cat = cat or catalogue_of(options.get("kind", "bsdf"))
+    script = ("`scripts/conformance.py`" if cat.kind == "bsdf"
+              else f"`scripts/conformance.py --kind {cat.kind}`")
     lines = [
-        f"# Conformance of Mitsuba {MITSUBA_VERSION}'s built-in BSDFs", "",
-        "Generated by `make conformance` (`scripts/conformance.py`) from `docs/conformance.json`;"
-        " do not edit by hand.  Each case is one BSDF at one parameter setting "
-        "(`phonglab.validate.builtins.cases()`), validated by `phonglab.validate.validate_bsdf` "
+        f"# Conformance of Mitsuba {MITSUBA_VERSION}'s built-in {cat.noun}", "",
+        f"Generated by `{cat.command}` ({script}) from `{cat.json}`;"
+        f" do not edit by hand.  Each case is {cat.case_text} "
+        f"(`{cat.cases_name}`), validated by `phonglab.validate.{cat.validate}` "
         f"with {mode}, seed {options.get('seed', 0)}: {len(data['reports'])} cases, "
         + ", ".join(f"{counts.get(s, 0)} {s}" for s in ("pass", "fail", "KNOWN", "skipped"))
         + f" rows, {took}.", "",
@@ -223,12 +241,12 @@ def render_markdown(data: dict) -> str:
         "row).  KNOWN means the row fails for a documented cause in Mitsuba (see Findings); "
         "it is still reported, never hidden by a wider tolerance.", "",
     ]
-    lines += _table(data) + ["", "## Rows that do not pass", ""]
+    lines += _table(data, cat) + ["", "## Rows that do not pass", ""]
     for report in data["reports"]:
-        lines += _case_section(report)
-    lines += _findings_section(data)
-    lines += _validator_section(data)
+        lines += _case_section(report, cat)
+    lines += _findings_section(data, cat)
+    lines += _validator_section(data, cat)
     lines += ["## Plugins left out", ""]
-    for name, why in LEFT_OUT.items():
+    for name, why in cat.left_out.items():
         lines.append(f"* `{name}`: {why}")
     return "\n".join(lines) + "\n"

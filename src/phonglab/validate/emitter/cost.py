@@ -2,7 +2,8 @@ r"""The ``cost`` topic: sample_direction throughput relative to the built-in of 
 
 Informational (the row passes unless the emitter could not be timed): a delta-position light
 is timed against ``point``, a directional one against ``directional``, a surface emitter
-against ``area`` on a shape of the same type, an environment against ``constant``; both over
+against ``area`` on a shape of the same type (a mesh loaded from a file: on a cube, also a
+mesh), an environment against ``constant``; both over
 the same reference points and sample values in the same variant, each once to compile its
 kernel, then ``cost_repeats`` timed runs alternating between the two, and the median of each.
 The ratio is time(emitter) / time(built-in), so > 1 is slower.
@@ -21,14 +22,20 @@ from .config import rng
 from .setup import Setup, interaction, point2
 from .topics import Row
 
+#: Shapes whose class name, lower-cased, is their plugin name and that load without a file.
+BUILTIN_SHAPES = ("rectangle", "disk", "sphere", "cube", "cylinder")
+
 
 def baseline(setup: Setup):
     """(the built-in emitter of the same kind, its name, the object that keeps it alive)."""
     if setup.kind == "position":
         return mi.load_dict({"type": "point", "position": setup.center.tolist()}), "point", None
     if setup.kind == "surface":
-        shape = mi.load_dict({"type": setup.shape_name.lower(), "emitter": {"type": "area"}})
-        return shape.emitter(), f"area on a {setup.shape_name.lower()}", shape
+        name = setup.shape_name.lower()
+        if name not in BUILTIN_SHAPES:          # a mesh from a file (OBJMesh, PLYMesh, ...)
+            name = "cube"                       # itself a mesh: the same Mesh sampling code
+        shape = mi.load_dict({"type": name, "emitter": {"type": "area"}})
+        return shape.emitter(), f"area on a {name}", shape
     name = "directional" if setup.kind == "direction" else "constant"
     scene = mi.load_dict({"type": "scene", "e": {"type": name}, "s": {"type": "sphere"}})
     return scene.emitters()[0], name, scene

@@ -169,8 +169,10 @@ def gradient(setup: Setup, opts) -> list[Row]:
                     f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
                     {})]
     params = mi.traverse(setup.emitter)
-    keys = [k for k in params.keys()
-            if not params.properties[k][3] & int(mi.ParamFlags.NonDifferentiable)]
+    # ReadOnly: traversed for reading, refused on update (sunsky's sun_direction when it is
+    # computed from a date and place, sunsky.cpp:291)
+    skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
+    keys = [k for k in params.keys() if not params.properties[k][3] & skip]
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "mi.traverse exposes no differentiable parameter", {})]

@@ -75,11 +75,25 @@ def lane_inputs(setup: Setup, s, mask) -> dict:
     return out
 
 
-def _count_row(name, bad, total, what, details=None) -> Row:
+def _count_row(name, bad, total, what, details=None, values=()) -> Row:
+    """``values``: the arrays checked; a failing row records, per failing lane, whether its
+    values were all finite and only negative (``failing_lanes["negative_only"]``)."""
     n_bad = int(np.sum(bad))
-    return Row("finite", name, float(n_bad), 0.0, None, 0.0, "pass" if n_bad == 0 else "fail",
-               f"lanes where {what} is NaN, infinite or negative, of {total} (reference "
-               f"points x sample values, edges 0 and 1-eps included)", details or {})
+    row = Row("finite", name, float(n_bad), 0.0, None, 0.0, "pass" if n_bad == 0 else "fail",
+              f"lanes where {what} is NaN, infinite or negative, of {total} (reference "
+              f"points x sample values, edges 0 and 1-eps included)", details or {})
+    if n_bad and values:
+        row.failing_lanes = {"negative_only": (~_nonfinite(*values) & _bad(*values))[bad]}
+    return row
+
+
+def _nonfinite(*arrays) -> np.ndarray:
+    out = None
+    for a in arrays:
+        b = ~np.isfinite(np.asarray(a, np.float64))
+        b = b.any(axis=1) if b.ndim > 1 else b
+        out = b if out is None else out | b
+    return out
 
 
 def _bad(*arrays) -> np.ndarray:
@@ -100,18 +114,22 @@ def finite(setup: Setup, opts) -> list[Row]:
     bad = _bad(s.pdf, s.weight) | (~np.all(np.isfinite(s.d), axis=1) & ~marked)
     rows.append(_count_row("sample_direction: ds.pdf, ds.d, weight", bad, n,
                            "ds.pdf or the weight (or ds.d non-finite in a sample not marked "
-                           "invalid by pdf = weight = 0)", _first_bad(s, bad)))
+                           "invalid by pdf = weight = 0)", _first_bad(s, bad),
+                           (s.pdf, s.weight, np.where(marked[:, None], 0.0, s.d))))
     pdf = probe.to_numpy(e.pdf_direction(s.it, s.ds), n)
     rows.append(_count_row("pdf_direction at the sampled ds", _bad(pdf), n, "pdf_direction",
                            _first_bad(s, _bad(pdf))))
     ev = probe.to_numpy(e.eval_direction(s.it, s.ds), n)
-    rows.append(_count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
-                           _first_bad(s, _bad(ev))))
+    row = _count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
+                     _first_bad(s, _bad(ev)), (ev,))
+    if row.status == "fail":           # for documented causes' signatures (the sample's pdf)
+        row.failing_lanes.update(pdf=s.pdf[_bad(ev)], ref=s.p[_bad(ev)])
+    rows.append(row)
     if not setup.delta:
         d = s.d if setup.kind == "infinite" else sphere_dirs(rng(opts.seed, "finite"), n)
         value, _ = lanes_.traced_radiance(setup, s.p, d)
         rows.append(_count_row("eval along rays from the reference points", _bad(value), n,
-                               "eval (radiance seen along a ray)"))
+                               "eval (radiance seen along a ray)", values=(value,)))
     r = rng(opts.seed, "finite")
     u = lanes_.with_edges(r.random((n, 5)), n)
     ray, w = e.sample_ray(float_(np.zeros(n)), float_(u[:, 4]), point2(u[:, :2]),
@@ -120,7 +138,8 @@ def finite(setup: Setup, opts) -> list[Row]:
     bad = _bad(wr) | ~np.all(np.isfinite(probe.to_numpy(ray.d, n)), axis=1) | \
         ~np.all(np.isfinite(probe.to_numpy(ray.o, n)), axis=1)
     rows.append(_count_row("sample_ray: weight, ray", bad, n, "the sample_ray weight (or the "
-                           "ray non-finite)"))
+                           "ray non-finite)", values=(wr, probe.to_numpy(ray.d, n),
+                                                      probe.to_numpy(ray.o, n))))
     if setup.kind in ("surface", "position"):
         ps, pw = e.sample_position(float_(np.zeros(n)), point2(u[:, :2]))
         bad = _bad(probe.to_numpy(ps.pdf, n), probe.to_numpy(pw, n))
@@ -144,11 +163,24 @@ def weight(setup: Setup, opts) -> list[Row]:
     ev = probe.to_numpy(setup.emitter.eval_direction(s.it, s.ds), s.n)
     rel = np.where(live, np.max(np.nan_to_num(rel_diff(lhs, ev), nan=np.inf), axis=1), 0.0)
     inputs = lane_inputs(setup, s, np.ones(s.n, bool))
-    rows = [bounded("weight", "weight x ds.pdf = eval_direction(ds)", rel, REL_TOL,
-                    f"max over {int(live.sum())} sampled lanes of rel_diff(weight·ds.pdf, "
-                    f"eval_direction(ds)); {ROUND_OFF}", {"lanes": int(live.sum())}, inputs)]
     if setup.delta:
-        return rows
+        return [bounded("weight", "weight x ds.pdf = eval_direction(ds)", rel, REL_TOL,
+                        f"max over {int(live.sum())} sampled lanes of rel_diff(weight·ds.pdf, "
+                        f"eval_direction(ds)); {ROUND_OFF}", {"lanes": int(live.sum())}, inputs)]
+    # where the two differ, the radiance's own conditioning at ds.d: a direction sampled on
+    # the edge of a sun's cone (sunsky.h:903, square_to_uniform_cone at u -> 1) is a sun
+    # direction to sample_direction, which takes the hit for granted (sunsky.h:430), and may
+    # round outside it in eval's dot(sun, d) >= cos(aperture) (sunsky.h:946)
+    sens = np.zeros(s.n)
+    check = np.flatnonzero(rel > REL_TOL)
+    if check.size:
+        sens[check] = sensitivity(lambda p, d: lanes_.traced_radiance(setup, p, d)[0],
+                                  s.p[check], s.d[check], rng(opts.seed, "weight"))
+    rows = [bounded("weight", "weight x ds.pdf = eval_direction(ds)", rel / (REL_TOL + sens),
+                    1.0, f"measured = max over {int(live.sum())} sampled lanes of "
+                    f"rel_diff(weight·ds.pdf, eval_direction(ds)) / (2^-10 + the radiance's "
+                    f"sensitivity to an 8u move of the ray, where they differ), must be ≤ 1",
+                    {"lanes": int(live.sum())}, inputs)]
     value, t = lanes_.traced_radiance(setup, s.p, s.d)
     same = np.isinf(t) if setup.kind == "infinite" else \
         np.abs(t - s.dist) <= 1e-3 * np.maximum(s.dist, 1e-3)

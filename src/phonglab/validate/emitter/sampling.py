@@ -118,11 +118,45 @@ def _midpoint(setup, p, basis_, c_lo, c_hi, p_lo, p_hi, k) -> np.ndarray:
     return values.sum(axis=(1, 2)) * area, values
 
 
-def bin_integrals(setup, p, basis_, c0, nc, nphi, k) -> np.ndarray:
+#: Levels of 2 x 2 subdivision :func:`_refine` may add below the (4k)² rule of a rough bin.
+MAX_SPLITS = 8
+#: Two levels agree when they differ by at most this share of the bin's Poisson error.
+POISSON_SHARE = 0.02
+
+
+def _refine(setup, p, basis_, c_lo, c_hi, p_lo, p_hi, k, coarse, n, level=0) -> np.ndarray:
+    """The integrals of bins whose k x k midpoint rule gave ``coarse``, each as the sum of its
+    2 x 2 sub-bins' k x k rules, recursively wherever the two levels differ by more than
+    POISSON_SHARE of the bin's Poisson error sqrt(N I)/N (N = ``n`` samples): a feature far
+    smaller than a bin (sunsky's 0.53 deg sun) is integrated to its edge, not to a node's."""
+    if len(coarse) == 0 or level >= MAX_SPLITS:
+        return coarse
+    cm, pm = 0.5 * (c_lo + c_hi), 0.5 * (p_lo + p_hi)
+    kids = [(c_lo, cm, p_lo, pm), (c_lo, cm, pm, p_hi), (cm, c_hi, p_lo, pm), (cm, c_hi, pm, p_hi)]
+    parts = np.stack([np.concatenate([_midpoint(setup, p, basis_, a[i:i + 256], b[i:i + 256],
+                                                c[i:i + 256], d[i:i + 256], k)[0]
+                                      for i in range(0, len(a), 256)])
+                      for a, b, c, d in kids], axis=1)
+    fine = parts.sum(axis=1)
+    tol = POISSON_SHARE * np.sqrt(np.maximum(np.abs(fine), 1.0 / n) / n)
+    bad = np.flatnonzero(np.abs(fine - coarse) > tol)
+    if len(bad):
+        for j, (a, b, c, d) in enumerate(kids):
+            parts[bad, j] = _refine(setup, p, basis_, a[bad], b[bad], c[bad], d[bad], k,
+                                    parts[bad, j], n, level + 1)
+        fine[bad] = parts[bad].sum(axis=1)
+    return fine
+
+
+def bin_integrals(setup, p, basis_, c0, nc, nphi, k, n=None, peaks=None) -> np.ndarray:
     """∫_bin pdf_direction dω for the (nc, nphi) bins of [c0, 1] x [−π, π]: the midpoint rule
     on k x k nodes, and on (4k)² nodes in the bins where the nodes disagree (a bin holding the
     emitter's silhouette, where pdf jumps to 0, a dark bin beside a lit one, which the
-    silhouette may cut between its nodes, or where pdf varies by more than 1.5x)."""
+    silhouette may cut between its nodes, or where pdf varies by more than 1.5x, or -- with
+    ``peaks``, the (nc, nphi) largest ds.pdf of the samples in each bin -- where a sample
+    saw a density above 1.5x all of the bin's nodes: a feature between them); with ``n``
+    (the χ² sample count) those bins are then subdivided until two levels agree
+    (:func:`_refine`)."""
     ce = np.linspace(c0, 1.0, nc + 1)
     pe = np.linspace(-np.pi, np.pi, nphi + 1)
     ci, pi = np.meshgrid(np.arange(nc), np.arange(nphi), indexing="ij")
@@ -134,11 +168,17 @@ def bin_integrals(setup, p, basis_, c0, nc, nphi, k) -> np.ndarray:
     near[1:] |= lit[:-1]
     near[:-1] |= lit[1:]
     near |= np.roll(lit, 1, axis=1) | np.roll(lit, -1, axis=1)
-    rough = np.flatnonzero(((lo <= 0) & (hi > 0)) | (hi > 1.5 * lo) | (near & ~lit).ravel())
+    between = np.zeros(nc * nphi, bool) if peaks is None else np.ravel(peaks) > 1.5 * hi
+    rough = np.flatnonzero(((lo <= 0) & (hi > 0)) | (hi > 1.5 * lo) | (near & ~lit).ravel()
+                           | between)
     for start in range(0, len(rough), 256):
         b = rough[start:start + 256]
         integral[b], _ = _midpoint(setup, p, basis_, ce[ci[b]], ce[ci[b] + 1], pe[pi[b]],
                                    pe[pi[b] + 1], 4 * k)
+    if n is not None:
+        b = rough
+        integral[b] = _refine(setup, p, basis_, ce[ci[b]], ce[ci[b] + 1], pe[pi[b]],
+                              pe[pi[b] + 1], 4 * k, integral[b], n)
     return integral.reshape(nc, nphi)
 
 
@@ -183,12 +223,16 @@ def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
     hit = lanes_.trace(setup, np.tile(p, (n, 1)), d)
     t_hit = probe.to_numpy(hit.t, n)
     visible = np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius)
+    # dω = |cos θ'| dA / dist² with the GEOMETRIC normal of the surface (si.n of the ray's own
+    # hit, which is x where visible): ps.n is a mesh's interpolated vertex normal
+    # (mesh.cpp:907), a shading normal, not the surface's orientation
+    geo_n = probe.to_numpy(hit.n, n)
     ds = mi.DirectionSample3f(ps)
     ds.d, ds.dist = probe.to_vectors(d), mi.Float(np.ascontiguousarray(dist, np.float32))
     ds.emitter = mi.EmitterPtr(setup.emitter)
     it = interaction(np.tile(p, (n, 1)))
     pdf = probe.to_numpy(setup.emitter.pdf_direction(it, ds), n)
-    cos = np.abs(np.sum(d * nrm, axis=1))
+    cos = np.abs(np.sum(d * np.where(visible[:, None], geo_n, nrm), axis=1))
     f = np.where(visible & np.isfinite(pdf) & (p_area > 0) & (dist > 0),
                  pdf * cos / np.maximum(dist, 1e-30) ** 2 / np.where(p_area > 0, p_area, 1.0),
                  0.0)
@@ -212,6 +256,17 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     d = probe.to_numpy(ds.d, n)
     keep = (np.all(np.isfinite(weight), axis=1) & np.any(weight != 0, axis=1)
             & np.all(np.isfinite(d), axis=1) & (pdf > 0))
+    occluded = 0
+    if setup.kind == "surface" and keep.any():
+        # the expectation counts a surface point only where it is the first hit of the ray
+        # from p (area_integrals); a sample of a point behind another part of the shape (a
+        # non-convex mesh, or one whose shading normals face p on its far side) is one an
+        # integrator's shadow ray drops: it leaves the histogram too, and is counted
+        dist = probe.to_numpy(ds.dist, n)
+        t_hit = probe.to_numpy(lanes_.trace(setup, np.tile(p, (n, 1)),
+                                            np.where(keep[:, None], d, [0.0, 0.0, 1.0])).t, n)
+        hidden = keep & ~(np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius))
+        occluded, keep = int(hidden.sum()), keep & ~hidden
     local = d[keep] @ basis_.T
     cos, phi = np.clip(local[:, 2], -1.0, 1.0), np.arctan2(local[:, 1], local[:, 0])
     nc, nphi, k = opts.chi2_res, 2 * opts.chi2_res, opts.chi2_ires
@@ -221,10 +276,15 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
         integral = area_integrals(setup, p, basis_, c0, nc, nphi, opts.chi2_area_nodes,
                                   [*np.atleast_1d(seed), 1])
     else:
-        integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k)
+        peaks = np.zeros(nc * nphi)             # the largest sampled ds.pdf per bin
+        ci = np.clip(np.floor((cos - c0) / (1.0 - c0) * nc).astype(int), 0, nc - 1)
+        pi = np.clip(np.floor((phi + np.pi) / (2 * np.pi) * nphi).astype(int), 0, nphi - 1)
+        np.maximum.at(peaks, ci * nphi + pi, pdf[keep])
+        integral = bin_integrals(setup, p, basis_, c0, nc, nphi, k, n, peaks)
     expected = n * integral
     rec = {"ref": p.tolist(), "c0": c0, "hist_sum": float(keep.sum()) / n,
-           "pdf_sum": float(integral.sum()), "outside_domain": outside}
+           "pdf_sum": float(integral.sum()), "outside_domain": outside,
+           "occluded": occluded / n}
     if keep.sum() == 0 and integral.sum() < 1e-6:
         return {**rec, "status": "empty"}
     if keep.sum() == 0 or outside > 0:

@@ -27,3 +27,29 @@ class SphereSurfaceBand:
             return np.array([abs(c.get("rel_radius", np.inf)) <= self.limit
                              for c in lanes["cell"]])
         return None
+
+
+class InvalidSample:
+    """Lanes whose sample sample_direction marked invalid (ds.pdf = 0): what an integrator
+    drops before it calls eval_direction (path.cpp:248, ``active_em &= ds.pdf != 0``)."""
+
+    text = "lanes whose direction sample is marked invalid (ds.pdf = 0)"
+
+    def covers(self, row):
+        lanes = row.failing_lanes or {}
+        if "pdf" not in lanes:
+            return None
+        return np.asarray(lanes["pdf"], np.float64) == 0.0
+
+
+class NegativeOnly:
+    """Failing lanes of a ``finite`` row whose values are all finite, some negative (no NaN,
+    no infinity): a radiance or weight below zero, not a broken computation."""
+
+    text = "failing lanes whose values are finite and only negative (no NaN or infinity)"
+
+    def covers(self, row):
+        lanes = row.failing_lanes or {}
+        if "negative_only" not in lanes:
+            return None
+        return np.asarray(lanes["negative_only"], bool)

@@ -36,6 +36,10 @@ from .. import core
 
 #: Built-ins without ``max_depth`` and the depth their estimator computes.
 FIXED_DEPTHS = {"direct": 2}
+#: Built-ins whose image is not radiance although ``aov_names()`` is empty (``depth`` returns
+#: the distance to the first hit in every channel, src/integrators/depth.cpp): as an AOV
+#: integrator, finite output only.
+NOT_RADIANCE = ("DepthIntegrator",)
 #: The depth a spec is probed with to learn whether it takes and keeps ``max_depth``.
 PROBE_DEPTH = 3
 
@@ -68,7 +72,11 @@ class Target:
                 return None, f"the scene needs depth >= 2; {self.depth_note}"
             return self.make(4), ""
         if self.depth == "settable":
-            return self.make(depth), ""
+            try:
+                return self.make(depth), ""
+            except Exception as exc:     # it takes max_depth but refuses this one (whitted: <= 10)
+                why = str(exc).strip().splitlines()[-1][:200] if str(exc).strip() else repr(exc)
+                return None, f"it refuses max_depth {depth}: {why}"
         if self.depth == "fixed" and self.fixed_depth == depth:
             return self.integrator, ""
         return None, f"the scene's value holds at max_depth {depth}; {self.depth_note}"
@@ -89,7 +97,7 @@ def build(loaded: Loaded, spec, params: dict | None) -> Target:
         d = {"type": spec, **(params or {})}
     elif isinstance(spec, dict):
         d = {**spec, **(params or {})}
-    aov = bool(list(integ.aov_names()))
+    aov = bool(list(integ.aov_names())) or integ.class_name() in NOT_RADIANCE
     splatting = isinstance(integ, mi.AdjointIntegrator)
     ad = dr.is_diff_v(mi.Float) and isinstance(integ, mi.ad.integrators.common.ADIntegrator)
     depth, fixed, note = "unknown", None, ""

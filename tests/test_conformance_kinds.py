@@ -1,0 +1,160 @@
+"""The emitter and integrator conformance tables (phonglab.validate.builtins.kind_catalogue):
+catalogues load, every 3.9.1 plugin is covered or left out, findings name their cases and
+reproducers, the markdown renders from a small JSON, and the validator fixes the tables led
+to.  Default tier: no validation runs here (``make conformance`` runs the tables)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from phonglab.scenes import REPO_ROOT
+from phonglab.validate import builtins
+from phonglab.verdict import Report, Row
+
+#: src/emitters/*.cpp and src/integrators/*.cpp + src/python/python/ad/integrators/*.py at
+#: tag v3.9.1 (timed_sunsky included; prb_basic, volprim_rf_basic are Python integrators)
+MITSUBA = {
+    "emitter": {"area", "constant", "directional", "directionalarea", "envmap", "point",
+                "projector", "spot", "sunsky", "timed_sunsky"},
+    "integrator": {"aov", "depth", "direct", "moment", "path", "ptracer", "stokes", "volpath",
+                   "volpathmis", "direct_projective", "prb", "prb_basic", "prb_projective",
+                   "prbvolpath", "volprim_rf_basic"},
+}
+SOURCE_LINE = re.compile(r"^(src|include|plugins)/[\w/]+\.(cpp|h|py):\d+$")
+
+
+@pytest.fixture(params=["emitter", "integrator"])
+def cat(request, variant_llvm_rgb):
+    return builtins.kind_catalogue(request.param)
+
+
+def test_catalogue_loads_and_covers_3_9_1(cat):
+    cases = cat.cases()
+    labels = [c.label for c in cases]
+    assert len(labels) == len(set(labels))
+    assert MITSUBA[cat.kind] <= {c.plugin for c in cases} | set(cat.left_out)
+    for c in cases:
+        assert c.skip or c.plugin not in cat.left_out, c.label
+        assert cat.find(c.label).label == c.label
+
+
+def test_findings_name_cases_source_lines_and_reproducers(cat):
+    labels = {c.label for c in cat.cases()}
+    for f in cat.findings:
+        assert set(f.labels) <= labels, f.key
+        assert f.topic in cat.topics and f.rows, f.key
+        assert SOURCE_LINE.match(f.source), f.source
+        assert (REPO_ROOT / f.reproducer).is_file(), f.reproducer
+    for v in cat.validator_issues:
+        assert set(v.labels) <= labels and v.topic in cat.topics, v.key
+    known = {c.label: c.known for c in cat.cases() if c.known}
+    for f in cat.findings:                  # each finding reaches its cases as a signature
+        for label in f.labels:
+            assert f.key in {k.key for k in known[label][f.topic]}
+
+
+def test_whitted_and_sphere_findings_are_in_the_tables(variant_llvm_rgb):
+    emitters = {c.label: c for c in builtins.kind_catalogue("emitter").cases()}
+    keys = {k.key for k in emitters["area (sphere, flip_normals)"].known["pdf"]}
+    assert keys == {"sphere_emitter_inside"}
+    integrators = {c.label: c for c in builtins.kind_catalogue("integrator").cases()}
+    assert integrators["whitted/radiance"].spec == {"type": "whitted", "units": "radiance"}
+    assert "plane under a point light" not in {
+        n for k in integrators["whitted/radiance"].known["bias"] for n in k.rows}
+
+
+def _report(label, kind, rows):
+    return Report({"case": label, kind: label, "variant": "llvm_ad_rgb", "note": "n"},
+                  rows).to_dict()
+
+
+def test_markdown_renders_emitter_and_integrator_json():
+    emitter = builtins.kind_catalogue("emitter")
+    reports = [
+        _report("area (sphere)", "emitter",
+                [Row("finite", "x", 0.0, 0.0, None, 0.0, "pass", ""),
+                 Row("pdf", "ds.pdf = pdf_direction(ds)", 0.6, 0.0, None, 1e-3, "KNOWN", "why"),
+                 Row("power", "p", 1.5, 1.0, 0.1, 0.3, "fail", "why")]),
+        _report("directionalarea", "emitter",
+                [Row("finite", "the case loads and runs", None, None, None, None, "skipped",
+                     "no model")]),
+    ]
+    data = {"meta": {"options": {"kind": "emitter", "quick": False, "seed": 0},
+                     "seconds": 7.5}, "reports": reports}
+    md = builtins.render_markdown(data)
+    assert md.startswith("# Conformance of Mitsuba 3.9.1's built-in emitters")
+    assert "`docs/conformance-emitters.json`" in md and "validate_emitter" in md
+    row = next(line for line in md.splitlines() if line.startswith("| `area (sphere)`"))
+    cells = [c.strip() for c in row.strip("|").split("|")][3:]
+    assert dict(zip(emitter.topics, cells)) == {
+        "finite": "pass", "weight": "", "pdf": "KNOWN", "chi2": "", "power": "**fail**",
+        "gradient": "", "cost": ""}
+    assert "src/shapes/sphere.cpp#L256" in md and "tests/repro/sphere_emitter_inside.py" in md
+    assert "**Unexplained fail** (power)" in md
+    assert "1 pass, 1 fail, 1 KNOWN, 1 skipped rows, 7.5 s" in md
+    for name in emitter.left_out:
+        assert f"* `{name}`:" in md
+
+    integ = builtins.kind_catalogue("integrator")
+    data = {"meta": {"options": {"kind": "integrator", "quick": True, "seed": 0}},
+            "reports": [_report("whitted/radiance", "integrator",
+                                [Row("bias", "enclosure ρ=0.5 D=2", 2.0, 3.0, 0.01, 0.05,
+                                     "KNOWN", "model")])]}
+    md = builtins.render_markdown(data, integ)
+    assert "built-in integrators" in md and "--quick" in md
+    assert "(../plugins/whitted.py#L48)" in md        # phonglab's own source, linked relatively
+
+
+def test_kind_options_reach_the_runner(variant_llvm_rgb):
+    # a skipped case is one skipped row, without running a validator
+    from phonglab.validate import batch
+
+    d = batch.run_case("directionalarea", {"kind": "emitter", "seed": 0, "quick": True})
+    assert [r["status"] for r in d["results"]] == ["skipped"]
+    assert d["meta"]["case"] == "directionalarea" and "delta" not in d["meta"]
+
+
+def test_refused_depth_is_a_skipped_scene_and_depth_is_not_radiance(variant_llvm_rgb):
+    from phonglab.validate.integrator.kind import prepare
+
+    whitted = prepare({"type": "whitted", "units": "radiance"}).plugin
+    assert whitted.depth == "settable"
+    integ, why = whitted.at_depth(64)            # whitted takes max_depth in 1..10
+    assert integ is None and "refuses max_depth 64" in why
+    assert whitted.at_depth(2)[0] is not None
+    assert prepare("depth").plugin.aov
+
+
+def test_mesh_cost_baseline(variant_llvm_rgb):
+    from phonglab.validate.emitter import builtins as eb
+    from phonglab.validate.emitter.cost import baseline
+    from phonglab.validate.emitter.kind import prepare
+
+    setup = prepare({"type": "area"}, shape={"type": "obj", "filename": eb.mesh_file()}).plugin
+    _, name, _ = baseline(setup)
+    assert name == "area on a cube"
+
+
+def _reproducers():
+    from phonglab.validate.emitter.builtins import FINDINGS as E
+    from phonglab.validate.integrator.builtins import FINDINGS as I
+    return sorted({f.reproducer for f in E + I})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", _reproducers())
+def test_reproducer_shows_its_finding(script, tmp_path):
+    """Each tests/repro script of the two tables exits 1 while its behaviour is present."""
+    import subprocess
+    import sys
+
+    from phonglab import runtime
+    runtime.configure()
+    import mitsuba as mi
+    if mi.__version__ != builtins.MITSUBA_VERSION:
+        pytest.skip(f"the findings are pinned to Mitsuba {builtins.MITSUBA_VERSION}")
+    done = subprocess.run([sys.executable, str(REPO_ROOT / script)], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 1, done.stdout + done.stderr
