@@ -398,3 +398,16 @@ def test_a_builtin_named_by_its_type_carries_its_documented_findings(capsys):
     assert "KNOWN" in out and "--no-known reports them as fails" in out
     assert main(args + ["--no-known"]) == 1
     assert "KNOWN rows" not in capsys.readouterr().out
+
+
+def test_a_builtins_findings_follow_its_microfacet_distribution():
+    """The Beckmann normalization finding explains a Beckmann lobe (Mitsuba's default), never a
+    GGX one: there a normalization fail stays a fail."""
+    from phonglab.validate.builtins import known_for_plugin
+
+    def keys(given):
+        return {getattr(c, "key", "") for c in known_for_plugin("roughconductor", given)
+                .get("normalization", ())}
+    assert "beckmann-pdf-normalization" in keys({})
+    assert "beckmann-pdf-normalization" in keys({"distribution": "beckmann"})
+    assert "beckmann-pdf-normalization" not in keys({"distribution": "ggx"})

@@ -170,14 +170,15 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
-def builtin_known(args) -> dict | None:
+def builtin_known(args, params: dict) -> dict | None:
     """The documented causes of a Mitsuba built-in BSDF named by its type (the conformance
     table's findings of that plugin, ``known_for_plugin``), None for anything else (an XML
-    file, a ``--plugin`` file, which may register the same name, or ``--no-known``)."""
+    file, a ``--plugin`` file, which may register the same name, or ``--no-known``); only the
+    findings of cases with the microfacet distribution of ``params``."""
     if args.no_known or args.plugin or args.bsdf.endswith(".xml"):
         return None
     from ..validate.builtins import known_for_plugin   # lazy: the catalogue loads Mitsuba
-    return known_for_plugin(args.bsdf) or None
+    return known_for_plugin(args.bsdf, params) or None
 
 
 def known_note(report: Report, label: str) -> str:
@@ -192,7 +193,7 @@ def known_note(report: Report, label: str) -> str:
 def _bsdf(args, params, core, sweep, BSDF):
     """(report, label, text) of a BSDF: its sweep, or the given point with --no-sweep."""
     topics = check_topics(args.only)
-    known = builtin_known(args)
+    known = builtin_known(args, params)
     if args.no_sweep:
         target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
                               plugins=args.plugin)

@@ -251,13 +251,23 @@ def cases() -> list[Case]:
                  c.note) for c in out]
 
 
-def known_for_plugin(plugin: str) -> dict[str, tuple]:
+#: Mitsuba 3.9.1's microfacet distribution when none is given (include/mitsuba/render/
+#: microfacet.h:104, src/bsdfs/roughconductor.cpp:183).
+DEFAULT_DISTRIBUTION = "beckmann"
+
+
+def known_for_plugin(plugin: str, given: dict | None = None) -> dict[str, tuple]:
     """topic -> every documented cause of the cases of ``plugin`` (a type name), for that
     plugin validated away from the table's points (a sweep): each cause still holds only
-    inside its own signature, so a failure outside all of them stays a fail."""
+    inside its own signature, so a failure outside all of them stays a fail.  With ``given``
+    (the parameters a user set), only the cases of the same microfacet ``distribution`` (the
+    default Beckmann when not given) count: the Beckmann pdf's documented normalization defect
+    says nothing about a GGX lobe, so a GGX failure of that row stays a fail."""
     out: dict[str, tuple] = {}
+    wanted = None if given is None else str(given.get("distribution", DEFAULT_DISTRIBUTION))
     for case in cases():
-        if case.plugin == plugin:
+        distribution = str(case.spec.get("distribution", DEFAULT_DISTRIBUTION)).lower()
+        if case.plugin == plugin and (wanted is None or distribution == wanted.lower()):
             for topic, causes in case.known.items():
                 out[topic] = out.get(topic, ()) + tuple(c for c in causes
                                                         if c not in out.get(topic, ()))
