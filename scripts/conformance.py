@@ -2,7 +2,7 @@
 ``--kind emitter|integrator`` docs/conformance-emitters.* and docs/conformance-integrators.*.
 
     python scripts/conformance.py [--kind bsdf] [--quick] [--seed S] [--only LABEL ...]
-        [--json docs/conformance.json] [--markdown docs/conformance.md]
+        [--json docs/conformance.json] [--markdown docs/conformance.md] [--workers N]
     python scripts/conformance.py --from-json docs/conformance.json   # markdown only
 
 The cases, the findings and the markdown renderer live in phonglab.validate.builtins (a
@@ -20,6 +20,7 @@ import sys
 import time
 from pathlib import Path
 
+from phonglab.parallel import add_arguments, runner_from_args
 from phonglab.validate import batch, builtins
 from phonglab.outputs import write_json
 
@@ -37,6 +38,7 @@ def main(argv=None) -> int:
     ap.add_argument("--markdown", type=Path, help="default: the kind's docs/conformance*.md")
     ap.add_argument("--from-json", type=Path, metavar="JSON",
                     help="render the markdown from this JSON instead of validating")
+    add_arguments(ap)       # --workers N / --scheduler ADDRESS: where the cases run (Dask)
     args = ap.parse_args(argv)
     cat = builtins.kind_catalogue(args.kind)
     args.json = args.json or Path(cat.json)
@@ -62,7 +64,8 @@ def main(argv=None) -> int:
         if log.done:
             print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
         t0 = time.perf_counter()
-        data = batch.run_all(chosen, options, progress, log=log)
+        with runner_from_args(args) as runner:
+            data = batch.run_all(chosen, options, progress, runner=runner, log=log)
         data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         data = builtins.without_plot_data(data)
