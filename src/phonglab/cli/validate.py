@@ -82,7 +82,7 @@ def add_parser(sub) -> None:
                         "a time, plus all at minimum and all at maximum; --set pins one)")
     p.add_argument("--no-known", action="store_true",
                    help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
-                        "as fails; by default a built-in BSDF named by its type carries them, "
+                        "as fails; by default a Mitsuba built-in named by its type carries them, "
                         "each only inside its own signature, as KNOWN rows")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.builtins); "
@@ -181,11 +181,24 @@ def builtin_known(args, params: dict) -> dict | None:
     return known_for_plugin(args.bsdf, params) or None
 
 
-def known_note(report: Report, label: str) -> str:
+def known_of_kind(args, kind: str, shape: dict | None) -> dict | None:
+    """As :func:`builtin_known`, for an emitter or integrator built into Mitsuba named by its
+    type: the findings of its catalogue's cases (an area emitter's of the same shape only,
+    ``phonglab.validate.builtins.kinds.known_for``); phonglab's own plugins (whitted) get none."""
+    from ..registration import PLUGINS
+    from ..validate.builtins.kinds import known_for
+
+    if (args.no_known or args.plugin or args.bsdf.endswith(".xml")
+            or args.bsdf in {name for _, name, _ in PLUGINS}):
+        return None
+    return known_for(kind, args.bsdf, shape) or None
+
+
+def known_note(report: Report, label: str, doc: str = "docs/conformance.md") -> str:
     """The line under a table with KNOWN rows from a built-in's documented findings."""
     if not any(r.status == "KNOWN" for r in report.rows):
         return ""
-    return (f"\n\nKNOWN rows: documented findings of Mitsuba's {label} (docs/conformance.md), "
+    return (f"\n\nKNOWN rows: documented findings of Mitsuba's {label} ({doc}), "
             f"each matched by its signature (a lane outside it stays a fail); --no-known "
             f"reports them as fails")
 
@@ -221,6 +234,7 @@ def _other_kind(args, params, core, not_bsdf: ValidateError):
 
     if mi.variant() is None:
         register(args.variant)
+    shape = params.get("shape")              # before prepare, which takes it out of params
     kinds = ((emitter.is_emitter, emitter.prepare, emitter.EMITTER),
              (integrator.is_integrator, integrator.prepare, integrator.INTEGRATOR))
     target = None
@@ -241,10 +255,11 @@ def _other_kind(args, params, core, not_bsdf: ValidateError):
         if target is None:
             raise not_bsdf
     report = core.run(kind, target, topics=check_topics(args.only, kind.topics),
-                      seed=args.seed, quick=args.quick)
+                      seed=args.seed, quick=args.quick, known=known_of_kind(args, kind.word, shape))
     note = "" if args.no_sweep else (f"\n\nan {kind.word} is validated at the given parameter "
                                      f"point (the parameter sweep is the BSDF kind's)")
-    return report, target.label, report.table() + note
+    return report, target.label, report.table() + note + known_note(report, args.bsdf,
+                                                        f"docs/conformance-{kind.word}s.md")
 
 
 def run(args) -> int:

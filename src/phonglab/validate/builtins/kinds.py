@@ -108,3 +108,34 @@ def catalogue(kind: str = "bsdf") -> Catalogue:
         from ..integrator import builtins as b
         return b.CATALOGUE
     raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+
+
+def _shape_key(shape: dict | None) -> dict:
+    """What identifies a surface emitter's shape for its findings: every entry but the file."""
+    return {k: v for k, v in (shape or {}).items() if k != "filename"}
+
+
+def known_for(kind: str, plugin: str, shape: dict | None = None) -> dict[str, tuple]:
+    """topic -> the documented causes of the ``kind`` catalogue's cases of ``plugin`` (an
+    emitter or integrator type name), for that plugin validated outside the table (``phonglab
+    validate area --set shape.type=sphere``).  A surface emitter's cases count only with the
+    same shape (type and flags, boolean flags False when absent; ``shape`` None: the rectangle
+    an area emitter loaded alone is attached to): the vertex-normal mesh finding says nothing
+    of a rectangle, the sphere's nothing of a disk.  Each cause still holds only inside its own
+    signature."""
+    from ..emitter.setup import DEFAULT_SHAPE
+
+    wanted = _shape_key(shape or DEFAULT_SHAPE)
+    out: dict[str, tuple] = {}
+    for case in catalogue(kind).cases():
+        if case.plugin != plugin or case.skip:
+            continue
+        have = _shape_key(case.options.get("shape") or (DEFAULT_SHAPE if plugin == "area"
+                                                        else None))
+        if kind == "emitter" and plugin == "area" and any(
+                have.get(k, False) != wanted.get(k, False) for k in {*have, *wanted}):
+            continue
+        for topic, causes in case.known.items():
+            out[topic] = out.get(topic, ()) + tuple(c for c in causes
+                                                    if c not in out.get(topic, ()))
+    return out
