@@ -38,7 +38,12 @@ def _kernel_name() -> str:
     return "python3"
 
 
-@pytest.mark.parametrize("name", OWNED)
+#: The two that take ~7 s each run in the slow tier (CI runs it); the default tier stays fast.
+SLOW = {"04_speed_vs_accuracy.ipynb", "05_fitting.ipynb"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n
+                                  for n in OWNED])
 def test_notebook_runs(name, monkeypatch):
     path = NOTEBOOKS / name
     book = nbformat.read(path, as_version=4)

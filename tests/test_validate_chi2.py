@@ -178,6 +178,7 @@ def test_residual_map_only_in_failing_cells(variant_llvm_rgb):
     assert not any("residual" in c or "histogram" in c for c in row.details["cells"])
 
 
+@pytest.mark.slow            # ~9 s: a scalar variant lane by lane (CI runs the slow tier)
 @pytest.mark.parametrize("bsdf", ["diffuse"])
 def test_scalar_rgb_quick_passes(bsdf, tmp_path):
     # scalar variants cannot run mi.chi2; a fresh process (the variant is global)

@@ -507,7 +507,8 @@ def _jit_kernels(scene, integrator) -> list[tuple]:
             if str(k.get("type", "")).endswith("JIT")]
 
 
-@pytest.mark.parametrize("name", ["exponent_series", "attenuation_demo"])
+@pytest.mark.parametrize("name", [pytest.param("exponent_series", marks=pytest.mark.slow),  # ~8 s
+                                  "attenuation_demo"])
 def test_graphics_and_radiance_units_launch_the_same_kernels_without_recompiling(variant_llvm_rgb, name):
     """Graphics units cost what radiance units cost in kernels: per render the same number of
     JIT launches, and a second render (another seed) reuses every kernel of the first (the
