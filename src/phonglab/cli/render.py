@@ -84,8 +84,10 @@ def run_planned(args, path: Path, out: Path) -> int:
     from ..planner import execute
 
     RenderOutputs.beside(out).check()       # before the pilot, not only before the render
+    # the pilot's seeds follow the render's (seed + 1, ...), so that the render, which is
+    # combined with the pilot's samples, never repeats them
     plan = planner.plan(path, args.target_error, variant=args.variant,
-                        max_depth=args.max_depth, spp=args.spp,
+                        max_depth=args.max_depth, spp=args.spp, seed=args.seed + planner.PILOT_SEED,
                         max_seconds=args.max_seconds, params=dict(args.params))
     print(plan.summary())
     done = execute.render_plan(plan, seed=args.seed, out=out, progress=True)

@@ -77,10 +77,12 @@ class Option:
     noise1: float       #: relative noise of one sample, n(1)
     sampler: str = "independent"  #: Mitsuba sampler of a uniform render
     passes: int = 0     #: passes of a uniform render (0: the planner's default)
+    reuses: bool = False  #: combined with the pilot's reusable renders
 
     def label(self) -> str:
         extra = f" ({self.sampler})" if self.sampler != "independent" else ""
-        return f"{self.model}, {self.sampling}{extra}"
+        reuse = " + the pilot's samples" if self.reuses else ""
+        return f"{self.model}, {self.sampling}{extra}{reuse}"
 
 
 #: The stratified sampler priced against ``independent`` (Mitsuba's ``multijitter``).
@@ -102,6 +104,10 @@ STRATIFIED_COST = 1.15
 #: depth 2) 1.07x at 8, 1.06x at 16, 1.08x at 64 but 1.35x at 35 and 1.52x at 132;
 #: cornell_phong (rgb, depth 10) 1.05x at 8, 1.06x at 16, 1.07x at 64, 1.32x at 35, 1.45x at 132.
 CHEAP_PASS_SPP = (8, 16, 64, 256, 1024, 4096, 16384, 65536)
+#: Samples per pass of a planned render combined with the pilot's, where it has that many:
+#: each pass costs a launch and a copy (a ms or two at 128²), and its standard error needs
+#: only two of them.
+MIN_PASS_SPP = 4
 #: Passes of a planned stratified render: at least 2 (a standard error), at most 8.
 MIN_STRATIFIED_PASSES, MAX_STRATIFIED_PASSES = 2, 8
 
@@ -166,14 +172,33 @@ def price(pilot: Pilot, model: str, noise1: float, vmap: np.ndarray, time_model,
     return options
 
 
+def credited_spp(noise1: float, budget2: float, credit: float) -> int:
+    """Samples per pixel a uniform render of relative noise ``noise1`` at 1 spp needs when the
+    pilot's reusable renders bring the precision ``credit`` (Σ n_j/V_j,
+    :func:`phonglab.render.combine_renders`): the combination's relative variance
+    1/(credit + n/noise1²) must be <= E² − b², so n = ⌈noise1² (1/(E² − b²) − credit)⌉,
+    at least 2 (a render of two passes: its standard error weighs it)."""
+    return max(2, math.ceil(noise1 ** 2 * (1.0 / budget2 - credit))) if noise1 > 0 else 2
+
+
+def reused_path(pilot: Pilot, depth: int, noise1: float, budget2: float, credit: float,
+                passes: int) -> Option:
+    """Uniform ``path`` (independent sampler) combined with the pilot's reusable renders."""
+    a, b = pilot.time_model(depth)
+    n = credited_spp(noise1, budget2, credit)
+    p = max(2, min(passes, n // MIN_PASS_SPP))   # the combination needs a standard error
+    return Option("path", "uniform", n, p * a + b * n, noise1, passes=p, reuses=True)
+
+
 def price_stratified(pilot: Pilot, depth: int, noise1: float, budget2: float,
-                     reasons: list[str]) -> Option:
-    """Uniform ``path`` with the :data:`STRATIFIED` sampler: ⌈N/g⌉ samples, its own timing."""
+                     reasons: list[str], credit: float = 0.0) -> Option:
+    """Uniform ``path`` with the :data:`STRATIFIED` sampler: ⌈N/g⌉ samples (less what the
+    pilot's reusable renders bring, ``credit``), its own timing."""
     gain = pilot.gain
     # passes of at least the pilot's pass size: the gain was measured there, and smaller
     # passes stratify less (gray_direct at 32²: 2 spp where 4 independent ones were needed
     # missed E by 1.3x)
-    needed = math.ceil(noise1 ** 2 / max(gain, 1e-9) / budget2)
+    needed = credited_spp(noise1 / math.sqrt(max(gain, 1e-9)), budget2, credit)
     a, b = pilot.time_model(depth)
     b *= STRATIFIED_COST
     passes, per_pass = stratified_layout(max(2 * pilot.stratified_pass_spp, needed),
@@ -182,18 +207,22 @@ def price_stratified(pilot: Pilot, depth: int, noise1: float, budget2: float,
     reasons.append(f"sampler: {STRATIFIED} (stratified) measured {gain:.2f}x lower variance "
                    f"than independent at equal samples ({pilot.stratified_pass_spp} spp "
                    f"passes, full depth), so uniform needs {needed} spp instead of "
-                   f"{math.ceil(noise1 ** 2 / budget2)}: {passes} passes of {per_pass} "
+                   f"{credited_spp(noise1, budget2, credit)}: {passes} passes of {per_pass} "
                    f"(a count {STRATIFIED} permutes without redraws)")
     return Option("path", "uniform", n, passes * a + b * n, noise1 / math.sqrt(max(gain, 1e-9)),
-                  sampler=STRATIFIED, passes=passes)
+                  sampler=STRATIFIED, passes=passes, reuses=credit > 0)
 
 
 def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_path: Option,
-           pixels: int, passes: int, reasons: list[str]) -> Option:
-    """Step 5: the fastest exact option (module docstring), with its reasons appended."""
+           pixels: int, passes: int, reasons: list[str], credit: float = 0.0) -> Option:
+    """Step 5: the fastest exact option (module docstring), with its reasons appended.
+    ``credit``: the precision the pilot's reusable renders bring to a uniform ``path`` render
+    at ``depth`` (:meth:`.pilot.Pilot.reusable`), which its uniform options count."""
     budget2 = target_error ** 2 - bias ** 2
     vmap = pilot.variance_maps[depth]
     options = [uniform_path]
+    if credit > 0:
+        options = [reused_path(pilot, depth, uniform_path.noise1, budget2, credit, passes)]
     path_adaptive = price(pilot, "path", uniform_path.noise1, vmap, pilot.time_model(depth),
                           budget2, pixels, passes)[1]
     options.append(path_adaptive)
@@ -214,7 +243,8 @@ def choose(pilot: Pilot, depth: int, bias: float, target_error: float, uniform_p
         reasons.append(f"no cheaper exact model: direct and whitted compute paths of at "
                        f"most 2 segments, and this scene needs depth {depth}")
     if pilot.stratified is not None:
-        options.append(price_stratified(pilot, depth, uniform_path.noise1, budget2, reasons))
+        options.append(price_stratified(pilot, depth, uniform_path.noise1, budget2, reasons,
+                                        credit))
     best_uniform = min((o for o in options if o.sampling == "uniform"), key=lambda o: o.seconds)
     best_adaptive = min((o for o in options if o.sampling == "adaptive"), key=lambda o: o.seconds)
     gain = uniform_path.spp / path_adaptive.spp

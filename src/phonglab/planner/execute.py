@@ -23,8 +23,10 @@ depth, the integrator a reload would give.  Pass k has the seed
 reference, bias included (:mod:`phonglab.metrics`, the one definition).  Achieved: against the
 reference given, else the cached one of the planned scene and colour model
 (:func:`phonglab.references.cached`), when there is one, the reference's noise subtracted.
-Estimated: √(n² + b²), n the render's relative noise (from its passes, uniform; from its samples,
-wavefront) and b the pilot's depth bias.
+Estimated: √(n² + b²), n the render's relative noise (from its passes, uniform, weighed by the
+pilot's weights ≈ 1/(r² + ε) rather than by the render's own image, whose fireflies would
+weigh themselves down; the combination's 1/√Σ n_j/V_j when the render is combined with the
+pilot's; from its samples, wavefront) and b the pilot's depth bias.
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .. import metrics, references
 from ..adaptive import MIN_SPP, AdaptiveResult, AdaptiveSampling
@@ -77,6 +81,10 @@ class PlannedRender:
 
 def sampling(plan: Plan, progress: bool = False) -> UniformPasses | AdaptiveSampling:
     """How the plan's render samples (module docstring)."""
+    if plan.reused is not None:   # combined with the pilot's renders: the spp chosen for that
+        sampler = plan.sampler if plan.sampler != "independent" else None
+        return UniformPasses(math.ceil(plan.chosen_spp), plan.chosen_passes, sampler, progress,
+                             prior=plan.reused)
     if not plan.uses_wavefront:
         kw = plan.render_kwargs()
         return UniformPasses(kw["spp"], kw["passes"], kw.get("sampler"), progress)
@@ -144,9 +152,14 @@ def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
     :class:`phonglab.references.Reference`), else the cached reference, when there is one."""
     if isinstance(result, AdaptiveResult):
         noise = result.estimated_error
+    elif "combined_noise" in result.metadata:   # 1/√Σ n_j/V_j, with the pilot's weights
+        noise = float(result.metadata["combined_noise"])
+    elif result.stderr is None:
+        noise = None
+    elif plan.weight is not None:   # weighed by the pilot's image, not the render's own
+        noise = math.sqrt(float(np.mean(result.stderr.astype(np.float64) ** 2 * plan.weight)))
     else:
-        noise = (None if result.stderr is None
-                 else metrics.relative_noise(result.image, result.stderr))
+        noise = metrics.relative_noise(result.image, result.stderr)
     report = ErrorReport(plan.target_error, plan.predicted_error, plan.predicted_bias, noise)
     if reference is None:
         reference = references.cached(plan.scene, params=plan.params,
@@ -169,6 +182,8 @@ def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
     (default: the cached one, when there is one).  ``progress`` shows a uniform render's
     passes.
     """
+    if plan.repeats_pilot(seed):   # combining would count the same samples twice
+        plan = plan.standalone()
     if out is None:
         result = prepare(plan).render(seed)
     else:

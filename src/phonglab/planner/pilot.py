@@ -56,7 +56,10 @@ DEPTH_LADDER = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
 LADDER_STAGES = ((1, 2, 3, 4), (6, 8, 12, 16), (24, 32, 48, 64))
 #: Pilot: total samples per pixel, split into this many passes of equal size (same seeds per depth).
 PILOT_SPP = 64
-PILOT_PASSES = 8
+PILOT_PASSES = 4
+#: The later ladder stages keep the pilot within this fraction of the render's predicted samples
+#: (:meth:`Pilot.limit`).
+PILOT_FRACTION = 0.25
 #: Films of more pixels than this get a pilot of the same number of samples per image
 #: (PILOT_SPP · PILOT_PIXELS), at least MIN_PILOT_SPP per pixel: the pilot's statistics are
 #: means over the image (bias b(d), noise n(1)), as precise with fewer samples per pixel over
@@ -82,8 +85,13 @@ def pilot_size(pixels: int, passes: int = PILOT_PASSES) -> tuple[int, int]:
 #: 4 spp cost deep rgb scenes ~0.2 s of the pilot).
 TIME_SPP = 1
 TIME_SAMPLES = 4 * 128 * 128
-#: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.
+#: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.  The pilot
+#: renders with seeds seed, seed + 1 (second pilot), seed + 2, ... (later ladder stages, at
+#: most 3) and seed + TIME_SEED, ... (time model).
 PILOT_SEED = 1
+TIME_SEED = 7
+#: The pilot's renders use seeds PILOT_SEED to PILOT_SEED + PILOT_SEEDS (relative to its own).
+PILOT_SEEDS = TIME_SEED + 7
 
 
 @dataclass
@@ -144,27 +152,40 @@ def stratification_gain(indep: np.ndarray, indep_spp: int, indep_weights: np.nda
     return v_indep / v_strat
 
 
-def _time_model(scene, integrator, spp_small: int = TIME_SPP,
-                repeats: int = 3) -> tuple[float, float]:
-    """(a, b) of T(spp) = a + b·spp from alternating one-pass renders of spp_small and
-    spp_big = max(2·spp_small, ⌈TIME_SAMPLES / pixels⌉) samples per pixel.
+def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP,
+                repeats: int = 3) -> tuple[tuple[float, float], list[render.RenderResult]]:
+    """((a, b) of T(spp) = a + b·spp, the renders timed) from alternating one-pass renders of
+    spp_small and spp_big = max(2·spp_small, ⌈TIME_SAMPLES / pixels⌉) samples per pixel.
 
     Each render goes through :func:`phonglab.render.render_scene`, the loop the planned render
     runs, and its ``pass_seconds[0]`` (``mi.render``, evaluation and the copy to numpy) is the
-    time.  Medians of ``repeats`` renders each; the kernel must already be compiled.
+    time.  Medians of ``repeats`` renders each, render i with seed ``seed + i`` (their images
+    are samples of the scene like any other: :meth:`Pilot.reusable`); the kernel must already
+    be compiled.
     """
     w, h = (int(v) for v in scene.sensors()[0].film().size())
     spp_big = max(2 * spp_small, -(-TIME_SAMPLES // (w * h)))
-    t_small, t_big = [], []
+    t_small, t_big, renders = [], [], []
     for k in range(repeats):
         for spp, bucket in ((spp_small, t_small), (spp_big, t_big)):
-            timed = render.render_scene(scene, spp, seed=7 + k, integrator=integrator)
+            timed = render.render_scene(scene, spp, seed=seed + len(renders),
+                                        integrator=integrator, keep_passes=True)
             bucket.append(timed.pass_seconds[0])
+            renders.append(timed)
     ts, tb = float(np.median(t_small)), float(np.median(t_big))
     b = (tb - ts) / (spp_big - spp_small)
     if b <= 0:  # timing noise swamped the difference: charge everything per sample
-        return 0.0, tb / spp_big
-    return max(ts - b * spp_small, 0.0), b
+        return (0.0, tb / spp_big), renders
+    return (max(ts - b * spp_small, 0.0), b), renders
+
+
+def merged(passes_img: np.ndarray, pass_spp: list[int]) -> render.RenderResult:
+    """The (P, H, W, C) pass images of ``pass_spp`` samples each as one render
+    (:class:`phonglab.render.PassMerge`: its image and standard error)."""
+    merge = render.PassMerge(int(sum(pass_spp)), len(pass_spp))
+    for img, n in zip(passes_img, pass_spp):
+        merge.add(img, int(n))
+    return merge.result(0.0, [])
 
 
 class Pilot:
@@ -181,14 +202,23 @@ class Pilot:
         #: one-render depth ladder (:mod:`.ladder`) where it applies, else one render per depth
         self.one_kernel = ladder.applies(info)
         self.renders = 0  #: pilot renders made (each spp samples per pixel)
-        self.ladder_images: dict[int, np.ndarray] = {}
+        #: depth -> (full-depth passes of the ladder render that held it, its passes at that
+        #: depth, that render's seed, its samples per pass)
+        self.ladder_images: dict[int, tuple[np.ndarray, np.ndarray, int, int]] = {}
+        #: samples per pixel of a later ladder stage (:meth:`limit`)
+        self.stage_spp = spp
         #: histogram of the vertices the ladder's full-depth paths found (:func:`.ladder.work`)
         self.lengths = np.zeros(ladder.LENGTH_BINS)
         #: (failing, passing, value) when :meth:`search_depth` left a gap unsearched
         self.gap_skipped: tuple[int, int, float] | None = None
         self.stratified = stratified
+        #: seed of the next ladder render beyond the first two (each later stage draws new
+        #: samples: :meth:`prefetch`)
+        self.next_seed = seed + 2
         if self.one_kernel:
-            self.full, self.ladder_images = self._render_ladder(LADDER_STAGES[0])
+            self.full, depth_images = self._render_ladder(LADDER_STAGES[0])
+            self.ladder_images = {d: (self.full, imgs, seed, self.spp_per_pass)
+                                  for d, imgs in depth_images.items()}
         else:
             self.full = self._render(-1, seed)
         # The weights come from an independent full-depth pilot (other seeds): taken from
@@ -220,12 +250,17 @@ class Pilot:
             self.gain = stratification_gain(self.full, self.spp_per_pass, self.weight,
                                             second, self.stratified_pass_spp,
                                             self.second_weight)
-        self.total_energy = float(self.full.mean(axis=0).sum()) or 1.0
         self.samples: dict[int, DepthSample] = {}
         self.compiled: set[int] = set()  #: finite depths whose kernel the pilot compiled
         #: per depth: (H, W) channel mean of σ²·w, the relative variance of one sample per pixel
         self.variance_maps: dict[int, np.ndarray] = {}
         self.time_models: dict[int, tuple[float, float]] = {}
+        #: per depth: its pass images and their seed (the first pilot's, or a later ladder
+        #: stage's), those of the second pilot (kept for :meth:`reusable`), and the time
+        #: model's renders (with the render that compiled its kernel)
+        self.depth_passes: dict[int, tuple[np.ndarray, int]] = {}
+        self.second_depth_passes: dict[int, np.ndarray] = {}
+        self.timed: dict[int, list[render.RenderResult]] = {}
 
     @property
     def spp(self) -> int:
@@ -260,16 +295,23 @@ class Pilot:
                 and d not in self.ladder_images]
 
     def prefetch(self, depths) -> None:
-        """Render the depths not yet measured in one ladder render (one-kernel pilots only)."""
+        """Render the depths not yet measured in one ladder render (one-kernel pilots only),
+        with a seed of its own: its D_k = full_k − depth_k are formed from its own full-depth
+        paths, and its depth images are samples no other pilot render holds
+        (:meth:`reusable`)."""
         missing = self.unrendered(depths)
         if self.one_kernel and missing:
-            self.ladder_images.update(self._render_ladder(missing)[1])
+            full, images = self._render_ladder(missing, self.next_seed, spp=self.stage_spp)
+            per_pass = self.stage_spp // self.passes
+            self.ladder_images.update({d: (full, imgs, self.next_seed, per_pass)
+                                       for d, imgs in images.items()})
+            self.next_seed += 1
 
-    def variance_map(self, passes_img: np.ndarray) -> np.ndarray:
+    def variance_map(self, passes_img: np.ndarray, per_pass: int | None = None) -> np.ndarray:
         """(H, W) mean over channels of σ² · w, σ² = s · var_k(pass_k) the variance of one
         sample: the relative variance a pixel's sample carries (what adaptive sampling
         allocates by)."""
-        sigma2 = passes_img.var(axis=0, ddof=1) * self.spp_per_pass
+        sigma2 = passes_img.var(axis=0, ddof=1) * (per_pass or self.spp_per_pass)
         return (sigma2 * self.weight).mean(axis=-1)
 
     def noise_per_sample(self, passes_img: np.ndarray) -> float:
@@ -282,7 +324,7 @@ class Pilot:
         imgs = self._pilot_render(integrator, self.seed)
         vmap = self.variance_map(imgs)
         return (math.sqrt(float(np.mean(vmap))), vmap,
-                _time_model(self.scene, integrator))
+                _time_model(self.scene, integrator, self.seed + TIME_SEED)[0])
 
     def measure(self, d: int) -> DepthSample:
         """The :class:`DepthSample` of max_depth d (-1: full depth, no bias), rendered once."""
@@ -293,20 +335,23 @@ class Pilot:
             else:
                 if self.one_kernel and d not in self.ladder_images:
                     self.prefetch(next((st for st in LADDER_STAGES if d in st), (d,)))
+                full, seed, per_pass = self.full, self.seed, self.spp_per_pass
                 if d in self.ladder_images:
-                    imgs = self.ladder_images.pop(d)
-                else:
+                    full, imgs, seed, per_pass = self.ladder_images.pop(d)
+                else:   # a path render with the first pilot's seeds
                     imgs = self._render(d, self.seed)
                     self.compiled.add(d)
-                diff = self.full - imgs
+                self.depth_passes[d] = (imgs, seed, per_pass)
+                diff = full - imgs
                 bias2 = depth_bias2(diff, self.weight)
                 if d in self.second_depths:  # the second pilot's estimate, pooled by samples
-                    bias2_second = depth_bias2(self.second - self.second_depths.pop(d),
+                    self.second_depth_passes[d] = self.second_depths.pop(d)
+                    bias2_second = depth_bias2(self.second - self.second_depth_passes[d],
                                                self.second_weight)
                     bias2 = ((self.spp * bias2 + self.second_spp * bias2_second)
                              / (self.spp + self.second_spp))
-                energy = float(diff.mean(axis=0).sum()) / self.total_energy
-                self.variance_maps[d] = self.variance_map(imgs)
+                energy = float(diff.mean(axis=0).sum()) / (float(full.mean(axis=0).sum()) or 1.0)
+                self.variance_maps[d] = self.variance_map(imgs, per_pass)
                 self.samples[d] = DepthSample(d, math.sqrt(max(bias2, 0.0)),
                                               energy if abs(energy) > 1e-9 else 0.0,
                                               math.sqrt(float(np.mean(self.variance_maps[d]))))
@@ -329,7 +374,28 @@ class Pilot:
             return math.inf
         n = s.noise_per_sample ** 2 / budget2
         saved = ladder.work(self.lengths, passing) - ladder.work(self.lengths, failing + 1)
+        # the gap's render is priced at the pilot's full size, whatever :meth:`limit` gave
+        # the stages: a render's launches and passes cost as much as its samples on a cheap
+        # scene (gray_room at 128² chose depth 5 over 6 with a 4-spp gap render and took
+        # 0.05 s longer in all)
         return saved * n / (ladder.work(self.lengths, -1) * self.spp)
+
+    def limit(self, target_error: float) -> None:
+        r"""Size the later ladder stages so that the pilot's renders stay within
+        :data:`PILOT_FRACTION` of the samples the render is predicted to need.
+
+        With n(1) the first pilot's relative noise at full depth, the render needs about
+        N = n(1)²/E² samples per pixel; the first two pilot renders hold ``spp + second_spp``
+        of them, and each later stage gets what is left of PILOT_FRACTION · N, between one
+        sample per pass and the first pilot's spp.  A cheap scene (gray_room at 128²: N ≈ 95,
+        the first two renders 32) thus searches deeper stages with 4 spp (65 536 samples of
+        the image: its b(d) is an image mean), and an expensive one with the pilot's full
+        size.  Their samples are not lost either way (:meth:`reusable`).
+        """
+        n = self.measure(-1).noise_per_sample ** 2 / target_error ** 2
+        left = PILOT_FRACTION * n - (self.spp + self.second_spp)
+        per_pass = int(min(self.spp_per_pass, max(1, left // self.passes)))
+        self.stage_spp = per_pass * self.passes
 
     def search_depth(self, allowed: float, cap: int = DEPTH_LADDER[-1],
                      target_error: float | None = None) -> tuple[int, int]:
@@ -344,6 +410,8 @@ class Pilot:
         :attr:`gap_skipped` says why (Russian roulette leaves few paths that deep: glass_slab
         and cornell_phong cost the same at depth 9 to 16, measured).
         """
+        if target_error is not None:
+            self.limit(target_error)
         failing, passing = 0, None
         for d in (d for d in DEPTH_LADDER if d <= cap):
             if self.measure(d).bias <= allowed:
@@ -373,10 +441,51 @@ class Pilot:
         measured once per depth (steps 4 and 5 both ask)."""
         if depth not in self.time_models:
             integrator = path_integrator(depth, self.info)
+            timed = []
             if depth not in self.compiled:  # compile the kernel before timing
-                render.render_scene(self.scene, 1, seed=self.seed + 99, integrator=integrator)
-            self.time_models[depth] = _time_model(self.scene, integrator)
+                timed.append(render.render_scene(self.scene, 1, seed=self.seed + TIME_SEED,
+                                                 integrator=integrator, keep_passes=True))
+            self.time_models[depth], renders = _time_model(self.scene, integrator,
+                                                           self.seed + TIME_SEED + 1)
+            self.timed[depth] = timed + renders
         return self.time_models[depth]
+
+    def reusable(self, depth: int) -> list[tuple[render.RenderResult, np.ndarray]]:
+        r"""The pilot's renders that are samples of the planned render's image at ``depth``,
+        one per independent seed, for :func:`phonglab.render.combine_renders`, each with
+        weights ≈ 1/(r² + ε) from other samples than its own (the second pilot's for every
+        render but the second pilot, the first pilot's for it) to measure its precision by.
+
+        * the first pilot's seeds: its images at ``depth`` (the ladder's, or a ``path``
+          render's), else its full-depth images, and the images at ``depth`` of a later
+          ladder stage (seeds of its own);
+        * the second pilot (other seeds; stratified when the plan may stratify): its images
+          at ``depth`` when its ladder stage held it, else its full-depth images;
+        * the time model's renders at ``depth`` (and the render that compiled its kernel), one
+          pass each, as one render of unequal passes.
+
+        A full-depth image has the expectation of the unbounded image, which exceeds the one
+        at ``depth`` by the deeper bounces' energy D >= 0 (radiance is never negative), so a
+        combination that includes one has a depth bias (1 − λ)·D, λ its weight: at most the
+        plan's b(d), and the error the plan reports stays an upper bound.  Every render here
+        has two passes or more (a standard error), and none shares a seed with the render
+        planned after it when the pilot's seed differs from the render's
+        (:func:`.planning.plan`; ``phonglab render`` uses the render's seed + 1).
+        """
+        groups = []
+        imgs, seed, per_pass = self.depth_passes.get(depth, (None, None, 0))
+        full = [(self.full, self.spp_per_pass)]
+        for passes_img, n in (full if imgs is None else [(imgs, per_pass)] if seed == self.seed
+                              else full + [(imgs, per_pass)]):
+            groups.append((merged(passes_img, [n] * len(passes_img)), self.weight))
+        second = self.second_depth_passes.get(depth, self.second)
+        per = self.stratified_pass_spp or self.second_spp // len(second)
+        groups.append((merged(second, [per] * len(second)), self.second_weight))
+        timed = self.timed.get(depth, [])
+        if len(timed) >= 2:
+            imgs = np.concatenate([t.passes for t in timed])
+            groups.append((merged(imgs, [int(t.pass_spp[0]) for t in timed]), self.weight))
+        return groups
 
     def depths(self) -> list[DepthSample]:
         """Every depth measured, finite ones in order, then -1."""

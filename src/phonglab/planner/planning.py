@@ -16,12 +16,12 @@ from typing import Any
 
 from ..errors import PlanError, SceneError
 from ..metrics import noise_target
-from ..render import MAX_SPP, check_spp
+from ..render import MAX_SPP, Prior, check_spp, precision
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
 from . import choice, ladder
-from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
-                    DepthSample, Pilot, pilot_size)
+from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
+                    PILOT_SPP, DepthSample, Pilot, pilot_size)
 
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
@@ -65,6 +65,14 @@ class Plan:
     #: (:mod:`.execute`); neither is part of :meth:`to_dict`
     info: SceneInfo | None = field(default=None, repr=False, compare=False)
     loaded: Any = field(default=None, repr=False, compare=False)
+    #: the pilot's renders the chosen uniform render is combined with (:meth:`.pilot.Pilot.
+    #: reusable`, :func:`phonglab.render.combine_renders`); None when it renders alone
+    reused: Prior | None = field(default=None, repr=False, compare=False)
+    #: the pilot's weights ≈ 1/(r² + ε) (from its second render): the render's noise is
+    #: measured with them (:func:`.execute.error_report`), not with its own image's
+    weight: Any = field(default=None, repr=False, compare=False)
+    reused_spp: int = 0              #: samples per pixel of :attr:`reused`
+    pilot_seed: int = PILOT_SEED     #: the pilot's seed (its renders use it and the next ones)
 
     @property
     def noise_target(self) -> float:
@@ -81,8 +89,9 @@ class Plan:
     def to_dict(self) -> dict[str, Any]:
         """The plan as plain values (JSON, the EXR header), without :attr:`info` and
         :attr:`loaded`."""
-        d = dataclasses.asdict(dataclasses.replace(self, info=None, loaded=None))
-        del d["info"], d["loaded"]
+        d = dataclasses.asdict(dataclasses.replace(self, info=None, loaded=None, reused=None,
+                                                   weight=None))
+        del d["info"], d["loaded"], d["reused"], d["weight"]
         d["resolution"] = list(self.resolution)
         return d
 
@@ -91,13 +100,31 @@ class Plan:
 
     def render_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`phonglab.render.render_file` that apply the plan (a
-        uniform ``path`` render: the chosen sampler, spp and passes)."""
-        if self.sampler != "independent" and self.sampling == "uniform" and self.model == "path":
+        uniform ``path`` render that reaches E on its own: the chosen sampler, spp and passes;
+        when the plan combines its render with the pilot's, the uniform spp of
+        :attr:`spp`)."""
+        if (self.sampler != "independent" and self.sampling == "uniform"
+                and self.model == "path" and self.reused is None):
             return {"spp": int(math.ceil(self.chosen_spp)), "variant": self.variant,
                     "max_depth": self.max_depth, "passes": self.chosen_passes,
                     "sampler": self.sampler}
         return {"spp": self.spp, "variant": self.variant, "max_depth": self.max_depth,
                 "passes": self.passes}
+
+    def repeats_pilot(self, seed: int) -> bool:
+        """True when a render with ``seed`` would repeat the samples of the pilot's renders
+        this plan combines its render with (seeds pilot_seed to pilot_seed + PILOT_SEEDS)."""
+        return self.reused is not None and self.pilot_seed <= seed <= self.pilot_seed + PILOT_SEEDS
+
+    def standalone(self) -> Plan:
+        """The plan without the pilot's samples: its uniform ``path`` render of :attr:`spp`
+        (:meth:`render_kwargs`), which reaches E on its own."""
+        return dataclasses.replace(
+            self, reused=None, reused_spp=0, sampling="uniform", model="path",
+            sampler="independent", chosen_spp=float(self.spp), chosen_passes=self.passes,
+            chosen_seconds=self.predicted_seconds,
+            reasons=self.reasons + ["the render's seed is one of the pilot's: it renders the "
+                                    "uniform spp alone, without the pilot's samples"])
 
     def uniform_sensor(self, info: SceneInfo):
         """The sensor of the plan's uniform render of the scene ``info`` describes: 0 (its own)
@@ -202,8 +229,17 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     _refuse_absurd(info.path, target_error, n, seconds,
                    MAX_SECONDS if max_seconds is None else max_seconds)
     pixels = resolution[0] * resolution[1]
+    prior, credit = _reusable(pilot, depth, overrides)
     option = _choose_render(pilot, depth, chosen, n, seconds, overrides, target_error,
-                            pixels, passes, reasons)
+                            pixels, passes, reasons, credit)
+    reused = prior if option.reuses else None
+    if reused:
+        reasons.append(f"reuse: the pilot's {len(reused.renders)} renders at this depth (or "
+                       f"full depth) hold {sum(sum(r.pass_spp) for r in reused.renders)} "
+                       f"samples per pixel, "
+                       f"worth {credit * chosen.noise_per_sample ** 2:.1f} of its independent "
+                       f"ones; the render is combined with them (inverse-variance weights), "
+                       f"so it takes {option.spp:g} spp")
     return Plan(scene=str(info.path), target_error=float(target_error), variant=variant,
                 backend=backend, color=color, max_depth=int(depth), spp=int(n), passes=passes,
                 predicted_error=predicted, predicted_bias=chosen.bias, predicted_noise=noise,
@@ -213,7 +249,24 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
                 depths=pilot.depths(), reasons=reasons, overrides=overrides,
                 model=option.model, sampling=option.sampling, chosen_spp=float(option.spp),
                 chosen_seconds=option.seconds, sampler=option.sampler,
-                chosen_passes=option.passes or passes, info=info, loaded=scene)
+                chosen_passes=option.passes or passes, info=info, loaded=scene,
+                reused=reused, weight=pilot.weight,
+                reused_spp=int(sum(sum(r.pass_spp) for r in reused.renders)) if reused else 0,
+                pilot_seed=int(seed))
+
+
+def _reusable(pilot: Pilot, depth: int, overrides: dict[str, Any]) -> tuple[Prior | None, float]:
+    """The pilot's renders a uniform ``path`` render at ``depth`` may be combined with
+    (:class:`phonglab.render.Prior`), and the precision Σ n_j/V_j they bring
+    (:func:`phonglab.render.combine_renders`): none when the caller fixed spp or depth (the
+    render is then the one asked for)."""
+    if "spp" in overrides or "max_depth" in overrides:
+        return None, 0.0
+    parts = pilot.reusable(depth)
+    precisions = tuple(precision(part, weight) for part, weight in parts)
+    if not all(math.isfinite(p) and p > 0 for p in precisions):
+        return None, 0.0   # a noiseless pilot: nothing to weigh (the plan renders 1 spp)
+    return Prior(tuple(part for part, _ in parts), precisions, pilot.weight), sum(precisions)
 
 
 def _stratified_sensor(info: SceneInfo, overrides: dict[str, Any], reasons: list[str]):
@@ -233,7 +286,7 @@ def _stratified_sensor(info: SceneInfo, overrides: dict[str, Any], reasons: list
 
 def _choose_render(pilot: Pilot, depth: int, sample: DepthSample, n: int, seconds: float,
                    overrides: dict[str, Any], target_error: float, pixels: int, passes: int,
-                   reasons: list[str]) -> choice.Option:
+                   reasons: list[str], credit: float = 0.0) -> choice.Option:
     """Step 5 (:mod:`.choice`): model and sampling; uniform path when spp or depth are given."""
     uniform = choice.Option("path", "uniform", n, seconds, sample.noise_per_sample)
     if "spp" in overrides or "max_depth" in overrides:
@@ -242,7 +295,7 @@ def _choose_render(pilot: Pilot, depth: int, sample: DepthSample, n: int, second
     if sample.noise_per_sample == 0.0:
         return uniform
     return choice.choose(pilot, depth, sample.bias, target_error, uniform, pixels, passes,
-                         reasons)
+                         reasons, credit)
 
 
 def _refuse_absurd(path, target_error: float, n: int, seconds: float, max_seconds: float) -> None:
