@@ -95,6 +95,7 @@ def run_child(kind: str, scene: str, params: dict, value, seed: int, out: Path) 
                      "variant": plan["variant"], "sampler": plan["sampler"],
                      "max_depth": plan["max_depth"], "spp": float(spp),
                      "uniform_path_spp": plan["spp"], "pilot_seconds": plan["pilot_seconds"],
+                     "reused_spp": plan.get("reused_spp", 0),
                      "predicted_seconds": plan["chosen_seconds"], "reasons": plan["reasons"]}
 
 
@@ -209,14 +210,15 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
     ratios = [d / p for d, p in zip(t_def, t_plan)]
     row = {
         "scene": name, "res": res, "params": params, "target_error": target, "repeats": repeats,
+        "held_out": name in HELD_OUT,
         "reference": {"spp": ref.spp, "noise": metrics.relative_noise(ref.image, ref.stderr),
                       "seconds": ref_seconds},
         "default": {"variant": DEFAULT_VARIANT, "max_depth": DEFAULT_DEPTH, "spp": spp_def,
                     "calibration_error": err_cal, "calibration": calibration,
-                    "error": float(np.mean(e_def)),
+                    "error": float(np.mean(e_def)), "errors": e_def,
                     "error_sd": float(np.std(e_def, ddof=1)) if repeats > 1 else 0.0,
                     "seconds": t_def, "seconds_median": statistics.median(t_def)},
-        "planned": {**plan_info, "error": float(np.mean(e_plan)),
+        "planned": {**plan_info, "error": float(np.mean(e_plan)), "errors": e_plan,
                     "error_sd": float(np.std(e_plan, ddof=1)) if repeats > 1 else 0.0,
                     "seconds": t_plan, "seconds_median": statistics.median(t_plan)},
         "speedup": statistics.median(t_def) / statistics.median(t_plan),

@@ -603,7 +603,15 @@ def test_benchmark_table_names_the_film_of_each_row():
     assert "| s (128²) | 0.01 |" in table and "| w (512×128) |" in table
     assert "1.50x (1.20-1.80) | 1.50x |" in table
     assert "path uniform (multijitter), llvm_ad_mono" in table
-    assert "at equal error" in table and "on 2 of 3 rows" in table
+    assert "at least 1.5x on 2 of 3" in table and "at least 0.95x" in table
+    held = planner.benchmark_table([row, dict(strat, held_out=True)])
+    assert "On the held-out rows: at least 0.95x the default's speed" in held
+    # the error promise: achieved / E per seed, ≤ 1.1 E and ≥ 0.8 E
+    promise = planner.benchmark.promise_table(
+        [dict(row, planned=dict(row["planned"], errors=[0.0099, 0.0115])),
+         dict(strat, planned=dict(strat["planned"], errors=[0.0075], reused_spp=32))])
+    assert "| s (128²) | adaptive | 0.990, 1.150 | **missed** | met |" in promise
+    assert "| m (128²) | uniform + pilot | 0.750 | met | **missed** |" in promise
 
 
 def test_equal_error_speedup_only_ever_lowers_the_raw_ratio():
