@@ -26,6 +26,17 @@ from phonglab.errors import PhonglabError
 from phonglab.planner import benchmark
 
 RES = {"res": 32}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def full_pilot():
+    """These tests check every step of the pilot on tiny films, where each render is
+    cheaper than the pilot and the plan would otherwise go straight to full depth
+    (planning.STRAIGHT; tested on its own by asking for it).  Module scope: the module's
+    shared plans are made with it too."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(planner.planning, "STRAIGHT", False)
+        yield
 TARGET = 0.05
 ALLOWED = planner.BIAS_FRACTION * TARGET
 
@@ -855,3 +866,35 @@ def test_the_pilots_renders_never_share_seeds(monkeypatch):
     assert len(seeds) == len(set(seeds)), seeds
     assert all(40 <= s <= 40 + planner.pilot.PILOT_SEEDS for s in seeds)
     assert not p.repeats_pilot(39)
+
+
+def test_a_render_cheaper_than_the_pilot_is_planned_straight_away(monkeypatch):
+    """gray_room at 32², E = 0.05: the pilot's two full-depth renders already hold most of
+    what the image needs, the rest costs less than the first pilot render did, so the plan
+    skips the depth search and the time model (no path render of the pilot), says so, and
+    renders path at full depth (unbiased) combined with the pilot's renders; the result
+    reaches E against the converged reference (tolerance 1.15 E, three seeds)."""
+    from phonglab.planner import execute
+
+    calls = []
+    real = render.render_scene
+    monkeypatch.setattr(render, "render_scene",
+                        lambda *a, **kw: calls.append(kw.get("integrator")) or real(*a, **kw))
+    target = 0.05
+    p = planner.plan("gray_room", target, params=RES, straight=True)
+    assert any(r.startswith("straight:") for r in p.reasons), p.summary()
+    assert p.max_depth == -1 and p.predicted_bias == 0.0 and p.reused is not None
+    assert len(calls) == 2   # the two pilot renders, nothing else
+    monkeypatch.setattr(render, "render_scene", real)
+    full = planner.plan("gray_room", target, params=RES, straight=False)
+    assert not any(r.startswith("straight:") for r in full.reasons) and full.max_depth > 0
+    ref = references.reference("gray_room", 4096, params=RES)
+    for seed in range(3):
+        done = execute.render_plan(p, seed=100 + seed, reference=ref)
+        assert done.error.achieved <= 1.15 * target, (done.error, p.summary())
+
+
+def test_full_pilot_without_a_target_error_is_one_sentence(capsys):
+    """--full-pilot belongs to the planner: alone (or with --adaptive) it is refused, exit 2."""
+    assert main(["render", "gray_direct", "--full-pilot"]) == 2
+    assert "--full-pilot is about the planner's pilot" in capsys.readouterr().err

@@ -39,8 +39,12 @@ def add_parser(sub) -> None:
     p.add_argument("--max-depth", type=int, default=None, help="fix max_depth")
     p.add_argument("--spp", type=int, default=None, help="fix spp (the error is then predicted)")
     p.add_argument("--pilot-spp", type=int, default=None,
-                   help="pilot samples per pixel, in 8 passes (default 64, fewer beyond 64x64 "
-                        "pixels: the same samples per image, at least 16)")
+                   help="pilot samples per pixel, in 4 passes (default 64, fewer beyond 64x64 "
+                        "pixels: the same samples per image, at least 4)")
+    p.add_argument("--full-pilot", action="store_true",
+                   help="run every step of the pilot (depth search, timing) even where the "
+                        "render is predicted to cost less than they would (by default the "
+                        "plan is then path at full depth at once, and says so)")
     add_scene_params(p)
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",
                    help="refuse a plan predicted to take longer (default: planner.MAX_SECONDS, "
@@ -73,6 +77,7 @@ def run(args) -> int:
     with runner if rendering else contextlib.nullcontext():
         p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
                          max_depth=args.max_depth, spp=args.spp, params=params,
+                         straight=False if args.full_pilot else None,
                          max_seconds=args.max_seconds, **kwargs)
         print(p.to_json() if args.json else p.summary())
         if args.make_reference is not None:

@@ -50,6 +50,9 @@ def add_parser(sub) -> None:
                         "the EXR (<out>.spp.exr, <out>.spp.png)")
     p.add_argument("--max-spp", type=int, default=None, metavar="N",
                    help="with --adaptive: at most N samples in any pixel")
+    p.add_argument("--full-pilot", action="store_true",
+                   help="with --target-error: run every step of the planner's pilot even "
+                        "where the render is predicted to cost less (see 'phonglab plan')")
     add_scene_params(p)
     p.set_defaults(func=run)
 
@@ -63,6 +66,9 @@ def run(args) -> int:
     if out.is_dir() or out.suffix.lower() != ".exr":
         raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
                             f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
+    if args.full_pilot and (args.target_error is None or args.adaptive):
+        raise PhonglabError("--full-pilot is about the planner's pilot: use it with "
+                            "--target-error E (without --adaptive), or drop it")
     if args.adaptive or args.max_spp is not None:
         return run_adaptive(args, path, out)
     if args.target_error is not None:
@@ -88,6 +94,7 @@ def run_planned(args, path: Path, out: Path) -> int:
     # combined with the pilot's samples, never repeats them
     plan = planner.plan(path, args.target_error, variant=args.variant,
                         max_depth=args.max_depth, spp=args.spp, seed=args.seed + planner.PILOT_SEED,
+                        straight=False if args.full_pilot else None,
                         max_seconds=args.max_seconds, params=dict(args.params))
     print(plan.summary())
     done = execute.render_plan(plan, seed=args.seed, out=out, progress=True)

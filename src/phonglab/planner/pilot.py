@@ -202,6 +202,7 @@ class Pilot:
         #: one-render depth ladder (:mod:`.ladder`) where it applies, else one render per depth
         self.one_kernel = ladder.applies(info)
         self.renders = 0  #: pilot renders made (each spp samples per pixel)
+        self.first_seconds = 0.0  #: wall time of the first (full-depth) pilot render
         #: depth -> (full-depth passes of the ladder render that held it, its passes at that
         #: depth, that render's seed, its samples per pass)
         self.ladder_images: dict[int, tuple[np.ndarray, np.ndarray, int, int]] = {}
@@ -269,11 +270,15 @@ class Pilot:
 
     def _pilot_render(self, integrator, seed: int, spp: int | None = None,
                       passes: int | None = None, sensor=0) -> np.ndarray:
-        """The pass images of one pilot render (the pilot's spp and passes unless given)."""
+        """The pass images of one pilot render (the pilot's spp and passes unless given);
+        :attr:`first_seconds` keeps the first one's wall time."""
         self.renders += 1
-        return render.render_scene(self.scene, spp or self.spp, seed=seed,
+        done = render.render_scene(self.scene, spp or self.spp, seed=seed,
                                    passes=passes or self.passes, sensor=sensor,
-                                   integrator=integrator, keep_passes=True).passes
+                                   integrator=integrator, keep_passes=True)
+        if self.renders == 1:
+            self.first_seconds = done.seconds
+        return done.passes
 
     def _render(self, depth: int, seed: int, **size) -> np.ndarray:
         """The pass images of a ``path`` render at ``depth`` (``size``: :meth:`_pilot_render`)."""

@@ -23,6 +23,8 @@ from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
                     PILOT_SPP, DepthSample, Pilot, pilot_size)
 
+#: :func:`plan` renders straight away (:func:`_straight`) when it pays, unless told not to.
+STRAIGHT = True
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
 
@@ -169,7 +171,7 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
          bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
          variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
          max_depth_cap: int = DEPTH_LADDER[-1], params: dict[str, Any] | None = None,
-         max_seconds: float | None = None) -> Plan:
+         max_seconds: float | None = None, straight: bool | None = None) -> Plan:
     """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
 
     Args:
@@ -185,6 +187,9 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
         variant, max_depth, spp: fix that part of the plan (the predictions follow it).
         max_depth_cap: deepest finite depth tried; beyond it the plan uses -1 (unbounded).
         params: values for the scene's ``<default>`` entries (``{"res": 64}``).
+        straight: when the rest of the render is predicted cheaper than the pilot's first
+            render, plan path at full depth at once (:func:`_straight`); default
+            :data:`STRAIGHT`, False to run every step of the pilot whatever it costs.
         max_seconds: a plan predicted to take longer is refused (default :data:`MAX_SECONDS`;
             ``math.inf`` allows any).
 
@@ -217,6 +222,27 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
         pilot_spp, pilot_passes = pilot_size(resolution[0] * resolution[1], pilot_passes)
     stratified = _stratified_sensor(info, overrides, reasons)
     pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed, stratified=stratified)
+    if not overrides and (STRAIGHT if straight is None else straight):
+        straight = _straight(pilot, target_error, resolution, reasons)
+        if straight is not None:
+            n, final, b, prior = straight
+            pixels = resolution[0] * resolution[1]
+            noise = pilot.measure(-1).noise_per_sample / math.sqrt(n)
+            _refuse_absurd(info.path, target_error, n, b * n,
+                           MAX_SECONDS if max_seconds is None else max_seconds)
+            passes = max(2, min(8, final // choice.MIN_PASS_SPP))
+            return Plan(scene=str(info.path), target_error=float(target_error),
+                        variant=variant, backend=backend, color=color, max_depth=-1,
+                        spp=int(n), passes=render_passes(n), predicted_error=noise,
+                        predicted_bias=0.0, predicted_noise=noise, predicted_seconds=b * n,
+                        seconds_per_sample=b / pixels, seconds_per_pass=0.0,
+                        resolution=resolution, params=dict(params), pilot_spp=pilot.spp,
+                        pilot_seconds=time.perf_counter() - t_start, depths=pilot.depths(),
+                        reasons=reasons, overrides=overrides, chosen_spp=float(final),
+                        chosen_seconds=b * final, chosen_passes=passes, info=info,
+                        loaded=scene, reused=prior, weight=pilot.weight,
+                        reused_spp=int(sum(sum(r.pass_spp) for r in prior.renders)),
+                        pilot_seed=int(seed))
     depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
     chosen = pilot.measure(depth)
     n = _choose_spp(chosen, target_error, spp, scene_spp, reasons)
@@ -253,6 +279,47 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
                 reused=reused, weight=pilot.weight,
                 reused_spp=int(sum(sum(r.pass_spp) for r in reused.renders)) if reused else 0,
                 pilot_seed=int(seed))
+
+
+def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
+              reasons: list[str]):
+    """(N, spp to render, seconds per pixel sample x pixels, the pilot's renders) of a
+    straight render, or None: when the rest of the render is predicted to take less than
+    the pilot's first render did, the rest of the pilot (the depth search, the time model)
+    cannot save more than it costs, and the plan is the default configuration at once:
+    ``path`` at full depth (unbiased), independent samples, combined with the pilot's two
+    full-depth renders.
+
+    With n(1) the first pilot's relative noise at full depth and P the two renders'
+    precision (:func:`_reusable`), the render needs n = ⌈n(1)² (1/E² − P)⌉ samples (at
+    least 2); the first render took t seconds for s samples per pixel of the same kernel
+    (the ladder costs what ``path`` at full depth does: 75 against 69 ms at 128², gray_room),
+    so the rest takes about t·n/s.  Every later step of the pilot costs at least a render
+    of its own (a ladder stage, seven time-model renders), so a rest shorter than t cannot
+    be shortened by more than it would cost to find out how.
+    """
+    full = pilot.measure(-1)
+    if full.noise_per_sample == 0.0 or pilot.first_seconds <= 0.0:
+        return None
+    parts = pilot.reusable(-1)
+    precisions = tuple(precision(part, weight) for part, weight in parts)
+    if not all(math.isfinite(p) and p > 0 for p in precisions):
+        return None
+    credit = sum(precisions)
+    v1 = full.noise_per_sample ** 2
+    n_total = max(1, math.ceil(v1 / target_error ** 2))
+    rest = choice.credited_spp(full.noise_per_sample, target_error ** 2, credit)
+    per_spp = pilot.first_seconds / pilot.spp
+    if per_spp * rest >= pilot.first_seconds:
+        return None
+    reasons.append(f"straight: the pilot's first render took {pilot.first_seconds:.3g} s for "
+                   f"{pilot.spp} spp at full depth; with its two full-depth renders (worth "
+                   f"{credit * v1:.1f} independent samples) the image needs {rest} more spp "
+                   f"of {n_total}, about {per_spp * rest:.3g} s, less than any further pilot "
+                   f"step would cost, so no depth search or timing: path at full depth "
+                   f"(max_depth -1, unbiased), {rest} spp, combined with the pilot's renders")
+    prior = Prior(tuple(part for part, _ in parts), precisions, pilot.weight)
+    return n_total, rest, per_spp, prior
 
 
 def _reusable(pilot: Pilot, depth: int, overrides: dict[str, Any]) -> tuple[Prior | None, float]:
