@@ -729,7 +729,7 @@ def test_stratified_layout_examples():
 
 
 def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plans):
-    """Each plan measures multijitter's gain and prices it; at E = 0.003 gray_direct (direct
+    """Each plan measures multijitter's gain and prices it; at E = 0.002 gray_direct (direct
     light, ~3-5x lower variance stratified) chooses it, combined with the pilot's samples,
     and the render the plan runs (execute.render_plan) reaches the target against the
     converged reference; so does the plan's standalone uniform render (render_kwargs)."""
@@ -737,7 +737,7 @@ def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plan
 
     for name, p in plans.items():
         assert any(r.startswith("sampler: multijitter") for r in p.reasons), name
-    target = 0.003
+    target = 0.002   # (at 0.003 the pilot's own samples nearly suffice: 2 spp more)
     p = planner.plan("gray_direct", target, params=RES)
     assert p.sampler == "multijitter" and p.reused, p.summary()
     assert p.chosen_spp / p.chosen_passes >= planner.pilot.STRATIFIED_PASS_SPP

@@ -51,7 +51,7 @@ import numpy as np
 
 from ..adaptive import MIN_SPP, window_mean
 from ..scenes import SceneInfo, inspect_scene
-from .pilot import Pilot
+from .pilot import STRATIFIED_COST, Pilot
 
 #: Passes an adaptive render typically takes (pilot and 2-4 more: measured on the bench scenes).
 ADAPTIVE_PASSES = 4
@@ -87,12 +87,6 @@ class Option:
 
 #: The stratified sampler priced against ``independent`` (Mitsuba's ``multijitter``).
 STRATIFIED = "multijitter"
-#: Time per sample of :data:`STRATIFIED` over ``independent`` at the pass counts
-#: :func:`stratified_layout` uses (:data:`CHEAP_PASS_SPP`; every count it is asked for is a
-#: kernel of its own, so it is not timed apart): measured 1.06-1.11x on gray_direct,
-#: gray_room, cornell_phong and glass_slab, 1.24x on nb_sphere_row (128², max_depth 8,
-#: 256-1024 spp, medians of 3); 1.05-1.08x at 8, 16 and 64 spp (:data:`CHEAP_PASS_SPP`).
-STRATIFIED_COST = 1.15
 #: Pass sizes at which ``multijitter`` costs no more than :data:`STRATIFIED_COST`.  Its grid is
 #: ⌊√n⌋ rows by ⌈n/⌊√n⌋⌉ columns (``src/samplers/multijitter.cpp``, ``set_sample_count``)
 #: and each 2D sample permutes the sample index, row and column with ``permute_kensler``

@@ -80,6 +80,14 @@ def pilot_size(pixels: int, passes: int = PILOT_PASSES) -> tuple[int, int]:
     spp = max(MIN_PILOT_SPP, min(PILOT_SPP, int(spp)))
     passes = max(2, min(passes, spp))
     return spp // passes * passes, passes
+#: Time per sample of multijitter over ``independent`` at the pass counts
+#: :func:`.choice.stratified_layout` uses (:data:`.choice.CHEAP_PASS_SPP`; every count it is
+#: asked for is a kernel of its own, so it is not timed apart): measured 1.06-1.11x on
+#: gray_direct, gray_room, cornell_phong and glass_slab, 1.24x on nb_sphere_row (128²,
+#: max_depth 8, 256-1024 spp, medians of 3); 1.05-1.08x at 8, 16 and 64 spp.  The time model,
+#: rendered with multijitter where the plan may stratify, divides its time per sample by this
+#: to price ``independent``.
+STRATIFIED_COST = 1.15
 #: The time model renders 1 spp and enough spp for TIME_SAMPLES samples (at least 2): its fit
 #: a + b·spp needs two sizes, not many samples (4 spp at 128², 2 at 256² and beyond, where
 #: 4 spp cost deep rgb scenes ~0.2 s of the pilot).
@@ -152,8 +160,8 @@ def stratification_gain(indep: np.ndarray, indep_spp: int, indep_weights: np.nda
     return v_indep / v_strat
 
 
-def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP,
-                repeats: int = 3) -> tuple[tuple[float, float], list[render.RenderResult]]:
+def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP, repeats: int = 3,
+                sensor=0) -> tuple[tuple[float, float], list[render.RenderResult]]:
     """((a, b) of T(spp) = a + b·spp, the renders timed) from alternating one-pass renders of
     spp_small and spp_big = max(2·spp_small, ⌈TIME_SAMPLES / pixels⌉) samples per pixel.
 
@@ -168,7 +176,7 @@ def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP,
     t_small, t_big, renders = [], [], []
     for k in range(repeats):
         for spp, bucket in ((spp_small, t_small), (spp_big, t_big)):
-            timed = render.render_scene(scene, spp, seed=seed + len(renders),
+            timed = render.render_scene(scene, spp, seed=seed + len(renders), sensor=sensor,
                                         integrator=integrator, keep_passes=True)
             bucket.append(timed.pass_seconds[0])
             renders.append(timed)
@@ -446,12 +454,18 @@ class Pilot:
         measured once per depth (steps 4 and 5 both ask)."""
         if depth not in self.time_models:
             integrator = path_integrator(depth, self.info)
+            # with the stratified sensor where the plan may stratify: the renders are then
+            # worth that sampler's samples to the planned render (:meth:`reusable`), and the
+            # time per sample of ``independent`` is theirs over STRATIFIED_COST
+            sensor = self.stratified if self.stratified is not None else 0
             timed = []
             if depth not in self.compiled:  # compile the kernel before timing
                 timed.append(render.render_scene(self.scene, 1, seed=self.seed + TIME_SEED,
-                                                 integrator=integrator, keep_passes=True))
-            self.time_models[depth], renders = _time_model(self.scene, integrator,
-                                                           self.seed + TIME_SEED + 1)
+                                                 sensor=sensor, integrator=integrator,
+                                                 keep_passes=True))
+            (a, b), renders = _time_model(self.scene, integrator, self.seed + TIME_SEED + 1,
+                                          sensor=sensor)
+            self.time_models[depth] = (a, b / STRATIFIED_COST if sensor else b)
             self.timed[depth] = timed + renders
         return self.time_models[depth]
 
@@ -486,10 +500,14 @@ class Pilot:
         second = self.second_depth_passes.get(depth, self.second)
         per = self.stratified_pass_spp or self.second_spp // len(second)
         groups.append((merged(second, [per] * len(second)), self.second_weight))
+        # the time model's renders, one group per size (passes of one size: with a stratified
+        # sampler a pass's variance is not that of its samples over its count)
         timed = self.timed.get(depth, [])
-        if len(timed) >= 2:
-            imgs = np.concatenate([t.passes for t in timed])
-            groups.append((merged(imgs, [int(t.pass_spp[0]) for t in timed]), self.weight))
+        for size in sorted({int(t.pass_spp[0]) for t in timed}):
+            same = [t for t in timed if int(t.pass_spp[0]) == size]
+            if len(same) >= 2:
+                imgs = np.concatenate([t.passes for t in same])
+                groups.append((merged(imgs, [size] * len(same)), self.weight))
         return groups
 
     def depths(self) -> list[DepthSample]:
