@@ -147,12 +147,57 @@ def test_choose_allocation_refuses_a_pure_strategy_that_misses_part_of_f():
     assert np.all(c_b < 1.0) and len(ALLOCATIONS) > 2
 
 
+def test_mis_optimal_main_stage_counts_nan_and_inf_only_when_a_sum_is_not_finite(variant_llvm_rgb):
+    """The main stage sums four numbers a row; a row whose α is NaN (Inf) makes every residual
+    NaN (−Inf) there, and the counting kernel must then find exactly ``per`` of them in that
+    row and none in the healthy one (whose sums stay finite)."""
+    import drjit as dr
+    import mitsuba as mi
+    from phonglab.physics.estimators.optimal_mis import optimal_sums
+
+    est = ReflectionEstimators(Problem(exponent=30.0, theta_i=30.0, half_angle=5.0))
+    per, rows = 512, 3
+    n_b = mi.UInt32([per, per, per // 2, per // 2])          # row 0, 1: BSDF only (c·p > 0)
+    alpha_b = mi.Float([float("nan"), float("inf"), 0.0, 0.0])
+    alpha_l = mi.Float([0.0, 0.0, 0.0, 0.0])
+    dr.eval(n_b, alpha_b, alpha_l)
+    t = optimal_sums(est.integrand, per, rows, n_b, alpha_b, alpha_l, seed=3)
+    assert list(t["nan"]) == [per, 0, 0] and list(t["inf"]) == [0, per, 0]
+    assert np.isfinite([t[k][2] for k in ("sum_b", "sum", "sq_b", "sq")]).all()
+    healthy = est.run("mis_optimal", 4096, seed=5, batches=2)
+    assert healthy.nan_count == 0 and healthy.inf_count == 0 and np.isfinite(healthy.values).all()
+
+
+def test_mis_optimal_frozen_replay_matches_a_fresh_trace_as_the_problem_changes(variant_llvm_rgb):
+    """``mis_optimal`` replays a recording (dr.freeze): every input that a sweep changes (the
+    exponent inside the plugin, ω_i, the light's axis, size and radiance, the seed, the
+    material) must reach the replayed kernels, so each replay agrees with a fresh trace of the
+    same seeds and not with the problem recorded first."""
+    from phonglab.physics.estimators.optimal_mis import FROZEN, run_optimal
+
+    est = ReflectionEstimators(Problem(exponent=10.0, theta_i=30.0, half_angle=3.0))
+    seen = []
+    for change in (dict(), dict(exponent=1e3, theta_i=60.0), dict(half_angle=10.0, radiance=2.0),
+                   dict(exponent=0.0, theta_i=80.0, light="constant"), dict(seed=9),
+                   dict(bsdf="lambert", diffuse_reflectance=0.4)):
+        seed = change.pop("seed", 4)
+        est.set(**change)
+        frozen = run_optimal(est.integrand, 2048, 4, seed, est.CHUNK, frozen=True)
+        fresh = run_optimal(est.integrand, 2048, 4, seed, est.CHUNK, frozen=False)
+        np.testing.assert_allclose(frozen[0], fresh[0], rtol=1e-6, err_msg=str(change))
+        np.testing.assert_allclose(frozen[1], fresh[1], rtol=1e-5, err_msg=str(change))
+        seen.append(float(np.mean(frozen[0])))
+    assert len(set(seen)) == len(seen), seen                   # no replay returned a stale value
+    assert FROZEN.n_recordings >= 1
+
+
 def test_sweeping_exponent_angle_and_light_size_never_recompiles(variant_llvm_rgb):
     """Opaque parameters: a sweep launches the kernels of its first point, by hash."""
     est = ReflectionEstimators(Problem(exponent=10.0, theta_i=30.0, half_angle=3.0))
     first = {m: est.run(m, 256, seed=1).kernel_hashes for m in METHODS}
-    # One kernel per estimator; mis_optimal launches two (its pilot, then its main stage).
-    assert all(len(h) == (2 if m == "mis_optimal" else 1) for m, h in first.items()), first
+    # One kernel per estimator; mis_optimal launches three, back to back on the device: its
+    # pilot, the 2×2 solves (one lane per estimate) and its main stage.
+    assert all(len(h) == (3 if m == "mis_optimal" else 1) for m, h in first.items()), first
     for p, theta, delta in ((1e4, 80.0, 1.0), (0.0, 0.0, 10.0), (1e5, 89.9, 0.5)):
         est.set(exponent=p, theta_i=theta, half_angle=delta, radiance=2.0)
         for m in METHODS:

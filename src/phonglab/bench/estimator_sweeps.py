@@ -166,20 +166,23 @@ def _stability_row(est: ReflectionEstimators, light: str, method: str, p: float,
 
 
 @functools.lru_cache(maxsize=None)
-def _warm_stability() -> ReflectionEstimators:
-    """Once per process: compile every estimator for both lights before cells are timed."""
+def _warm_stability(seeds: int) -> ReflectionEstimators:
+    """Once per process: compile every estimator for both lights before cells are timed, at the
+    cells' own size (``mis_optimal``'s frozen function records per size, and on its first two
+    calls of one: ``dr.freeze`` makes a literal that changed opaque and records again)."""
     est = _process_estimators("stability")
     for method in METHODS:
         for light in STABILITY_LIGHTS.values():
-            est.set(Problem(**_SPECULAR, **light))
-            est.run(method, STABILITY_N, seed=1)
+            for seed in (1, 2):
+                est.set(Problem(**_SPECULAR, **light))
+                est.run(method, STABILITY_N, seed=seed, batches=seeds)
     return est
 
 
 def stability_job(cells: tuple[tuple[str, str, float, float, int], ...], seeds: int,
                   z_crit: float) -> list[tuple[str, dict]]:
     """Job: the stability.csv rows of ``cells`` ((light, method, p, θ_i, seed) each)."""
-    est = _warm_stability()
+    est = _warm_stability(seeds)
     return [("stability", _stability_row(est, light, method, p, theta, seed, seeds, z_crit))
             for light, method, p, theta, seed in cells]
 

@@ -405,7 +405,10 @@ def mis_section(d: RunData) -> list[str]:
          "(src/phonglab/physics/estimators/optimal_mis.py)): a pilot of N/32 samples (at most "
          "2048; half BSDF, half light sampling, then discarded) chooses the "
          "BSDF share c_b ∈ {0, 1/8, …, 1} and the optimal weights' α (Kondapaneni et al. 2019, a "
-         "2×2 solve per candidate); the other samples give the estimate. Ratios are errors at "
+         "2×2 solve per candidate, on the device); the other samples give the estimate. Its "
+         "three kernels (pilot, solves, main stage) run back to back with nothing read back "
+         "between them, replayed by `dr.freeze` (the single-kernel estimators are traced at "
+         "every call). Ratios are errors at "
          "equal time (√(σ²·t) over the better strategy's) and at equal samples (√σ²), as in the "
          f"target table. Median time per estimate (N = {STABILITY_N}, interleaved cells): {cost}.\n"]
     shown = [c for c in table if c["rt"] > 1.2 or c["rn"] > 1.2 or c["vs_base"] > 1.0]
@@ -415,10 +418,8 @@ def mis_section(d: RunData) -> list[str]:
     lower = sum(c["rn"] <= c["rn_base"] for c in shown)
     L += [f"The cells where `mis_optimal` misses 1.2× or takes longer than power-heuristic `mis` "
           f"to equal error. At equal samples it is the better of the two in {lower} of these "
-          f"{len(shown)} cells: the rest of the gap is its cost per estimate (a second kernel "
-          f"launch for the pilot and the 2×2 solves on the host, against one launch for `mis`; "
-          f"see the medians above): a fixed cost per estimate, as large as a whole `mis` "
-          f"estimate at N = {STABILITY_N}, which a larger N would amortize.\n",
+          f"{len(shown)} cells: the rest of the gap is its cost per estimate (see the medians "
+          f"above).\n",
           "| light | p | θ_i | mis_optimal, equal time | equal samples | power mis, equal time | "
           "power mis, equal samples | optimal / power (equal time) | near-zero-variance |",
           "|---|---|---|---|---|---|---|---|---|"]

@@ -109,13 +109,16 @@ def safe_ratio(value, pdf):
     return dr.select(pdf > 0, value / dr.select(pdf > 0, pdf, 1.0), 0.0)
 
 
-def row_sums(values: list, row, rows: int) -> np.ndarray:
-    """(rows, K) float64 sums of K Dr.Jit arrays over the lanes of each row.
+def row_sums_device(values: list, row, rows: int):
+    """The K Dr.Jit arrays summed over the lanes of each row, left on the device: a Float64
+    buffer of (rows + 1)·K entries, row r's sum of value k at r·K + k (the last row stays 0:
+    a gather source of one entry would compile a different kernel).
 
     A scatter-add inside the kernel (``ReduceMode.Local``: reduced within each SIMD packet
-    first) into one (rows + 1)·K buffer at the opaque index row·K + k, read back at once.  Not
-    ``dr.block_sum``, whose block size is a kernel literal (a new N would recompile), nor the
-    automatic mode, which compiles a kernel per buffer size.
+    first) at the opaque index row·K + k.  Not ``dr.block_sum``, whose block size is a kernel
+    literal (a new N would recompile), nor the automatic mode, which compiles a kernel per
+    buffer size.  Nothing runs until the buffer is read: by :func:`row_sums`, or by a gather
+    of a later kernel (which launches this one first, with no round trip to the host).
     """
     k = len(values)
     target = dr.zeros(mi.Float64, (rows + 1) * k)
@@ -123,8 +126,23 @@ def row_sums(values: list, row, rows: int) -> np.ndarray:
     for i, value in enumerate(values):
         dr.scatter_reduce(dr.ReduceOp.Add, target, mi.Float64(value), base + i,
                           mode=dr.ReduceMode.Local)
+    return target
+
+
+def row_sums(values: list, row, rows: int) -> np.ndarray:
+    """(rows, K) float64 sums of K Dr.Jit arrays over the lanes of each row, read back at once
+    (:func:`row_sums_device`)."""
+    k = len(values)
+    target = row_sums_device(values, row, rows)
     dr.eval(target)
     return np.array(target, dtype=np.float64)[:rows * k].reshape(rows, k)
+
+
+def row_column(sums, width: int, column: int, rows: int):
+    """Column ``column`` of a :func:`row_sums_device` buffer of ``width`` values a row, as a
+    Float64 of rows + 1 entries (the padding row's 0 last), still on the device."""
+    idx = dr.arange(mi.UInt32, rows + 1) * dr.opaque(mi.UInt32, width) + column
+    return dr.gather(mi.Float64, sums, idx)
 
 
 def channel_mean(spectrum):
@@ -133,10 +151,15 @@ def channel_mean(spectrum):
     return sum(channels[1:], channels[0]) * (1.0 / len(channels))
 
 
-def uniforms(n_total: int, seed: int):
-    """(lane index, u1, u2, rng) of n_total lanes; lane k draws from PCG32 stream TEA(seed, k)."""
+def uniforms(n_total: int, seed):
+    """(lane index, u1, u2, rng) of n_total lanes; lane k draws from PCG32 stream TEA(seed, k).
+
+    ``seed``: a Python int (made an opaque UInt32) or already a UInt32 (a frozen function's
+    input)."""
     idx = dr.arange(mi.UInt32, n_total)
-    v0, v1 = mi.sample_tea_32(dr.opaque(mi.UInt32, seed & 0xFFFFFFFF), idx)
+    if not isinstance(seed, mi.UInt32):
+        seed = dr.opaque(mi.UInt32, seed & 0xFFFFFFFF)
+    v0, v1 = mi.sample_tea_32(seed, idx)
     rng = mi.PCG32(size=n_total)
     rng.seed(mi.UInt64(v0), mi.UInt64(v1))
     u1 = rng.next_float32()

@@ -28,6 +28,15 @@ below the horizon) is a point of its own with probability 1 − ∫_{H²} p_b; g
 p_l = 0, f = 0 makes its value −α_b/c_b, which is what keeps ∫ p_b = 1 (the control variate)
 true, and the "1" cancels in every term above. With f = α·p exactly (a pure lobe inside the
 light, a pure light under a wide lobe) σ² = 0 for every c, so no split is penalized.
+
+Cost (issue 28): the pilot, the 2×2 solves and the main stage are three kernels that run back to
+back on the device, nothing read back between them (the solves are one lane per estimate, by
+Cramer's rule; the main stage gathers its row's n_b and α); a pilot lane draws one sample of
+each strategy and a main-stage lane two samples, which halves what a lane costs besides its
+samples (seeding its stream, the gathers, the atomic sums).  The three are one frozen function
+(``dr.freeze``, :data:`FROZEN`): traced and recorded once per size, replayed afterwards, so an
+estimate does not pay the tracing of its ~600 Dr.Jit operations and the code generation of
+three kernels at every call, which cost as much as running them at 16 × 2¹⁴ samples.
 """
 
 from __future__ import annotations
@@ -36,11 +45,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .kernel import Integrand, channel_mean, chunks, row_sums, safe_ratio, uniforms
+from .kernel import (Integrand, KernelLight, channel_mean, chunks, row_column, row_sums,
+                     row_sums_device, safe_ratio, uniforms)
 
 #: ``mis_optimal``: the pilot's share of the N samples (discarded after it chose α and c).
 PILOT_FRACTION = 1.0 / 32.0
-#: ``mis_optimal``: the largest pilot (its 2×2 solves cost host time per candidate c).
+#: ``mis_optimal``: the largest pilot (its samples are discarded: an upper bound on that loss).
 PILOT_MAX = 2048
 #: ``mis_optimal``: the candidate BSDF shares c_b of the main samples (c_l = 1 − c_b).
 ALLOCATIONS = tuple(k / 8.0 for k in range(9))
@@ -51,27 +61,48 @@ PURE_PREFERENCE = 0.1
 _PILOT_KEY = 0x6A09E667
 
 
+def _by_bsdf(f: Integrand, u1, u2):
+    """(f, p_b, p_l) at a sample of BSDF sampling.  A BSDF sample the plugin rejects (pdf 0,
+    e.g. a lobe direction below the horizon) is the *null point* of that technique: f = 0,
+    p_l = 0 and p_b := 1 (any positive value; it cancels, module docstring)."""
+    bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
+    valid = bs.pdf > 0
+    value = channel_mean(weight) * bs.pdf * f.light.emitted(bs.wo)     # eval · L
+    return (dr.select(valid, value, 0.0), dr.select(valid, bs.pdf, 1.0),
+            dr.select(valid, f.light.pdf(bs.wo), 0.0))
+
+
+def _by_light(f: Integrand, u1, u2):
+    """(f, p_b, p_l) at a sample of light sampling (``u1`` unused)."""
+    wo, p_l = f.light.sample(u2)
+    value, p_b = f.bsdf.eval_pdf(f.ctx, f.si, wo)
+    return channel_mean(value) * f.light.radiance, p_b, p_l
+
+
 def _technique(f: Integrand, is_b, u1, u2):
     """(f, p_b, p_l) at one sample of BSDF sampling where ``is_b``, else of light sampling.
 
     A symbolic ``if``: a lane runs only its own technique (the LLVM backend skips a branch
-    that no lane of a packet takes).  A BSDF sample the plugin rejects (pdf 0, e.g. a lobe
-    direction below the horizon) is the *null point* of that technique: f = 0, p_l = 0 and
-    p_b := 1 (any positive value; it cancels, module docstring).
+    that no lane of a packet takes).
     """
-    def by_bsdf(u1, u2):
-        bs, weight = f.bsdf.sample(f.ctx, f.si, u1, u2)
-        valid = bs.pdf > 0
-        value = channel_mean(weight) * bs.pdf * f.light.emitted(bs.wo)     # eval · L
-        return (dr.select(valid, value, 0.0), dr.select(valid, bs.pdf, 1.0),
-                dr.select(valid, f.light.pdf(bs.wo), 0.0))
+    return dr.if_stmt((u1, u2), is_b, lambda u1, u2: _by_bsdf(f, u1, u2),
+                      lambda u1, u2: _by_light(f, u1, u2))
 
-    def by_light(u1, u2):
-        wo, p_l = f.light.sample(u2)
-        value, p_b = f.bsdf.eval_pdf(f.ctx, f.si, wo)
-        return channel_mean(value) * f.light.radiance, p_b, p_l
 
-    return dr.if_stmt((u1, u2), is_b, by_bsdf, by_light)
+def _rows(lanes_per_row: int, rows: int, seed: int):
+    """(row, lane within its row, rng) of ``rows`` rows of ``lanes_per_row`` lanes each; lane
+    k draws from PCG32 stream TEA(seed, k)."""
+    idx, _, _, rng = uniforms(lanes_per_row * rows, seed)
+    # row = ⌊k / lanes⌋ in float64 (exact here: k < 2³², lanes ≤ 2²²), not a UInt32 division,
+    # which the LLVM backend scalarizes (it cost as much as the BSDF sample itself).
+    row = mi.UInt32(dr.floor((mi.Float64(idx) + 0.5) * dr.opaque(mi.Float64, 1.0 / lanes_per_row)))
+    return row, idx - row * dr.opaque(mi.UInt32, lanes_per_row), rng
+
+
+def _draw(rng):
+    """(u1, u2) of one sample from a lane's stream."""
+    u1 = rng.next_float32()
+    return u1, mi.Point2f(rng.next_float32(), rng.next_float32())
 
 
 def weighted_moments(fv, pb, pl, c_b: float, select):
@@ -85,46 +116,68 @@ def weighted_moments(fv, pb, pl, c_b: float, select):
     return [w * pb * pb, w * pb * pl, w * pl * pl, wf * pb, wf * pl, wf * fv]
 
 
-def solve_allocation(mom: np.ndarray, uncovered_b: np.ndarray, uncovered_l: np.ndarray,
-                     allocations=ALLOCATIONS) -> tuple[np.ndarray, ...]:
-    """(c_b, α_b, α_l, σ²(c_b)) per row from the pilot's moments.
+def solve_moments(columns, uncovered_b, uncovered_l, allocations, select):
+    """(c_b, α_b, α_l, σ²(c_b)) per row from the pilot's moments, for numpy or Dr.Jit arrays.
 
     Args:
-        mom: (B, G, 6) pilot means of :func:`weighted_moments` for each candidate c_b.
-        uncovered_b / uncovered_l: (B,) whether a pilot sample had f ≠ 0 where p_b (p_l) = 0.
-        allocations: the G candidate BSDF shares c_b (c_l = 1 − c_b).
+        columns: one tuple (A_bb, A_bl, A_ll, b_b, b_l, ∫f²/(c·p)) of row arrays per candidate.
+        uncovered_b / uncovered_l: per row, whether a pilot sample had f ≠ 0 where p_b (p_l) = 0.
+        allocations: the candidate BSDF shares c_b (c_l = 1 − c_b), one per column.
+        select: ``np.where`` or ``dr.select``: plain arithmetic and ``select`` only, so that
+            the same formula solves on the host (:func:`solve_allocation`) and inside the
+            device's kernel (:func:`pilot`).
 
     For each c the 2×2 system A α = b (A = mean w p pᵀ, b = mean w f p) is the pilot's estimate
-    of Kondapaneni et al.'s moment matrix and vector, and σ²(c) = mean w f² − αᵀ b the
-    per-sample variance of the optimally weighted estimator (module docstring).  At c_b = 0
-    or 1 only the present technique's α is fitted (the other is 0), and σ² is infinite when
-    that technique alone misses part of f (``uncovered``).  The smallest σ² wins, a pure
-    strategy (c_b ∈ {0, 1}) when it is within :data:`PURE_PREFERENCE` of the best.
+    of Kondapaneni et al.'s moment matrix and vector, solved by Cramer's rule, and σ²(c) =
+    mean w f² − αᵀ b the per-sample variance of the optimally weighted estimator (module
+    docstring).  At c_b = 0 or 1 only the present technique's α is fitted (the other is 0),
+    and σ² is infinite when that technique alone misses part of f (``uncovered``).  The
+    smallest σ² wins (the first on a tie), a pure strategy (c_b ∈ {0, 1}) when it is within
+    :data:`PURE_PREFERENCE` of the best.
     """
-    abb, abl, all_, bb, bl, sff = np.moveaxis(np.asarray(mom, np.float64), -1, 0)
-    det = abb * all_ - abl * abl
-    good = det > 1e-9 * abb * all_
-    safe = np.where(good, det, 1.0)
-    fit_b = bb / np.where(abb > 0, abb, 1.0)
-    alpha_b = np.where(good, (bb * all_ - bl * abl) / safe, fit_b)
-    alpha_l = np.where(good, (bl * abb - bb * abl) / safe, 0.0)
-    ends = np.asarray(allocations, np.float64)
-    pure_b, pure_l = ends == 1.0, ends == 0.0
-    alpha_b = np.where(pure_b, fit_b, np.where(pure_l, 0.0, alpha_b))
-    alpha_l = np.where(pure_l, bl / np.where(all_ > 0, all_, 1.0), np.where(pure_b, 0.0, alpha_l))
-    sigma2 = sff - alpha_b * bb - alpha_l * bl
-    # Below 10⁻¹² of the second moment it is float64 rounding of an exact fit (σ² = 0).
-    sigma2 = np.where(sigma2 <= 1e-12 * sff, 0.0, sigma2)
-    # Inside (0, 1) c·p > 0 at every sample (each has p_b > 0 or p_l > 0).
-    sigma2 = np.where(pure_b & np.asarray(uncovered_b, bool)[:, None], np.inf, sigma2)
-    sigma2 = np.where(pure_l & np.asarray(uncovered_l, bool)[:, None], np.inf, sigma2)
-    best = np.argmin(sigma2, axis=1)
-    rows = np.arange(len(best))
-    for end in (np.flatnonzero(pure_b), np.flatnonzero(pure_l)):
-        if end.size:
-            e = int(end[0])
-            best = np.where(sigma2[:, e] * (1.0 - PURE_PREFERENCE) <= sigma2[rows, best], e, best)
-    return ends[best], alpha_b[rows, best], alpha_l[rows, best], sigma2[rows, best]
+    best, ends = None, []
+    for c, (abb, abl, all_, bb, bl, sff) in zip(allocations, columns):
+        fit_b = bb / select(abb > 0, abb, 1.0)
+        if c == 1.0:
+            alpha_b, alpha_l = fit_b, 0.0 * bb
+        elif c == 0.0:
+            alpha_b, alpha_l = 0.0 * bb, bl / select(all_ > 0, all_, 1.0)
+        else:
+            det = abb * all_ - abl * abl
+            good = det > 1e-9 * abb * all_
+            safe = select(good, det, 1.0)
+            alpha_b = select(good, (bb * all_ - bl * abl) / safe, fit_b)
+            alpha_l = select(good, (bl * abb - bb * abl) / safe, 0.0)
+        sigma2 = sff - alpha_b * bb - alpha_l * bl
+        # Below 10⁻¹² of the second moment it is float64 rounding of an exact fit (σ² = 0).
+        sigma2 = select(sigma2 <= 1e-12 * sff, 0.0, sigma2)
+        # Inside (0, 1) c·p > 0 at every sample (each has p_b > 0 or p_l > 0).
+        if c in (0.0, 1.0):
+            sigma2 = select(uncovered_b if c == 1.0 else uncovered_l, np.inf, sigma2)
+        share = select(sigma2 == sigma2, c, c)             # c as an array of the rows' shape
+        candidate = (share, alpha_b, alpha_l, sigma2)
+        if c in (0.0, 1.0):
+            ends.append((c, candidate))
+        if best is None:
+            best = candidate
+        else:
+            take = sigma2 < best[3]
+            best = tuple(select(take, x, y) for x, y in zip(candidate, best))
+    for _, end in sorted(ends, key=lambda e: -e[0]):            # c_b = 1 first, then 0
+        take = end[3] * (1.0 - PURE_PREFERENCE) <= best[3]
+        best = tuple(select(take, x, y) for x, y in zip(end, best))
+    return best
+
+
+def solve_allocation(mom: np.ndarray, uncovered_b: np.ndarray, uncovered_l: np.ndarray,
+                     allocations=ALLOCATIONS) -> tuple[np.ndarray, ...]:
+    """(c_b, α_b, α_l, σ²(c_b)) per row from (B, G, 6) pilot means of :func:`weighted_moments`
+    for each of the G candidate shares c_b, on the host (:func:`solve_moments`)."""
+    mom = np.asarray(mom, np.float64)
+    columns = [tuple(mom[:, g, k] for k in range(6)) for g in range(mom.shape[1])]
+    return tuple(np.asarray(x, np.float64) for x in
+                 solve_moments(columns, np.asarray(uncovered_b, bool),
+                               np.asarray(uncovered_l, bool), allocations, np.where))
 
 
 def choose_allocation(fv: np.ndarray, pb: np.ndarray, pl: np.ndarray,
@@ -144,85 +197,154 @@ def pilot_size(n: int) -> int:
     return min(PILOT_MAX, max(32, 2 * int(round(n * PILOT_FRACTION / 2))))
 
 
-def pilot(f: Integrand, m: int, batches: int, seed: int) -> tuple[np.ndarray, ...]:
-    """(c_b, α_b, α_l, σ²) per row from a pilot of m/2 BSDF then m/2 light samples a row.
+def pilot(f: Integrand, m: int, batches: int, seed: int) -> tuple:
+    """(c_b, α_b, α_l, σ²) per row from a pilot of m/2 BSDF then m/2 light samples a row, as
+    Dr.Jit Float64 arrays of batches + 1 entries (the last a padding row), not yet computed.
 
-    The kernel sums :func:`weighted_moments` for every candidate c_b per row (float64), so
-    only (batches, G, 6) means and two coverage flags per row come back;
-    :func:`solve_allocation` does the 2×2 solves on the host.
+    The pilot's kernel sums :func:`weighted_moments` for every candidate c_b per row (float64,
+    :func:`~.kernel.row_sums_device`); :func:`solve_moments` traces the 2×2 solves over those
+    sums, so they run on the device in a kernel of one lane per row, and nothing comes back to
+    the host before the main stage has run (:func:`run_optimal`).
     """
-    idx, u1, u2, _ = uniforms(m * batches, seed ^ _PILOT_KEY)
-    row = mi.UInt32(dr.floor((mi.Float64(idx) + 0.5) * dr.opaque(mi.Float64, 1.0 / m)))
-    j = idx - row * dr.opaque(mi.UInt32, m)
-    fv, pb, pl = (mi.Float64(x) for x in
-                  _technique(f, j < dr.opaque(mi.UInt32, m // 2), u1, u2))
-    terms = [t for c in ALLOCATIONS for t in weighted_moments(fv, pb, pl, c, dr.select)]
+    # A lane draws one BSDF and one light sample: the m/2 + m/2 of its row, no branch.
+    row, _, rng = _rows(m // 2, batches, seed ^ _PILOT_KEY)
+    samples = [tuple(mi.Float64(x) for x in technique(f, *_draw(rng)))
+               for technique in (_by_bsdf, _by_light)]
+    terms = [sum(t) for c in ALLOCATIONS
+             for t in zip(*(weighted_moments(fv, pb, pl, c, dr.select) for fv, pb, pl in samples))]
     zero = mi.Float64(0.0)
-    terms += [dr.select((pb == 0) & (fv != 0), 1.0, zero),
-              dr.select((pl == 0) & (fv != 0), 1.0, zero)]
-    out = row_sums(terms, row, batches) / m
-    mom = out[:, :-2].reshape(batches, len(ALLOCATIONS), 6)
-    return solve_allocation(mom, out[:, -2] > 0, out[:, -1] > 0)
+    terms += [sum(dr.select((p == 0) & (fv != 0), 1.0, zero) for fv, p in
+                  ((fv, pb) for fv, pb, _ in samples)),
+              sum(dr.select((p == 0) & (fv != 0), 1.0, zero) for fv, p in
+                  ((fv, pl) for fv, _, pl in samples))]
+    sums = row_sums_device(terms, row, batches)
+    width, scale = len(terms), dr.opaque(mi.Float64, 1.0 / m)
+    mean = [row_column(sums, width, k, batches) * scale for k in range(width)]
+    columns = [tuple(mean[6 * g: 6 * g + 6]) for g in range(len(ALLOCATIONS))]
+    return solve_moments(columns, mean[-2] > 0, mean[-1] > 0, ALLOCATIONS, dr.select)
 
 
-def optimal_sums(f: Integrand, per: int, n_b: np.ndarray, alpha_b: np.ndarray,
-                 alpha_l: np.ndarray, seed: int) -> dict[str, np.ndarray]:
-    """Per-row sums of ``mis_optimal``'s main stage: row s draws n_b[s] BSDF samples then
-    per − n_b[s] light samples, weighted with its own α (module docstring).
+def _residuals(f: Integrand, per: int, rows: int, n_b, alpha_b, alpha_l, seed: int):
+    """([R₁, R₂], [is_b₁, is_b₂], row) of the main stage, two samples a lane: row s draws
+    n_b[s] BSDF samples then per − n_b[s] light samples, R = (f − α·p)/(c·p) with the row's
+    own α and c = n_b/per (Dr.Jit arrays of >= 2 entries: a gather source of one entry would
+    compile a different kernel); the second sample of a row's last lane is R = 0 when per is
+    odd.  Two samples a lane halve what a lane costs besides its samples: its stream's seeding,
+    the row's gathers and the sums' atomic adds."""
+    lanes = (per + 1) // 2
+    row, lane, rng = _rows(lanes, rows, seed)
+    n_row = dr.gather(mi.UInt32, n_b, row)
+    a_b = dr.gather(mi.Float, alpha_b, row)
+    a_l = dr.gather(mi.Float, alpha_l, row)
+    c_b = mi.Float(n_row) * dr.opaque(mi.Float, 1.0 / per)
+    values, kinds = [], []
+    for second in (0, 1):
+        j = 2 * lane + second
+        is_b = j < n_row
+        fv, pb, pl = _technique(f, is_b, *_draw(rng))
+        r = safe_ratio(fv - a_b * pb - a_l * pl, c_b * pb + (1.0 - c_b) * pl)
+        if second:
+            r = dr.select(j < dr.opaque(mi.UInt32, per), r, 0.0)
+        values.append(r)
+        kinds.append(is_b)
+    return values, kinds, row
 
-    The kernel sums its residuals R = X − α_b − α_l per row (float64, :func:`~.kernel.row_sums`), so
-    only a few numbers per row come back: Σ R and Σ R² over the BSDF samples and over all,
-    and the NaN and Inf counts.  α as the kernel holds them (float32) come back too.
+
+def _main_sums(f: Integrand, per: int, rows: int, n_b, alpha_b, alpha_l, seed):
+    """The main stage's row sums Σ R, Σ R² over the BSDF samples and over all (a
+    :func:`~.kernel.row_sums_device` buffer of four values a row, float64)."""
+    rs, kinds, row = _residuals(f, per, rows, n_b, alpha_b, alpha_l, seed)
+    zero = mi.Float64(0.0)
+    r64 = [mi.Float64(r) for r in rs]
+    sq = [r * r for r in r64]
+    return row_sums_device([sum(dr.select(b, r, zero) for b, r in zip(kinds, r64)),
+                            r64[0] + r64[1], sum(dr.select(b, q, zero) for b, q in zip(kinds, sq)),
+                            sq[0] + sq[1]], row, rows)
+
+
+def _stages(bsdf: mi.BSDF, si: mi.SurfaceInteraction3f, light: KernelLight, seed: mi.UInt32,
+            m: int, per: int, rows: int):
+    """The three kernels of ``rows`` estimates, with nothing read back between them: the pilot,
+    the solves (n_b = round(c_b·per), α as float32), the main stage's sums.
+
+    Its arguments are all that varies between calls: Dr.Jit arrays (the BSDF's parameters,
+    ω_i, the light's, the seed) and the sizes (Python ints).  :data:`FROZEN` records it
+    once per size and replays it (the BSDF context, not a Dr.Jit type, is made here so that
+    a new one never forces a new recording).
     """
-    batches = len(n_b)
-    idx, u1, u2, _ = uniforms(per * batches, seed)
-    # row = ⌊k / per⌋ in float64 (exact here: k < 2³², per ≤ 2²²), not a UInt32 division,
-    # which the LLVM backend scalarizes (it cost as much as the BSDF sample itself).
-    row = mi.UInt32(dr.floor((mi.Float64(idx) + 0.5) * dr.opaque(mi.Float64, 1.0 / per)))
-    width = dr.opaque(mi.UInt32, per)
+    f = Integrand(bsdf, si, light, mi.BSDFContext())
+    c_b, alpha_b, alpha_l, _ = pilot(f, m, rows, seed)
+    n_b = mi.UInt32(dr.round(c_b * dr.opaque(mi.Float64, per)))
+    alpha_b, alpha_l = mi.Float(alpha_b), mi.Float(alpha_l)
+    dr.eval(n_b, alpha_b, alpha_l)              # the solves: one kernel, one lane per row
+    return _main_sums(f, per, rows, n_b, alpha_b, alpha_l, seed), n_b, alpha_b, alpha_l
 
-    def table(kind, values, dtype):
-        # Padded to >= 2 entries: a 1-entry gather source compiles a different kernel.
-        return dr.gather(kind, kind(np.append(values, values[-1:]).astype(dtype)), row)
 
-    is_b = (idx - row * width) < table(mi.UInt32, n_b, np.uint32)
-    fv, pb, pl = _technique(f, is_b, u1, u2)
-    a_b = table(mi.Float, alpha_b, np.float32)
-    a_l = table(mi.Float, alpha_l, np.float32)
-    c_b = table(mi.Float, n_b / per, np.float32)
-    r = safe_ratio(fv - a_b * pb - a_l * pl, c_b * pb + (1.0 - c_b) * pl)
-    r64 = mi.Float64(r)
-    sq = r64 * r64
-    zero = mi.Float64(0.0)
-    names = ("sum_b", "sum", "sq_b", "sq", "nan", "inf")
-    sums = row_sums([dr.select(is_b, r64, zero), r64, dr.select(is_b, sq, zero), sq,
-                      dr.select(dr.isnan(r), 1.0, zero), dr.select(dr.isinf(r), 1.0, zero)],
-                     row, batches)
-    out = {k: sums[:, i] for i, k in enumerate(names)}
-    out["alpha"] = (alpha_b.astype(np.float32).astype(np.float64)
-                    + alpha_l.astype(np.float32).astype(np.float64))
+#: :func:`_stages` as a frozen function (``dr.freeze``): its first calls of a size trace the
+#: three kernels and record them, later calls replay the recording with the new arguments, so
+#: a call costs the kernels' run time and not the tracing of some 600 Dr.Jit operations and
+#: the three kernels' code generation (~1 ms a call, as much as the kernels themselves at
+#: 16 × 2¹⁴ samples; docs/speed.md).  The sizes are Python ints: each (m, per, rows) has a
+#: recording of its own (``warn_after`` is raised for sweeps over N).
+FROZEN = dr.freeze(_stages, warn_after=1000)
+
+
+def optimal_sums(f: Integrand, per: int, rows: int, n_b, alpha_b, alpha_l, seed,
+                 sums=None) -> dict[str, np.ndarray]:
+    """Per-row sums of ``mis_optimal``'s main stage (:func:`_residuals`), read back.
+
+    The kernel sums the residuals R = X − α_b − α_l per row (float64,
+    :func:`~.kernel.row_sums_device`), so only four numbers per row come back: Σ R and Σ R²
+    over the BSDF samples and over all (``sums``, when a frozen :func:`_stages` computed them
+    already).  A sum that is not finite (a float32 R is finite, and so are its float64 sums
+    and squares, unless some R is NaN or ±Inf) sends the rows through a second kernel that
+    counts the NaN and Inf values; otherwise both counts are exactly 0 and the main stage
+    costs no counting.
+    """
+    if sums is None:
+        sums = _main_sums(f, per, rows, n_b, alpha_b, alpha_l, seed)
+    dr.eval(sums, n_b, alpha_b, alpha_l)
+    table = np.array(sums, dtype=np.float64)[:rows * 4].reshape(rows, 4)
+    out = {k: table[:, i] for i, k in enumerate(("sum_b", "sum", "sq_b", "sq"))}
+    out["n_b"] = np.array(n_b, dtype=np.int64)[:rows]
+    out["alpha"] = (np.array(alpha_b, dtype=np.float64)[:rows]
+                    + np.array(alpha_l, dtype=np.float64)[:rows])
+    out["nan"] = out["inf"] = np.zeros(rows)
+    if not np.isfinite(table).all():
+        rs, _, row = _residuals(f, per, rows, n_b, alpha_b, alpha_l, seed)
+        zero = mi.Float64(0.0)
+        counts = row_sums([sum(dr.select(dr.isnan(r), 1.0, zero) for r in rs),
+                           sum(dr.select(dr.isinf(r), 1.0, zero) for r in rs)], row, rows)
+        out["nan"], out["inf"] = counts[:, 0], counts[:, 1]
     return out
 
 
-def run_optimal(f: Integrand, n: int, batches: int, seed: int, chunk: int) -> tuple:
+def run_optimal(f: Integrand, n: int, batches: int, seed: int, chunk: int,
+                frozen: bool = True) -> tuple:
     """(values, stderr, NaN count, Inf count) of ``batches`` mis_optimal estimates of ``f``,
-    launched in chunks of <= ``chunk`` samples."""
+    launched in chunks of <= ``chunk`` samples.
+
+    Per chunk the pilot's kernel, the solves' kernel (one lane per row) and the main stage's
+    kernel run back to back on the device (:func:`_stages`, replayed by :data:`FROZEN`
+    unless ``frozen`` is False): n_b = round(c_b (n − m)) and α stay there (the main stage
+    gathers them by row) and come back to the host only with the main stage's sums.
+    """
     m = pilot_size(n)
     per = n - m
     values, stderr, nan, inf = [], [], 0, 0
     for _, b, chunk_seed in chunks(batches, max(1, chunk // n), seed):
-        c_b, alpha_b, alpha_l, _ = pilot(f, m, b, chunk_seed)
-        n_b = np.rint(c_b * per).astype(np.int64)
-        t = optimal_sums(f, per, n_b, alpha_b, alpha_l, chunk_seed)
+        key = dr.opaque(mi.UInt32, chunk_seed)
+        stages = FROZEN if frozen else _stages
+        sums, n_b, alpha_b, alpha_l = stages(f.bsdf, f.si, f.light, key, m, per, b)
+        t = optimal_sums(f, per, b, n_b, alpha_b, alpha_l, key, sums=sums)
         values.append(t["alpha"] + t["sum"] / per)
         # Stratified: Var = Σ_t k_t s_t² / per², s_t² the variance within technique t.
         var = np.zeros(b)
-        for k, total, squares in ((n_b, t["sum_b"], t["sq_b"]),
-                                  (per - n_b, t["sum"] - t["sum_b"], t["sq"] - t["sq_b"])):
+        for k, total, squares in ((t["n_b"], t["sum_b"], t["sq_b"]),
+                                  (per - t["n_b"], t["sum"] - t["sum_b"], t["sq"] - t["sq_b"])):
             ss = np.maximum(squares - total * total / np.maximum(k, 1), 0.0)
             var += ss / np.maximum(k - 1, 1) * k
         stderr.append(np.sqrt(var) / per)
         nan += int(t["nan"].sum())
         inf += int(t["inf"].sum())
     return np.concatenate(values), np.concatenate(stderr), nan, inf
-
