@@ -278,3 +278,43 @@ def test_an_unreachable_target_stops_at_the_time_limit_without_overflow(variant_
     assert r.stopped == "max_seconds"
     assert r.seconds <= 2 * 2.0 + r.passes[0]["seconds"], r.passes
     assert r.spp.max() <= adaptive.MAX_SPP
+
+
+def test_oracle_speedup_is_the_neyman_gain_of_two_pixel_classes_and_one_for_uniform_variance():
+    """Two equal halves of pixels with relative per-sample variances v₁, v₂: uniform sampling
+    at n̄ samples has relMSE (v₁ + v₂)/(2n̄), the Neyman allocation n ∝ √v has
+    ((√v₁ + √v₂)/2)²/n̄, so the oracle is 2(v₁ + v₂)/(√v₁ + √v₂)² (1 when v₁ = v₂)."""
+    ref = np.full((4, 4, 3), 0.5)
+    var = np.full((4, 4, 3), 0.01)
+    assert adaptive.oracle_speedup(var, ref) == pytest.approx(1.0, abs=1e-12)
+    var[:2] *= 16.0                                          # v₂ = 16 v₁
+    assert adaptive.oracle_speedup(var, ref) == pytest.approx(2 * 17 / 25, rel=1e-12)
+    # ε weights dark pixels by their absolute error: the same variance on a black reference
+    # counts 1/(0.25 + ε) / (1/ε) as much.
+    dark = ref.copy()
+    dark[:2] = 0.0
+    v1, v2 = 0.01 / (0.25 + metrics.REL_EPS), 0.01 / metrics.REL_EPS
+    expect = 2 * (v1 + v2) / (math.sqrt(v1) + math.sqrt(v2)) ** 2
+    assert adaptive.oracle_speedup(np.full((4, 4, 3), 0.01), dark) == pytest.approx(expect, rel=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(1e-6, 1e3), min_size=2, max_size=30), st.integers(0, 2 ** 31 - 1))
+def test_oracle_speedup_matches_the_relmse_of_the_neyman_allocation_and_is_at_least_one(vs, seed):
+    """For any per-pixel variances, the oracle equals the ratio of the relMSE of uniform
+    sampling to that of n_p ∝ √v_p at the same total samples (computed directly), and is >= 1."""
+    v = np.asarray(vs)
+    ref = np.zeros((1, len(v), 1))
+    var = (v * metrics.REL_EPS)[None, :, None]               # v_p = var / (0 + ε)
+    n = np.sqrt(v) / np.sqrt(v).sum() * len(v)               # Neyman, mean 1
+    uniform, neyman = np.mean(v / 1.0), np.mean(v / n)
+    got = adaptive.oracle_speedup(var, ref)
+    assert got == pytest.approx(uniform / neyman, rel=1e-9)
+    assert got >= 1.0 - 1e-12
+
+
+def test_oracle_speedup_refuses_a_variance_map_that_is_not_finite():
+    var = np.full((2, 2, 1), 0.1)
+    var[0, 0, 0] = np.nan
+    with pytest.raises(PhonglabError, match="finite variance map"):
+        adaptive.oracle_speedup(var, np.ones((2, 2, 1)))

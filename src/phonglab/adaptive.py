@@ -326,6 +326,27 @@ def relative_error_map(image: np.ndarray, variance: np.ndarray) -> np.ndarray:
     return np.mean(variance / (image * image + REL_EPS), axis=2)
 
 
+def oracle_speedup(variance: np.ndarray, reference: np.ndarray, eps: float = REL_EPS) -> float:
+    """The most any per-pixel allocation of samples can gain over uniform sampling, at equal
+    total samples, on phonglab's relative MSE (issue 28: the limit adaptive sampling is
+    measured against).
+
+    ``variance``: (H, W, C) per-sample variance σ²_pc of each pixel value (a converged map:
+    stderr² · spp of a high-spp render); ``reference``: (H, W, C) the converged image r.  With
+    v_p = mean_c σ²_pc / (r_pc² + ε) and n_p samples in pixel p, the relMSE is mean_p v_p/n_p;
+    at the same mean n̄, uniform gives mean(v)/n̄ and the Neyman allocation n_p ∝ √v_p (the
+    module docstring's N_p*) gives mean(√v)²/n̄, so the speed-up is mean(v) / mean(√v)² ≥ 1
+    (Cauchy–Schwarz; 1 exactly when every pixel has the same v).
+    """
+    v = np.mean(np.asarray(variance, np.float64)
+                / (np.asarray(reference, np.float64) ** 2 + eps), axis=2)
+    if not np.isfinite(v).all() or v.size == 0:
+        raise PhonglabError("the oracle needs a finite variance map of at least one pixel; "
+                            "render the map with more samples per pixel")
+    root = float(np.mean(np.sqrt(v)))
+    return float(np.mean(v)) / (root * root) if root > 0 else 1.0
+
+
 def _check(target_error, max_seconds, max_spp, min_spp) -> None:
     """Refuse a target or cap no render can use (one sentence each)."""
     if not (isinstance(target_error, (int, float)) and math.isfinite(target_error)

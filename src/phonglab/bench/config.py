@@ -136,6 +136,19 @@ class Config:
                 ["gray_direct", "cornell_phong", "check_furnace_enclosure"])
 
     @property
+    def adaptive_oracle_scenes(self) -> dict[str, tuple[float, dict]]:
+        """Scene -> (target E, parameters) of the oracle rows: the planner bench's scenes and
+        targets at 128² (scripts/planner_bench.py), and the uniform-variance furnace."""
+        if self.quick:
+            return {"gray_direct": (0.04, {"res": 32}),
+                    "check_furnace_enclosure": (0.04, {"res": 32})}
+        return {"gray_direct": (0.005, {"res": 128}), "gray_room": (0.01, {"res": 128}),
+                "cornell_phong": (0.02, {"res": 128}), "glass_slab": (0.05, {"res": 128}),
+                "nb_sphere_row": (0.005, {"width": 512, "height": 128}),
+                "textured_room": (0.02, {"res": 128}), "outdoor_envmap": (0.01, {"res": 128}),
+                "check_furnace_enclosure": (0.02, {"res": 32})}
+
+    @property
     def adaptive_planned_targets(self) -> list[float]:
         """Targets of the planned points (a plan runs a pilot: seconds each)."""
         return [0.04] if self.quick else [0.05, 0.02]
