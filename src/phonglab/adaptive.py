@@ -55,8 +55,9 @@ every pixel gets the pilot's :data:`MIN_SPP` samples, and the allocation is shap
 ``g_p = max(v_p, mean of v over the window)`` (:data:`NEIGHBOURHOOD`), so a pixel whose
 own samples show no variance inherits its neighbours', while its size is set by the
 estimates v themselves: ``N_p* = √g_p · mean(v/√g) / E²`` predicts exactly E² (sized by g,
-the guard made renders stop 13–22 % below E with a third more samples; :func:`allocation`).  (The window's *max* would inflate a
-uniform-variance image's budget by the noise of nine estimates; the mean is unbiased there.)
+the guard made renders stop 13–22 % below E with a third more samples; :func:`allocation`).
+(The window's *max* would inflate a uniform-variance image's budget by the noise of nine
+estimates; the mean is unbiased there.)
 The bench (:mod:`phonglab.bench.adaptive_sweeps`) measures what they do: the fraction of
 pixels whose true error exceeds three times their budget against a converged reference, with
 and without the neighbourhood rule.
