@@ -178,12 +178,12 @@ def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["validate", "nosuch"], "cannot load BSDF 'nosuch'"),
+    (["validate", "nosuch"], "unknown plugin type 'nosuch'"),
     (["validate", "diffuse", "--set", "reflectance"], "is not NAME=VALUE"),
     (["validate", "diffuse", "--only", "speed"], "unknown topic 'speed'"),
     (["validate", "x", "--plugin", "no/such/file.py"], "does not exist"),
     (["validate", "missing.xml"], "does not exist"),
-    (["validate"], "name the BSDF"),
+    (["validate"], "name the plugin to validate"),
     (["validate", "diffuse", "--report", "out.txt"], "must end in .html"),
     (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no BSDF"),
 ])

@@ -13,12 +13,14 @@ plugin inside pytest.
     def test_mybsdf_is_physical():
         assert_bsdf_valid("mybsdf", plugins=[HERE / "mybsdf.py"], quick=True)
 
-The options are those of :func:`phonglab.validate.validate_bsdf` (variant, params, topics,
-seed, quick, known, plugins); by default the BSDF is checked across its parameter sweep
-(:mod:`phonglab.validate.sweep`; ``params`` are pinned), ``sweep=False`` checks the given point
-alone.  On failure the AssertionError's message is the table of the failing rows, grouped by
+There is one helper per kind of :data:`phonglab.validate.registry.KINDS`
+(``assert_<kind>_valid``), and :func:`assert_valid`, which detects the kind.  The options are
+those of the kind's validator (:func:`phonglab.validate.validate_bsdf`: variant, params, topics,
+seed, quick, known, plugins); by default the plugin is checked across its kind's parameter
+sweep (:mod:`phonglab.validate.sweep`; ``params`` are pinned), ``sweep=False`` checks the given
+point alone.  On failure the AssertionError's message is the table of the failing rows, grouped by
 the parameter point they failed at, so pytest shows what is wrong and where.
-:func:`assert_emitter_valid` does the same for an emitter, at the given point
+:func:`assert_emitter_valid` does the same for an emitter
 (:func:`phonglab.validate.validate_emitter`; ``shape`` attaches an area emitter to a shape)::
 
     assert_emitter_valid("mylight", plugins=[HERE / "mylight.py"], quick=True)
@@ -31,45 +33,45 @@ the parameter point they failed at, so pytest shows what is wrong and where.
 
 from __future__ import annotations
 
-from .validate import validate_bsdf, validate_emitter, validate_integrator
+from .validate import KINDS
 from .verdict import point_label, table
 
-__all__ = ["assert_bsdf_valid", "assert_emitter_valid", "assert_integrator_valid"]
+__all__ = ["assert_valid", *(k.assert_helper for k in KINDS)]
 
 
-def assert_bsdf_valid(spec, sweep: bool = True, **options):
-    """Validate ``spec`` across its parameter sweep (``sweep=False``: at the given point
-    alone); raise AssertionError listing the failing rows, each with its point. Returns the
-    report."""
-    report = validate_bsdf(spec, sweep=sweep, **options)
+def assert_valid(spec, kind: str | None = None, sweep: bool = True, **options):
+    """Validate ``spec`` (of ``kind``, e.g. "bsdf"; None: detected) across its kind's parameter
+    sweep (``sweep=False``: at the given point alone; a kind without a sweep is checked at the
+    given point); raise AssertionError listing the failing rows, each with its point.
+    Returns the report."""
+    from .validate import registry, validate
+
+    if kind is None:
+        report = validate(spec, sweep=sweep, **options)
+        kind = report.meta.get("kind") or next(k.name for k in KINDS if k.name in report.meta)
+    else:
+        report = registry.by_name(kind).validator()(spec, sweep=sweep, **options)
     if not report.passed:
         by_point = {}
         for r in report.failing:
             by_point.setdefault(point_label(r.point) if r.point is not None else "", []).append(r)
         text = "\n".join((f"at {label}:\n" if label else "") + table(rows)
                          for label, rows in by_point.items())
-        raise AssertionError(f"{report.meta.get('bsdf', spec)} failed "
+        raise AssertionError(f"{report.meta.get(kind, spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
                              + text)
     return report
 
 
-def assert_emitter_valid(spec, **options):
-    """Validate the emitter ``spec``; raise AssertionError listing the failing rows. Returns
-    the report."""
-    return _passed_or_raise(validate_emitter(spec, **options), "emitter", spec)
+def _helper(kind):
+    def assert_kind_valid(spec, sweep: bool = True, **options):
+        return assert_valid(spec, kind.name, sweep, **options)
+
+    assert_kind_valid.__name__ = assert_kind_valid.__qualname__ = kind.assert_helper
+    assert_kind_valid.__doc__ = (f"Validate the {kind.word} ``spec`` (:func:`assert_valid`); "
+                                 f"raise AssertionError listing the failing rows.")
+    return assert_kind_valid
 
 
-def assert_integrator_valid(spec, **options):
-    """Validate the integrator ``spec``; raise AssertionError listing the failing rows. Returns
-    the report."""
-    return _passed_or_raise(validate_integrator(spec, **options), "integrator", spec)
-
-
-def _passed_or_raise(report, word: str, spec):
-    """``report`` when it passed; else AssertionError listing its failing rows."""
-    if not report.passed:
-        raise AssertionError(f"{report.meta.get(word, spec)} failed "
-                             f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
-                             + report.table(report.failing))
-    return report
+for _kind in KINDS:
+    globals()[_kind.assert_helper] = _helper(_kind)

@@ -1,10 +1,12 @@
-"""``phonglab validate``: physics conformance of one BSDF (or every built-in), one emitter or one
-integrator, as a table.
+"""``phonglab validate``: physics conformance of one plugin of any kind of
+:data:`phonglab.validate.registry.KINDS` (a BSDF, an emitter, an integrator, ...) or of every
+built-in, as a table.
 
-The kind is detected: the BSDF path runs first, unchanged; a spec that does not load as a BSDF
-and names an emitter (:func:`phonglab.validate.emitter.kind.is_emitter`) is validated on the
-emitter topics, one that names an integrator
-(:func:`phonglab.validate.integrator.kind.is_integrator`) on the integrator topics.
+One path for every kind: the variant is set, the ``--plugin`` files run once (a file that
+registers a name Mitsuba or phonglab already has is refused), the kind is detected from what
+the plugin is (:func:`phonglab.validate.registry.detect`), the plugin is loaded once and
+checked across its kind's parameter sweep (:mod:`phonglab.validate.sweep`; ``--no-sweep``: at
+the given point).
 
 Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed), 1 when a
 row fails, 2 on bad input (unknown plugin type, bad --set, missing file, unknown topic): one
@@ -18,9 +20,7 @@ from pathlib import Path
 
 from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
-from ..validate.bsdf.topics import TOPICS
-from ..validate.emitter.topics import TOPICS as EMITTER_TOPICS
-from ..validate.integrator.topics import TOPICS as INTEGRATOR_TOPICS
+from ..validate import registry
 from ..validate.inputs import ValidateError, check_topics
 from ..verdict import Report
 from .options import add_seed
@@ -41,35 +41,37 @@ EPILOG = """examples:
 """
 
 
+def _kinds_text() -> str:
+    """Each kind and its topics, for the description."""
+    return "; ".join(f"{k.article} {k.word} ({k.register}, <{k.tag}>) on {', '.join(k.topics)}"
+                     for k in registry.KINDS)
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "validate", help="check any Mitsuba BSDF: finiteness, weights, pdf, chi2, energy, "
-                         "reciprocity, components, gradients, cost",
-        description="Validate a Mitsuba 3 BSDF (a registered plugin type, a Python plugin "
-                    "registered by --plugin, or an XML file holding one <bsdf>) on every "
-                    f"topic ({', '.join(TOPICS)}) and print one row per check. "
-                    "An emitter (a name, dict or XML that loads as one, or a --plugin file "
-                    "calling mi.register_emitter) is detected and validated on the emitter "
-                    f"topics ({', '.join(EMITTER_TOPICS)}); --set shape.type=sphere attaches an "
-                    "area emitter to a shape. An integrator (path, direct, ptracer, prb, ... or a "
-                    "--plugin file calling mi.register_integrator) on the integrator topics "
-                    f"({', '.join(INTEGRATOR_TOPICS)}). "
-                    "Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
+        "validate", help="check any Mitsuba BSDF, emitter, integrator or phase function: "
+                         "finiteness, weights, pdf, chi2, energy, reciprocity, gradients, cost",
+        description="Validate a Mitsuba 3 plugin (a registered plugin type, a Python plugin "
+                    "registered by --plugin, or an XML file holding one) on every topic of "
+                    "its kind, detected from the plugin, and print one row per check: "
+                    f"{_kinds_text()}. --set shape.type=sphere attaches an area emitter to a "
+                    "shape. Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("bsdf", nargs="?", metavar="BSDF",
-                   help="plugin type name (diffuse, roughplastic, lambert, ...; an emitter: "
-                        "point, area, constant, ...; an integrator: path, direct, ...) or an XML "
-                        "file")
+    p.add_argument("bsdf", nargs="?", metavar="PLUGIN",
+                   help="plugin type name (a BSDF: diffuse, roughplastic, lambert, ...; an "
+                        "emitter: point, area, constant, ...; an integrator: path, direct, ...) "
+                        "or an XML file")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
-                   help="a Python file run after the variant is set; it calls mi.register_bsdf "
-                        "(or mi.register_emitter, mi.register_integrator)")
+                   help="a Python file run once after the variant is set; it calls "
+                        + ", ".join(k.register for k in registry.KINDS)
+                        + " with a name of its own")
     p.add_argument("--variant", help="Mitsuba variant (default llvm_ad_rgb)")
     p.add_argument("--only", action="append", metavar="TOPIC",
-                   help=f"run only this topic (repeatable): {', '.join(TOPICS)}; an emitter's: "
-                        f"{', '.join(EMITTER_TOPICS)}; an integrator's: "
-                        f"{', '.join(INTEGRATOR_TOPICS)}")
+                   help="run only this topic (repeatable): "
+                        + "; ".join(f"{k.article} {k.word}'s: {', '.join(k.topics)}"
+                                    for k in registry.KINDS))
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")
     p.add_argument("--report", metavar="PATH.html", help="write a self-contained HTML report")
     add_seed(p)
@@ -96,21 +98,23 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     """Every check that needs no Mitsuba, in the order a user would fix them: the --set
     parameters and the topics to run."""
     from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
-    every = tuple(dict.fromkeys(TOPICS + EMITTER_TOPICS + INTEGRATOR_TOPICS))
-    topics = args.only and check_topics(args.only, every)
+    topics = args.only and check_topics(args.only, registry.every_topic())
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
             raise ValidateError("--all-builtins takes no BSDF, --set or --plugin; drop them or "
                                 "drop --all-builtins")
     elif not args.bsdf:
-        raise ValidateError("name the BSDF to validate (e.g. phonglab validate diffuse) or "
+        raise ValidateError("name the plugin to validate (e.g. phonglab validate diffuse) or "
                             "give --all-builtins")
     for path in args.plugin:
         if not Path(path).is_file():
-            raise ValidateError(f"plugin file {path!r} does not exist; give the path of a "
-                                f"Python file that calls mi.register_bsdf")
+            raise ValidateError(f"plugin file {path!r} "
+                                f"{'is a folder' if Path(path).is_dir() else 'does not exist'}; "
+                                f"give the path of a Python file that calls mi.register_bsdf "
+                                f"(or another mi.register_*)")
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
-        raise ValidateError(f"XML file {args.bsdf!r} does not exist")
+        raise ValidateError(f"XML file {args.bsdf!r} "
+                            f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
     if args.report and not args.report.endswith((".html", ".htm")):
         raise ValidateError(f"--report {args.report!r} must end in .html")
     for path, what in ((args.json, "JSON report"), (args.report, "HTML report")):
@@ -170,28 +174,18 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
-def builtin_known(args, params: dict) -> dict | None:
-    """The documented causes of a Mitsuba built-in BSDF named by its type (the conformance
-    table's findings of that plugin, ``known_for_plugin``), None for anything else (an XML
-    file, a ``--plugin`` file, which may register the same name, or ``--no-known``); only the
-    findings of cases with the microfacet distribution of ``params``."""
-    if args.no_known or args.plugin or args.bsdf.endswith(".xml"):
-        return None
-    from ..validate.builtins import known_for_plugin   # lazy: the catalogue loads Mitsuba
-    return known_for_plugin(args.bsdf, params) or None
-
-
-def known_of_kind(args, kind: str, shape: dict | None) -> dict | None:
-    """As :func:`builtin_known`, for an emitter or integrator built into Mitsuba named by its
-    type: the findings of its catalogue's cases (an area emitter's of the same shape only,
-    ``phonglab.validate.builtins.kinds.known_for``); phonglab's own plugins (whitted) get none."""
+def builtin_known(args, kind, params: dict) -> dict | None:
+    """The documented causes of a Mitsuba built-in named by its type (the kind's ``known_for``:
+    its conformance table's findings of that plugin, a BSDF's of the microfacet distribution
+    of ``params``, an area emitter's of the same shape), None for anything else: an XML file,
+    a run with ``--plugin`` files, phonglab's own plugins, or ``--no-known``."""
     from ..registration import PLUGINS
-    from ..validate.builtins.kinds import known_for
 
     if (args.no_known or args.plugin or args.bsdf.endswith(".xml")
             or args.bsdf in {name for _, name, _ in PLUGINS}):
         return None
-    return known_for(kind, args.bsdf, shape) or None
+    known_for = kind.part("known_for")
+    return (known_for(args.bsdf, params) or None) if known_for is not None else None
 
 
 def known_note(report: Report, label: str, doc: str = "docs/conformance.md") -> str:
@@ -203,63 +197,41 @@ def known_note(report: Report, label: str, doc: str = "docs/conformance.md") -> 
             f"reports them as fails")
 
 
-def _bsdf(args, params, core, sweep, BSDF):
-    """(report, label, text) of a BSDF: its sweep, or the given point with --no-sweep."""
-    topics = check_topics(args.only)
-    known = builtin_known(args, params)
+def which_plugin(name: str, kind, registered) -> str:
+    """The line saying which of several plugins a ``--plugin`` run validates ("" for one)."""
+    others = [f"the {word} {n!r}" for word, n in registered if n != name]
+    if not others:
+        return ""
+    return (f"\n\nvalidated the {kind.word} {name!r}; the plugin files also registered "
+            f"{', '.join(others)} (name one to validate it)")
+
+
+def validate_one(args, params: dict):
+    """(report, label, text) of the plugin ``args.bsdf``: variant, plugin files once, its kind,
+    one load, its sweep (or the given point with --no-sweep)."""
+    from ..validate import core, sweep   # lazy: Mitsuba loads only for a run
+
+    core.start(args.variant)
+    registered = core.load_plugins(args.plugin)
+    kind = registry.detect(args.bsdf, registered)
+    core.check_registered(registered, kind)
+    topics = kind.check_topics(args.only)
+    known = builtin_known(args, kind, params)
+    target = core.load(kind, args.bsdf, params, registered)
     if args.no_sweep:
-        target = core.prepare(BSDF, args.bsdf, variant=args.variant, params=params,
-                              plugins=args.plugin)
-        report: Report = core.run(BSDF, target, topics=topics, seed=args.seed, quick=args.quick,
-                                  known=known)
-        return report, target.label, report.table() + known_note(report, args.bsdf)
-    with runner_from_args(args) as runner:
-        report = sweep.validate(BSDF, args.bsdf, variant=args.variant, params=params,
-                                topics=topics, seed=args.seed, quick=args.quick,
-                                plugins=args.plugin, runner=runner, known=known)
-    return (report, report.meta["bsdf"],
-            sweep_text(report) + known_note(report, args.bsdf))
-
-
-def _other_kind(args, params, core, not_bsdf: ValidateError):
-    """(report, label, text) of an emitter or an integrator, at the given point (the sweep is
-    the BSDF kind's): the first kind whose detection function (``is_emitter``,
-    ``is_integrator``) accepts ``args.bsdf``; raises the BSDF's error ``not_bsdf`` when it
-    names neither."""
-    import mitsuba as mi
-
-    from ..registration import register
-    from ..validate.emitter import kind as emitter
-    from ..validate.integrator import kind as integrator
-
-    if mi.variant() is None:
-        register(args.variant)
-    shape = params.get("shape")              # before prepare, which takes it out of params
-    kinds = ((emitter.is_emitter, emitter.prepare, emitter.EMITTER),
-             (integrator.is_integrator, integrator.prepare, integrator.INTEGRATOR))
-    target = None
-    for detect, prepare, kind in kinds:
-        if detect(args.bsdf):
-            target = prepare(args.bsdf, variant=args.variant, params=params, plugins=args.plugin)
-            break
+        report = core.run(kind, target, topics=topics, seed=args.seed, quick=args.quick,
+                          known=known)
+        text = report.table()
     else:
-        # The BSDF path can stop before the plugin files run (a topic of another kind): each
-        # kind's prepare runs them and refuses a file that registers none of its kind.
-        for _, prepare, kind in kinds if args.plugin else ():
-            try:
-                target = prepare(args.bsdf, variant=args.variant, params=params,
-                                 plugins=args.plugin)
-                break
-            except ValidateError:
-                continue
-        if target is None:
-            raise not_bsdf
-    report = core.run(kind, target, topics=check_topics(args.only, kind.topics),
-                      seed=args.seed, quick=args.quick, known=known_of_kind(args, kind.word, shape))
-    note = "" if args.no_sweep else (f"\n\nan {kind.word} is validated at the given parameter "
-                                     f"point (the parameter sweep is the BSDF kind's)")
-    return report, target.label, report.table() + note + known_note(report, args.bsdf,
-                                                        f"docs/conformance-{kind.word}s.md")
+        with runner_from_args(args) as runner:
+            report = sweep.run(kind, target, args.bsdf, params=params, topics=topics,
+                               seed=args.seed, quick=args.quick, known=known,
+                               plugins=args.plugin, runner=runner)
+        text = sweep_text(report)
+    label = report.meta.get(kind.name, target.label)
+    text += known_note(report, args.bsdf, kind.conformance)
+    text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind, registered)
+    return report, label, text
 
 
 def run(args) -> int:
@@ -269,14 +241,9 @@ def run(args) -> int:
                             "the points of a sweep; drop them or drop --no-sweep")
     if args.all_builtins:
         return _all_builtins(args)
-    from ..validate import core, html, sweep   # lazy: Mitsuba and matplotlib load only for a run
-    from ..validate.bsdf.kind import BSDF
+    from ..validate import html   # lazy: matplotlib loads only for a run
 
-    try:
-        report, label, text = _bsdf(args, params, core, sweep, BSDF)
-    except ValidateError as not_bsdf:
-        # Not a BSDF: an emitter or an integrator is validated on its own topics.
-        report, label, text = _other_kind(args, params, core, not_bsdf)
+    report, label, text = validate_one(args, params)
     print(text)
     if args.json:
         report.write_json(args.json)

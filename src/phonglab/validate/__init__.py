@@ -1,48 +1,64 @@
-"""Physics conformance of any Mitsuba 3 BSDF: :func:`validate_bsdf` and its report.
+"""Physics conformance of any Mitsuba 3 plugin: one validator per kind, and its report.
 
-The runner is kind-independent (:mod:`.core`: guarded topics, Šidák over the statistical
-rows, KNOWN causes, the report); a plugin kind brings its topics.  The BSDF kind
-(:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``
-(:mod:`.bsdf.identities`), ``chi2`` (:mod:`.bsdf.sampling`), ``energy`` (:mod:`.bsdf.energy`),
-``reciprocity`` (:mod:`.bsdf.reciprocity`), ``gradient`` (:mod:`.bsdf.gradient`), ``cost``
-(:mod:`.bsdf.cost`); sizes and tolerances: :mod:`.bsdf.config`; the topic list and the
-BSDF rows: :mod:`.bsdf.topics`.  Rows and reports: :mod:`phonglab.verdict`; user input:
-:mod:`.inputs` and :mod:`phonglab.settings`; Mitsuba's built-ins and their findings:
-:mod:`.builtins`; many cases as jobs: :mod:`.batch`.
+The kinds are listed once, in :data:`~.registry.KINDS` (:mod:`.registry`; what a kind is:
+:mod:`.kind`); this face gives each its ``validate_<kind>`` function (``validate_bsdf``,
+``validate_emitter``, ``validate_integrator``, ...) and :func:`validate`, which detects the
+kind.  The runner is kind-independent (:mod:`.core`: guarded topics, Šidák over the
+statistical rows, KNOWN causes, the report) and so is the parameter sweep (:mod:`.sweep`); a
+kind's folder brings its topics:
 
-The emitter kind (:mod:`.emitter`, :func:`validate_emitter`): ``finite``, ``weight``, ``pdf``,
-``chi2``, ``power``, ``gradient``, ``cost``.  The integrator kind (:mod:`.integrator`,
-:func:`validate_integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
-``gradient``, ``cost``.
+* BSDFs (:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``,
+  ``chi2``, ``normalization``, ``energy``, ``reciprocity``, ``eval_null_transmission``,
+  ``eval_diffuse_reflectance``, ``gradient``, ``cost``;
+* emitters (:mod:`.emitter`): ``finite``, ``weight``, ``pdf``, ``chi2``, ``power``,
+  ``gradient``, ``cost``;
+* integrators (:mod:`.integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
+  ``gradient``, ``cost``.
 
-Importing this package does not import Mitsuba (the CLI starts fast); ``validate_bsdf`` and
-``validate_emitter`` and ``validate_integrator`` do.
+Rows and reports: :mod:`phonglab.verdict`; user input: :mod:`.inputs` and
+:mod:`phonglab.settings`; Mitsuba's built-ins and their findings: :mod:`.builtins`; many
+cases as jobs: :mod:`.batch`.  Importing this package does not import Mitsuba (the CLI
+starts fast); the validators do.
 """
 
 from ..verdict import Report
 from .bsdf.topics import TOPICS
+from .registry import KINDS, detect
 
-__all__ = ["TOPICS", "validate_bsdf", "validate_emitter", "validate_integrator"]
-
-
-def validate_bsdf(spec, **options) -> Report:
-    """Validate a BSDF on every topic; see :func:`phonglab.validate.bsdf.kind.validate_bsdf`."""
-    from .bsdf.kind import validate_bsdf as run   # lazy: imports Mitsuba (seconds) only when called
-
-    return run(spec, **options)
+__all__ = ["KINDS", "TOPICS", "validate", *(k.function for k in KINDS)]
 
 
-def validate_emitter(spec, **options) -> Report:
-    """Validate an emitter on every emitter topic; see
-    :func:`phonglab.validate.emitter.kind.validate_emitter`."""
-    from .emitter.kind import validate_emitter as run   # lazy, as validate_bsdf
+def validate(spec, *, variant=None, params=None, plugins=(), sweep=True, runner=None,
+             **options) -> Report:
+    """Validate ``spec`` as the plugin kind it is (:func:`~.registry.detect`): the variant
+    set, the ``plugins`` files run once, the plugin loaded once, then checked across its
+    kind's parameter sweep (``sweep=False``: at the given point).  ``options``: topics, seed,
+    quick, known, family, sizes (:func:`phonglab.validate.core.run`)."""
+    from . import core, sweep as sweep_   # lazy: imports Mitsuba
 
-    return run(spec, **options)
+    core.start(variant)
+    registered = core.load_plugins(plugins)
+    kind = detect(spec, registered)
+    core.check_registered(registered, kind)
+    target = core.load(kind, spec, params, registered)
+    topics = kind.check_topics(options.pop("topics", None))
+    if not sweep:
+        return core.run(kind, target, topics=topics, **options)
+    return sweep_.run(kind, target, spec, params=params, topics=topics, plugins=plugins,
+                      runner=runner, **options)
 
 
-def validate_integrator(spec, **options) -> Report:
-    """Validate an integrator on every integrator topic; see
-    :func:`phonglab.validate.integrator.kind.validate_integrator`."""
-    from .integrator.kind import validate_integrator as run   # lazy, as validate_bsdf
+def _face(kind):
+    """``validate_<kind>``: the kind's own validator, imported (with Mitsuba) when called."""
 
-    return run(spec, **options)
+    def validate_kind(spec, **options) -> Report:
+        return kind.validator()(spec, **options)
+
+    validate_kind.__name__ = validate_kind.__qualname__ = kind.function
+    validate_kind.__doc__ = (f"Validate {kind.article} {kind.word} on every topic of its kind; "
+                             f"see :func:`{kind.impl}.{kind.function}`.")
+    return validate_kind
+
+
+for _kind in KINDS:
+    globals()[_kind.function] = _face(_kind)

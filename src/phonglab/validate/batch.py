@@ -19,11 +19,11 @@ from pathlib import Path
 
 from ..parallel import Job, Runner
 from ..outputs import jsonable
-from ..verdict import Report, point_label
-from ..verdict import Row as VRow
-from . import builtins
+from ..verdict import Report, Row, point_label
+from . import registry
 from .bsdf.kind import validate_bsdf
-from .bsdf.topics import TOPICS, Row
+from .bsdf.topics import TOPICS
+from .builtins.kinds import catalogue
 
 
 def find_case(case, kind: str = "bsdf"):
@@ -31,31 +31,25 @@ def find_case(case, kind: str = "bsdf"):
     from itself or its label."""
     if not isinstance(case, str):
         return case
-    if kind != "bsdf":
-        return builtins.kinds.catalogue(kind).find(case)
-    for c in builtins.cases():
-        if c.label == case:
-            return c
-    raise KeyError(f"no built-in case labelled {case!r}")
+    return catalogue(kind).find(case)
 
 
 def _validate(case, kind: str, options: dict) -> Report:
-    """The kind's validator on one case (an emitter or integrator case: its own options, e.g.
-    an area emitter's shape; a case with ``skip`` set: one skipped row saying why)."""
+    """The kind's validator on one case (with the case's own options, e.g. an area emitter's
+    shape; a case with ``skip`` set: one skipped row saying why)."""
     common = dict(variant=case.resolved_variant(), known=case.known,
                   seed=options.get("seed", 0), quick=options.get("quick", False),
                   topics=options.get("topics"))
+    if getattr(case, "skip", ""):
+        return Report({kind: case.plugin, "variant": case.resolved_variant()},
+                      [Row("finite", "the case loads and runs", None, None, None, None,
+                           "skipped", case.skip)])
     if kind == "bsdf":
         return validate_bsdf(case.spec, **common, sweep=options.get("sweep", False))
-    if case.skip:
-        return Report({kind: case.plugin, "variant": case.resolved_variant()},
-                      [VRow("finite", "the case loads and runs", None, None, None, None,
-                            "skipped", case.skip)])
     from .. import registration                  # phonglab's own plugins (whitted) in it
     registration.register(common["variant"])
-    from . import validate_emitter, validate_integrator
-    run = validate_emitter if kind == "emitter" else validate_integrator
-    return run(case.spec, **common, **case.options)
+    return registry.by_name(kind).validator()(case.spec, **common,
+                                              **getattr(case, "options", {}))
 
 
 def run_case(case, options: dict | None = None) -> dict:
@@ -73,9 +67,8 @@ def run_case(case, options: dict | None = None) -> dict:
     try:
         report = _validate(case, kind, options)
     except Exception as exc:      # one broken case is a result, not the end of the batch
-        row = Row if kind == "bsdf" else VRow
         report = Report({kind: case.plugin, "variant": case.variant, "error": repr(exc)},
-                        [row("finite", "the case loads and runs", None, None, None, None, "fail",
+                        [Row("finite", "the case loads and runs", None, None, None, None, "fail",
                              f"{type(exc).__name__}: {str(exc).splitlines()[0][:300] if str(exc) else ''}",
                              {"traceback": traceback.format_exc()[-2000:]})])
     d = report.to_dict()
@@ -141,7 +134,7 @@ def run_all(cases=None, options: dict | None = None, progress=None,
     """
     if cases is None:
         kind = (options or {}).get("kind", "bsdf")
-        cases = builtins.cases() if kind == "bsdf" else builtins.kinds.catalogue(kind).cases()
+        cases = catalogue(kind).cases()
     results = dict(log.done) if log is not None else {}
     todo = [case for case in cases if case.label not in results]
 

@@ -1,13 +1,17 @@
 r"""The kind-independent conformance runner: one plugin, every topic of its kind, one Report.
 
-A plugin kind (:class:`Kind`; the BSDF one is :data:`phonglab.validate.bsdf.kind.BSDF`) names
-its Mitsuba class, its topics in table order, the sizes of a run, how many statistical tests a
-run makes and the table topic -> runner.  What is the same for every kind lives here:
+A plugin kind (:class:`~phonglab.validate.kind.Kind`, listed in
+:data:`phonglab.validate.registry.KINDS`) names its Mitsuba class, its topics in table order
+and the parts that run them (the sizes of a run, how many statistical tests it makes, the
+table topic -> runner).  What is the same for every kind lives here:
 
-* :func:`prepare`: set the variant, run the ``--plugin`` files, load the plugin from a type
-  name, a dict for ``mi.load_dict``, an XML file or a loaded object
-  (:func:`phonglab.settings.load_plugin`): everything that can be bad input, each a one-sentence
-  :class:`~phonglab.validate.inputs.ValidateError`, before any check runs;
+* :func:`load_plugins`: run the ``--plugin`` files once, recording what each registers; a file
+  that registers a name Mitsuba or phonglab already has is refused (the report would be of
+  the plugin that name already meant, not of the file's);
+* :func:`load`: the plugin from a type name, a dict for ``mi.load_dict``, an XML file or a
+  loaded object (:func:`phonglab.settings.load_plugin`, or the kind's own ``load`` part);
+  :func:`prepare` sets the variant and does both: everything that can be bad input, each a
+  one-sentence :class:`~phonglab.validate.inputs.ValidateError`, before any check runs;
 * :func:`run`: every topic guarded (an exception, from the plugin or the validator, is one
   failing row of that topic, so the other topics still report) and timed.  The statistical rows
   share one family-wise level: each of the m tests the kind counts runs at the Šidák level
@@ -28,7 +32,7 @@ import time
 import traceback
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import mitsuba as mi
 import numpy as np
@@ -36,73 +40,96 @@ import numpy as np
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import Report, Row
-from .inputs import ValidateError, check_topics, xml_head
+from .inputs import ValidateError, check_topics
+from .kind import Kind
 
-
-@dataclass(frozen=True)
-class Kind:
-    """What the runner needs to know of one plugin kind (BSDF today; emitters, integrators)."""
-
-    name: str                  #: the meta key of the plugin's label, e.g. ``"bsdf"``
-    word: str                  #: the kind in messages, e.g. ``"BSDF"``
-    class_name: str            #: its Mitsuba class ``mi.<class_name>`` (exists once a variant is set)
-    register: str              #: what a ``--plugin`` file calls, e.g. ``"mi.register_bsdf"``
-    topics: tuple[str, ...]    #: every topic, in table order
-    #: (quick, seed, topics) -> the sizes of a run
-    options: Callable[[bool, int, tuple], Any]
-    #: (plugin, options, topics) -> m, the number of statistical tests the run makes
-    statistical_tests: Callable[[Any, Any, tuple], int]
-    #: (plugin, options, topics, m) -> {topic: () -> rows}
-    runners: Callable[[Any, Any, tuple, int], dict[str, Callable[[], list[Row]]]]
-    #: (plugin, spec, pinned names) -> the parameters a sweep varies (each with ``name``,
-    #: ``value``, ``range`` (``lo``, ``hi``, ``edges``, ``values(quick)``) and ``source``);
-    #: None: the kind is checked at its given point only (:mod:`phonglab.validate.sweep`)
-    parameters: Callable[[Any, Any, set], list] | None = None
-    #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
-    informational: tuple[str, ...] = ()
-    #: plugin -> {parameter: value} (a documented cause's ``at`` is held against it)
-    values: Callable[[Any], dict] | None = None
+__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "prepare", "run", "validate"]
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
 REGISTER_CALLS = {"register_bsdf": "BSDF", "register_emitter": "emitter",
                   "register_integrator": "integrator", "register_texture": "texture",
                   "register_sensor": "sensor", "register_medium": "medium",
-                  "register_phasefunction": "phase function", "register_film": "film",
+                  "register_phase": "phase function", "register_film": "film",
+                  "register_shape": "shape",
                   "register_sampler": "sampler", "register_rfilter": "reconstruction filter"}
 
 
-def load_plugins(paths, kind: Kind) -> list[tuple[str, str]]:
-    """Execute each plugin file in the active variant; the (kind word, name) pairs it registered.
+def load_plugins(paths, kind: Kind | None = None) -> list[tuple[str, str]]:
+    """Execute each plugin file in the active variant; the (kind word, name) pairs they
+    registered.
 
-    A file that exits (``sys.exit``, even with status 0), registers nothing, or registers no
-    plugin of ``kind`` is bad input (:class:`ValidateError`, naming what it did register):
-    the report must never say "all pass" of a plugin that was never loaded.
+    A file that exits (``sys.exit``, even with status 0) or registers a name Mitsuba or
+    phonglab already has is bad input (:class:`ValidateError`); with ``kind`` given, so is a
+    file that registers no plugin of ``kind`` (:func:`check_registered`): the report must never
+    say "all pass" of a plugin that was never loaded, or of another plugin of the same name.
     """
-    found: list[tuple[str, str]] = []
+    by_file: dict[str, list[tuple[str, str]]] = {}
     for p in paths:
         path = Path(p)
         if not path.is_file():
-            raise ValidateError(f"plugin file {str(p)!r} does not exist; give the path of a "
-                                f"Python file that calls {kind.register}")
-        mine = _run_plugin_file(path, kind)
+            raise ValidateError(f"plugin file {str(p)!r} "
+                                f"{'is a folder' if path.is_dir() else 'does not exist'}; give "
+                                f"the path of a Python file that calls "
+                                f"{kind.register if kind else 'mi.register_bsdf (or another mi.register_*)'}")
+        by_file[str(p)] = _run_plugin_file(path, kind)
+    if kind is not None:
+        check_registered(by_file, kind)
+    return Registered(pair for pairs in by_file.values() for pair in pairs).of(by_file)
+
+
+class Registered(list):
+    """The (kind word, name) pairs plugin files registered; :attr:`by_file` per file."""
+
+    by_file: dict
+
+    def of(self, by_file: dict) -> "Registered":
+        self.by_file = by_file
+        return self
+
+
+def check_registered(registered, kind: Kind) -> None:
+    """Every plugin file registered a plugin of ``kind`` (``registered``: what
+    :func:`load_plugins` returned, or its per-file dict), else :class:`ValidateError` naming
+    what the file did register."""
+    by_file = getattr(registered, "by_file", registered)
+    for path, mine in by_file.items():
         if not any(word == kind.word for word, _ in mine):
             what = (", ".join(f"the {word} {name!r}" for word, name in mine) if mine
                     else "nothing")
-            raise ValidateError(f"plugin file {str(p)!r} registered {what}; validating a "
-                                f"{kind.word} needs a file that calls {kind.register}(name, "
-                                f"constructor)")
-        found += mine
-    return found
+            raise ValidateError(f"plugin file {path!r} registered {what}; validating "
+                                f"{kind.article} {kind.word} needs a file that calls "
+                                f"{kind.register}(name, constructor)")
 
 
-def _run_plugin_file(path: Path, kind: Kind) -> list[tuple[str, str]]:
-    """Run one plugin file with Mitsuba's registration calls recorded; what it registered."""
+def taken_by(name: str) -> str | None:
+    """Who already has the plugin type ``name`` in the active variant: "Mitsuba" (a built-in),
+    "phonglab" (:data:`phonglab.registration.PLUGINS`), or None."""
+    if any(plugin == name for _, plugin, _ in registration.PLUGINS):
+        return "phonglab"
+    if mi.PluginManager.instance().plugin_type(name) != mi.ObjectType.Unknown:
+        return "Mitsuba"
+    return None
+
+
+def _run_plugin_file(path: Path, kind: Kind | None) -> list[tuple[str, str]]:
+    """Run one plugin file with Mitsuba's registration calls recorded; what it registered.
+    A registration of a name Mitsuba or phonglab already has is refused before it happens."""
     calls: list[tuple[str, str]] = []
     originals = {name: getattr(mi, name) for name in REGISTER_CALLS if hasattr(mi, name)}
+    register_call = kind.register if kind else "mi.register_*"
+
+    class Collision(Exception):
+        pass
 
     def recording(name, original):
         def register(plugin_name, *args, **kwargs):
+            owner = taken_by(str(plugin_name))
+            if owner is not None:
+                raise Collision(f"plugin file {str(path)!r} registers {plugin_name!r}, a name "
+                                f"{owner} already has, so validating {plugin_name!r} would "
+                                f"check {owner}'s plugin, not the file's; give it a name of "
+                                f"its own in the {name}() call (e.g. 'my_{plugin_name}')")
             calls.append((REGISTER_CALLS[name], str(plugin_name)))
             return original(plugin_name, *args, **kwargs)
         return register
@@ -111,10 +138,12 @@ def _run_plugin_file(path: Path, kind: Kind) -> list[tuple[str, str]]:
         setattr(mi, name, recording(name, original))
     try:
         runpy.run_path(str(path), run_name="__phonglab_plugin__")
+    except Collision as exc:
+        raise ValidateError(str(exc)) from None
     except SystemExit as exc:
         raise ValidateError(f"plugin file {str(path)!r} called sys.exit({exc.code!r}) while it "
                             f"was loaded; a plugin file must only define its plugin and call "
-                            f"{kind.register}") from None
+                            f"{register_call}") from None
     except Exception as exc:
         raise ValidateError(f"plugin file {str(path)!r} failed: {type(exc).__name__}: "
                             f"{str(exc).splitlines()[0] if str(exc) else ''}") from exc
@@ -130,23 +159,39 @@ def _first_line(exc) -> str:
     return line.split("] ")[-1][:300]
 
 
-def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loaded:
-    """Set the variant, run the plugin files, load the plugin: everything that can be bad input."""
-    loaded = mi.variant() is not None and isinstance(spec, getattr(mi, kind.class_name))
+def start(variant=None, spec=None, kind: Kind | None = None) -> None:
+    """Set the variant (phonglab's plugins registered in it) unless ``spec`` is an object of
+    ``kind`` already loaded in the active one and no variant is asked for."""
+    loaded = (kind is not None and mi.variant() is not None
+              and isinstance(spec, getattr(mi, kind.class_name)))
     if not loaded or variant is not None:
         try:
             registration.register(variant)
         except ValueError as exc:
             raise ValidateError(str(exc)) from exc
-    registered = load_plugins(plugins, kind)
+
+
+def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
+    """The plugin of ``kind`` from ``spec`` with ``params`` (its ``load`` part, or the plugin
+    itself); ``registered``: what the ``--plugin`` files registered, for the fix a load
+    failure suggests.  The variant must be set."""
     names = [name for word, name in registered if word == kind.word]
     hint = ("check the type name and --set values, or register it with --plugin FILE.py"
             if not names else f"the plugin files registered {', '.join(map(repr, names))}")
+    own = kind.part("load")
     try:
+        if own is not None:
+            return own(spec, params, hint)
         return load_plugin(spec, params, kind=getattr(mi, kind.class_name), word=kind.word,
                            hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
+
+
+def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loaded:
+    """Set the variant, run the plugin files, load the plugin: everything that can be bad input."""
+    start(variant, spec, kind)
+    return load(kind, spec, params, load_plugins(plugins, kind))
 
 
 def _guarded(topic: str, runner) -> list[Row]:
@@ -158,29 +203,6 @@ def _guarded(topic: str, runner) -> list[Row]:
         return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
                     "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
                     {"traceback": traceback.format_exc()[-3000:]})]
-
-
-def names_plugin(spec, cls, object_type, tag: str) -> bool:
-    """Whether ``spec`` (a type name, a dict with 'type', an XML file or an object) names a
-    plugin of class ``cls`` (``mi.Emitter``; ``object_type`` its ``mi.ObjectType``, ``tag`` its
-    XML element); Mitsuba's variant must be set and the plugin files run."""
-    if isinstance(spec, cls):
-        return True
-    if isinstance(spec, str) and spec.endswith(".xml"):
-        return f"<{tag}" in xml_head(spec)
-    name = spec.get("type") if isinstance(spec, dict) else spec
-    if not isinstance(name, str):
-        return False
-    try:
-        kind = mi.PluginManager.instance().plugin_type(name)
-    except Exception:
-        return False
-    if kind == mi.ObjectType.Unknown:       # a Python plugin (mi.register_*): load it
-        try:
-            return isinstance(mi.load_dict({"type": name}), cls)
-        except Exception:
-            return False
-    return kind == object_type
 
 
 @dataclass(frozen=True)
@@ -300,7 +322,8 @@ def _lane_value(values, i):
 def parameter_values(kind: Kind, target: Loaded) -> dict:
     """The plugin's parameter values a cause's ``at`` is held against: its traversed values
     (:attr:`Kind.values`) and the numbers it was loaded with (which a plugin may not expose)."""
-    out = dict(kind.values(target.plugin)) if kind.values is not None else {}
+    values = kind.part("values")
+    out = dict(values(target.plugin)) if values is not None else {}
     for name, v in (target.spec or {}).items():
         if isinstance(v, (int, float)) and not isinstance(v, bool):
             out[name] = float(v)
@@ -319,11 +342,11 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         # numpy's generators refuse it inside every topic: seven failing rows, not bad input
         raise ValidateError(f"the seed must be a whole number >= 0, got {seed!r}")
-    opts = kind.options(quick, seed, topics)
+    opts = kind.part("options")(quick, seed, topics)
     if sizes:
         opts = replace(opts, **sizes)
-    m = kind.statistical_tests(target.plugin, opts, topics) * family
-    runners = kind.runners(target.plugin, opts, topics, m)
+    m = kind.part("statistical_tests")(target.plugin, opts, topics) * family
+    runners = kind.part("runners")(target.plugin, opts, topics, m)
     rows, seconds = [], {}
     t_all = time.perf_counter()
     for topic in topics:

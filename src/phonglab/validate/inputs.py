@@ -6,21 +6,9 @@ documented there); plugins are loaded by :func:`phonglab.settings.load_plugin`.
 
 from __future__ import annotations
 
-from ..errors import PhonglabError
-from .bsdf.topics import TOPICS
+from .kind import ValidateError, check_topics
 
-
-class ValidateError(PhonglabError):
-    """A BSDF, plugin file, parameter or topic the validator cannot use."""
-
-
-def check_topics(topics, table=TOPICS) -> tuple[str, ...]:
-    """The topics to run, in ``table`` order (all of ``table`` when ``topics`` is empty)."""
-    topics = tuple(topics or table)
-    bad = [t for t in topics if t not in table]
-    if bad:
-        raise ValidateError(f"unknown topic {bad[0]!r}; choose from {', '.join(table)}")
-    return tuple(t for t in table if t in topics)
+__all__ = ["ValidateError", "check_topics", "xml_head", "xml_root_tag"]
 
 
 def xml_head(path: str) -> str:
@@ -32,3 +20,15 @@ def xml_head(path: str) -> str:
     except OSError:
         return ""
     return text.split("?>", 1)[-1].lstrip()[:200]
+
+
+def xml_root_tag(path: str) -> str:
+    """The name of an XML file's first element (``bsdf``, ``scene``; "" when there is none),
+    comments skipped."""
+    head = xml_head(path)
+    while head.startswith("<!--"):
+        head = head.split("-->", 1)[-1].lstrip()
+    if not head.startswith("<"):
+        return ""
+    name = head[1:].split(None, 1)[0] if head[1:].split() else ""
+    return name.rstrip(">/").strip()

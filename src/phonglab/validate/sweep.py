@@ -37,8 +37,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..verdict import Report, Row, point_label
-from . import core
+from . import core, registry
 from .inputs import ValidateError, check_topics
+from .kind import Kind
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,7 @@ def sweepable(spec) -> bool:
     return isinstance(spec, dict) or (isinstance(spec, str) and not spec.endswith(".xml"))
 
 
-def validate(kind: core.Kind, spec, *, variant=None, params=None, topics=None, seed=0,
+def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0,
              quick=False, known=None, plugins=(), family=1, sizes=None, runner=None,
              progress=None) -> Report:
     """Validate ``spec`` at every point of its sweep; one Report whose rows carry their point.
@@ -88,28 +89,48 @@ def validate(kind: core.Kind, spec, *, variant=None, params=None, topics=None, s
     topics = check_topics(topics, kind.topics)
     t0 = time.perf_counter()
     base = core.prepare(kind, spec, variant=variant, params=params, plugins=plugins)
-    if not sweepable(spec) or kind.parameters is None:
+    return run(kind, base, spec, params=params, topics=topics, seed=seed, quick=quick,
+               known=known, plugins=plugins, family=family, sizes=sizes, runner=runner,
+               progress=progress, t0=t0)
+
+
+def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False, known=None,
+        plugins=(), family=1, sizes=None, runner=None, progress=None, t0=None) -> Report:
+    """The sweep of a plugin already prepared at its given point (``base``, a
+    :class:`~phonglab.settings.Loaded` of ``spec`` with ``params``, the variant set and the
+    ``plugins`` files run: they run again only in other processes).  Each point is loaded once:
+    the load that tells whether the plugin refuses it is the one its topics run on."""
+    topics = check_topics(topics, kind.topics)
+    t0 = time.perf_counter() if t0 is None else t0
+    parameters = kind.part("parameters")
+    if not sweepable(spec) or parameters is None:
         report = core.run(kind, base, topics=topics, seed=seed, quick=quick, known=known,
                           family=family, sizes=sizes)
-        report.meta["sweep"] = {"points": 1, "note": "an XML file or a loaded object is checked "
-                                "at its one point: give a type name or a dict to sweep it"}
+        note = ("an XML file or a loaded object is checked at its one point: give a type name "
+                "or a dict to sweep it" if parameters is not None else
+                f"{kind.article} {kind.word} is checked at its given parameter point (the "
+                f"{kind.word} kind has no parameter sweep)")
+        report.meta["sweep"] = {"points": 1, "note": note}
         return report
     pinned = set(params or {}) | (set(spec) - {"type"} if isinstance(spec, dict) else set())
-    swept = kind.parameters(base.plugin, spec, pinned)
+    swept = parameters(base.plugin, spec, pinned)
     pts = points(swept, quick)
-    runnable, refused = [], []
+    runnable, refused, loaded = [], [], []
     for pt in pts:
         try:
-            core.prepare(kind, spec, params={**(params or {}), **pt.params})
-            runnable.append(pt)
+            target = base if not pt.params else core.load(kind, spec,
+                                                          {**(params or {}), **pt.params})
         except ValidateError as exc:
             reason = str(exc).split("; check the type name")[0].split("; the plugin files")[0]
             refused.append({"point": pt.params, "status": "refused", "reason": reason})
+            continue
+        runnable.append(pt)
+        loaded.append(target)
     size = family * len(runnable)
     options = {"variant": base_variant(), "topics": list(topics), "seed": seed, "quick": quick,
                "known": known, "plugins": [str(p) for p in plugins], "family": size,
                "sizes": sizes, "kind": kind.name}
-    reports = _run_points(spec, params or {}, runnable, options, runner, progress,
+    reports = _run_points(spec, params or {}, runnable, loaded, options, runner, progress,
                           [t for t in topics if t not in kind.informational])
     rows: list[Row] = []
     records = []
@@ -137,9 +158,11 @@ def base_variant() -> str:
     return mi.variant()
 
 
-def _run_points(spec, params, pts, options, runner, progress, other_topics) -> list[Report]:
-    """Each point's report, in point order: here, or one job per point on ``runner``; the
-    points after the given one run ``other_topics`` (no informational topic)."""
+def _run_points(spec, params, pts, loaded, options, runner, progress,
+                other_topics) -> list[Report]:
+    """Each point's report, in point order: here on its ``loaded`` target, or one job per point
+    on ``runner``; the points after the given one run ``other_topics`` (no informational
+    topic)."""
     results: dict[int, Report] = {}
     per_point = [options] + [{**options, "topics": list(other_topics)}] * (len(pts) - 1)
 
@@ -150,7 +173,7 @@ def _run_points(spec, params, pts, options, runner, progress, other_topics) -> l
 
     if runner is None or runner.serial:
         for i, pt in enumerate(pts):
-            finished(i, run_point(spec, {**params, **pt.params}, per_point[i], local=True))
+            finished(i, run_loaded(loaded[i], per_point[i]))
     else:
         from ..parallel import Job
         jobs = [Job(run_point, (spec, {**params, **pt.params}, per_point[i]), key=str(i))
@@ -159,16 +182,19 @@ def _run_points(spec, params, pts, options, runner, progress, other_topics) -> l
     return [results[i] for i in range(len(pts))]
 
 
-def run_point(spec, params, options: dict, local: bool = False):
-    """One point of a sweep (a picklable job): the plugin loaded with ``params``, every topic
-    at the sweep's family level.  Returns the Report here (``local``), else its dict."""
-    from .bsdf.kind import BSDF
-    kinds = {BSDF.name: BSDF}
-    kind = kinds[options["kind"]]
-    plugins = [] if local else [Path(p) for p in options["plugins"]]
-    target = core.prepare(kind, spec, variant=None if local else options["variant"],
-                          params=params, plugins=plugins)
-    report = core.run(kind, target, topics=tuple(options["topics"]), seed=options["seed"],
-                      quick=options["quick"], known=options["known"],
-                      family=options["family"], sizes=options["sizes"])
-    return report if local else report.to_dict()
+def run_point(spec, params, options: dict):
+    """One point of a sweep as a picklable job in another process: the variant set, the plugin
+    files run, the plugin loaded with ``params``; every topic at the sweep's family level.
+    Returns the report's dict."""
+    kind = registry.by_name(options["kind"])
+    target = core.prepare(kind, spec, variant=options["variant"], params=params,
+                          plugins=[Path(p) for p in options["plugins"]])
+    return run_loaded(target, options).to_dict()
+
+
+def run_loaded(target, options: dict) -> Report:
+    """Every topic of ``options`` on a point's loaded ``target``, at the family level."""
+    return core.run(registry.by_name(options["kind"]), target,
+                    topics=tuple(options["topics"]), seed=options["seed"],
+                    quick=options["quick"], known=options["known"], family=options["family"],
+                    sizes=options["sizes"])

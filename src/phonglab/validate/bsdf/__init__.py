@@ -9,5 +9,13 @@ both integrate with :mod:`.lobes`), ``reciprocity`` (:mod:`.reciprocity`),
 row that checks it (:mod:`.topics`), the identity rows' reduction (:mod:`.rows`), and the table that ties them to the kind-independent runner
 (:mod:`.kind`: :data:`~.kind.BSDF`, :func:`~.kind.validate_bsdf`).
 
-Importing this package imports nothing; its modules import Mitsuba.
+Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """
+
+from ..kind import Kind
+from .topics import TOPICS
+
+#: The BSDF kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
+KIND = Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
+            topics=TOPICS, informational=("cost",), object_type="BSDF", tag="bsdf",
+            impl=__name__ + ".kind", conformance="docs/conformance.md")

@@ -1,5 +1,6 @@
-"""The BSDF kind of the validator: ``mi.BSDF``, its topics table, its statistical tests, and
-:func:`validate_bsdf` (the kind-independent runner :mod:`phonglab.validate.core` does the rest).
+"""The parts of the BSDF kind (:data:`phonglab.validate.bsdf.KIND`): its statistical tests, its
+runners, its sweep's parameters, its built-ins' findings, and :func:`validate_bsdf` (the
+kind-independent runner :mod:`phonglab.validate.core` does the rest).
 
 The statistical tests of a BSDF are the χ² cells and the normalization cells (unless every lobe
 is a delta), when it has a delta lobe the energy cells whose albedo is a mean of sample
@@ -14,7 +15,7 @@ import mitsuba as mi
 from ...verdict import Report
 from .. import core
 from ..sweep import validate as sweep_validate
-from . import lanes, ranges
+from . import KIND, lanes, ranges
 from .config import options
 from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost
@@ -24,7 +25,6 @@ from .identities import component, eval_pdf, finite, weight_and_pdf
 from .normalization import normalization
 from .reciprocity import reciprocity
 from .sampling import chi2
-from .topics import TOPICS
 
 
 def statistical_tests(bsdf, opts, topics) -> int:
@@ -63,11 +63,25 @@ def runners(bsdf, opts, topics, m: int) -> dict:
     }
 
 
-#: The BSDF kind: what :mod:`phonglab.validate.core` runs.
-BSDF = core.Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
-                 topics=TOPICS, options=options, statistical_tests=statistical_tests,
-                 runners=runners, parameters=ranges.parameters, informational=("cost",),
-                 values=ranges.traversed)
+#: The sweep's parameters and the values a documented cause's ``at`` is held against.
+parameters = ranges.parameters
+values = ranges.traversed
+
+#: The BSDF kind (declared by the package, whose parts this module holds).
+BSDF = KIND
+
+
+def known_for(name: str, params: dict | None) -> dict:
+    """The conformance table's findings of the Mitsuba built-in BSDF ``name``, for the
+    microfacet distribution of ``params`` (:func:`phonglab.validate.builtins.known_for_plugin`)."""
+    from ..builtins import known_for_plugin   # the catalogue and its findings: only when asked
+    return known_for_plugin(name, params or {})
+
+
+def catalogue():
+    """The BSDF conformance table (:mod:`phonglab.validate.builtins`)."""
+    from ..builtins.kinds import bsdf_catalogue
+    return bsdf_catalogue()
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,

@@ -7,7 +7,7 @@ fails where the row is built, not later in a report.  No Mitsuba import here.
 
 from __future__ import annotations
 
-from ... import verdict
+from ..kind import topic_row
 
 #: The validator's BSDF topics, in the order the table lists them.
 TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energy",
@@ -15,10 +15,5 @@ TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energ
           "gradient", "cost")
 
 
-class Row(verdict.Row):
-    """A :class:`phonglab.verdict.Row` of one of the BSDF kind's :data:`TOPICS`."""
-
-    def __post_init__(self):
-        if self.topic not in TOPICS:
-            raise ValueError(f"unknown topic {self.topic!r}; choose one of {', '.join(TOPICS)}")
-        super().__post_init__()
+#: A row of one of :data:`TOPICS` (:func:`phonglab.validate.kind.topic_row`).
+Row = topic_row(TOPICS, "BSDF", __name__)

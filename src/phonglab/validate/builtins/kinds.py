@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from ... import runtime
+from .. import registry
 from .findings import Finding, ValidatorIssue
 
 
@@ -85,29 +86,26 @@ def with_known(cases: list, findings: tuple[Finding, ...]) -> list:
     return [replace(c, known={**c.known, **known.get(c.label, {})}) for c in cases]
 
 
-KINDS = ("bsdf", "emitter", "integrator")
+#: The kinds with a conformance table: every kind of :data:`phonglab.validate.registry.KINDS`.
+KINDS = registry.names()
 
 
 def catalogue(kind: str = "bsdf") -> Catalogue:
-    """The :class:`Catalogue` of ``kind`` (one of :data:`KINDS`)."""
-    if kind == "bsdf":
-        from ..bsdf.topics import TOPICS
-        from .. import builtins as package       # its cases() as looked up at call time
-        from .catalogue import LEFT_OUT
-        from .findings import FINDINGS, VALIDATOR_ISSUES
-        return Catalogue("bsdf", "BSDFs", "BSDF", lambda: package.cases(), TOPICS,
-                         "validate_bsdf",
-                         "phonglab.validate.builtins.cases()", FINDINGS,
-                         VALIDATOR_ISSUES, LEFT_OUT, "docs/conformance.json",
-                         "docs/conformance.md", "make conformance",
-                         case_text="one BSDF at one parameter setting")
-    if kind == "emitter":
-        from ..emitter import builtins as b
-        return b.CATALOGUE
-    if kind == "integrator":
-        from ..integrator import builtins as b
-        return b.CATALOGUE
-    raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+    """The :class:`Catalogue` of ``kind`` (one of :data:`KINDS`): the kind's ``catalogue`` part."""
+    return registry.by_name(kind).part("catalogue")()
+
+
+def bsdf_catalogue() -> Catalogue:
+    """The BSDF kind's table: the cases of :func:`phonglab.validate.builtins.cases` (looked up
+    at call time, so a test can patch them) and the findings of :mod:`.findings`."""
+    from .. import builtins as package
+    from ..bsdf.topics import TOPICS
+    from .catalogue import LEFT_OUT
+    from .findings import FINDINGS, VALIDATOR_ISSUES
+    return Catalogue("bsdf", "BSDFs", "BSDF", lambda: package.cases(), TOPICS, "validate_bsdf",
+                     "phonglab.validate.builtins.cases()", FINDINGS, VALIDATOR_ISSUES, LEFT_OUT,
+                     "docs/conformance.json", "docs/conformance.md", "make conformance",
+                     case_text="one BSDF at one parameter setting")
 
 
 def _shape_key(shape: dict | None) -> dict:

@@ -8,5 +8,13 @@ identity topics (:mod:`.lanes`), sizes and seeds (:mod:`.config`), the topic lis
 :mod:`.signatures`), and the table that ties them to the kind-independent runner
 (:mod:`.kind`: :data:`~.kind.EMITTER`, :func:`~.kind.validate_emitter`).
 
-Importing this package imports nothing; its modules import Mitsuba.
+Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """
+
+from ..kind import Kind
+from .topics import TOPICS
+
+#: The emitter kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
+KIND = Kind(name="emitter", word="emitter", class_name="Emitter", register="mi.register_emitter",
+            topics=TOPICS, informational=("cost",), object_type="Emitter", tag="emitter",
+            impl=__name__ + ".kind", conformance="docs/conformance-emitters.md")

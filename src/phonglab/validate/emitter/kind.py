@@ -1,5 +1,5 @@
-"""The emitter kind of the validator: ``mi.Emitter``, its topics table, its statistical tests,
-its loading (an area emitter attached to a shape, an environment placed in a scene:
+"""The parts of the emitter kind (:data:`phonglab.validate.emitter.KIND`): its statistical tests,
+its runners, its loading (an area emitter attached to a shape, an environment placed in a scene:
 :mod:`.setup`) and :func:`validate_emitter`.
 
 The statistical tests of an emitter are its χ² reference points (non-delta emitters) and the
@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import mitsuba as mi
 
-from ...settings import Loaded
+from ...settings import Loaded, load_plugin
 from ...verdict import Report
 from .. import core
 from ..inputs import ValidateError, check_topics
+from ..sweep import validate as sweep_validate
+from . import KIND
 from . import setup as setup_
 from .config import options
 from .cost import cost
@@ -47,26 +49,19 @@ def runners(target, opts, topics, m: int) -> dict:
     }
 
 
-#: The emitter kind: what :mod:`phonglab.validate.core` runs (its plugin is a
-#: :class:`~.setup.Setup`, built by :func:`prepare`).
-EMITTER = core.Kind(name="emitter", word="emitter", class_name="Emitter",
-                    register="mi.register_emitter", topics=TOPICS, options=options,
-                    statistical_tests=statistical_tests, runners=runners)
+#: The emitter kind (declared by the package, whose parts this module holds).
+EMITTER = KIND
 
 
-def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loaded:
-    """Load the emitter (:func:`phonglab.validate.core.prepare`) and build its
-    :class:`~.setup.Setup`; ``shape`` (or ``params["shape"]``, from ``--set shape.type=...``)
-    is the shape a surface emitter loaded alone is attached to."""
+def load(spec, params, hint) -> Loaded:
+    """Load the emitter (:func:`phonglab.settings.load_plugin`) and build its
+    :class:`~.setup.Setup`; ``params["shape"]`` (from ``--set shape.type=...``) is the shape a
+    surface emitter loaded alone is attached to."""
     params = dict(params or {})
-    if "shape" in params:
-        if shape is not None:
-            raise ValidateError("give the shape once: as shape= or as --set shape.*")
-        shape = params.pop("shape")
-        if not isinstance(shape, dict) or "type" not in shape:
-            raise ValidateError("--set shape.* needs shape.type (e.g. --set shape.type=sphere)")
-    loaded = core.prepare(EMITTER, spec, variant=variant, params=params or None,
-                          plugins=plugins)
+    shape = params.pop("shape", None)
+    if shape is not None and (not isinstance(shape, dict) or "type" not in shape):
+        raise ValidateError("--set shape.* needs shape.type (e.g. --set shape.type=sphere)")
+    loaded = load_plugin(spec, params or None, kind=mi.Emitter, word="emitter", hint=hint)
     target = setup_.build(loaded.plugin, shape)
     spec_meta = loaded.spec
     if shape is not None:
@@ -76,24 +71,53 @@ def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loade
     return Loaded(target, loaded.label, spec_meta)
 
 
+def with_shape(params, shape) -> dict | None:
+    """``params`` with ``shape`` (a keyword of :func:`validate_emitter`) added; given twice is
+    bad input."""
+    if shape is None:
+        return params
+    if "shape" in (params or {}):
+        raise ValidateError("give the shape once: as shape= or as --set shape.*")
+    return {**(params or {}), "shape": shape}
+
+
+def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loaded:
+    """Set the variant, run the plugin files, load the emitter attached to ``shape``
+    (:func:`phonglab.validate.core.prepare`)."""
+    return core.prepare(EMITTER, spec, variant=variant, params=with_shape(params, shape),
+                        plugins=plugins)
+
+
+def known_for(name: str, params: dict | None) -> dict:
+    """The conformance table's findings of the Mitsuba built-in emitter ``name`` (a surface
+    emitter's of the same shape only: :func:`phonglab.validate.builtins.kinds.known_for`)."""
+    from ..builtins.kinds import known_for as of_kind
+    return of_kind("emitter", name, (params or {}).get("shape"))
+
+
+def catalogue():
+    """The emitter conformance table (:mod:`.builtins`)."""
+    from .builtins import CATALOGUE
+    return CATALOGUE
+
+
 def validate_emitter(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                     known=None, plugins=(), family=1, sizes=None, shape=None) -> Report:
+                     known=None, plugins=(), family=1, sizes=None, shape=None, sweep=False,
+                     runner=None) -> Report:
     """Validate one emitter on every topic (or ``topics``); see :mod:`phonglab.validate`.
 
     ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
     ``<emitter>``, or a loaded ``mi.Emitter`` (an area emitter may come attached to its shape);
     ``shape``: a shape dict a surface emitter without one is attached to (default
     :data:`~.setup.DEFAULT_SHAPE`).  ``known``, ``plugins``, ``family``, ``sizes``: as for
-    :func:`phonglab.validate.bsdf.kind.validate_bsdf`.  Bad input raises
-    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
+    :func:`phonglab.validate.bsdf.kind.validate_bsdf`, and so are ``sweep`` and ``runner``.
+    Bad input raises :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
     """
+    if sweep:
+        return sweep_validate(EMITTER, spec, variant=variant, params=with_shape(params, shape),
+                              topics=topics, seed=seed, quick=quick, known=known,
+                              plugins=plugins, family=family, sizes=sizes, runner=runner)
     topics = check_topics(topics, TOPICS)
     target = prepare(spec, variant=variant, params=params, plugins=plugins, shape=shape)
     return core.run(EMITTER, target, topics=topics, seed=seed, quick=quick, known=known,
                     family=family, sizes=sizes)
-
-
-def is_emitter(spec) -> bool:
-    """Whether ``spec`` names an emitter plugin (:func:`phonglab.validate.core.names_plugin`)."""
-    return core.names_plugin(spec, mi.Emitter, mi.ObjectType.Emitter, "emitter")
-

@@ -6,16 +6,11 @@ schema and table there) whose topic must be one of :data:`TOPICS`.  No Mitsuba i
 
 from __future__ import annotations
 
-from ... import verdict
+from ..kind import topic_row
 
 #: The validator's emitter topics, in the order the table lists them.
 TOPICS = ("finite", "weight", "pdf", "chi2", "power", "gradient", "cost")
 
 
-class Row(verdict.Row):
-    """A :class:`phonglab.verdict.Row` of one of the emitter kind's :data:`TOPICS`."""
-
-    def __post_init__(self):
-        if self.topic not in TOPICS:
-            raise ValueError(f"unknown topic {self.topic!r}; choose one of {', '.join(TOPICS)}")
-        super().__post_init__()
+#: A row of one of :data:`TOPICS` (:func:`phonglab.validate.kind.topic_row`).
+Row = topic_row(TOPICS, "emitter", __name__)

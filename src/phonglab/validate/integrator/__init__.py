@@ -8,5 +8,14 @@ seeds (:mod:`.config`), the topic list and the row (:mod:`.topics`), and the tab
 them to the kind-independent runner (:mod:`.kind`: :data:`~.kind.INTEGRATOR`,
 :func:`~.kind.validate_integrator`).
 
-Importing this package imports nothing; its modules import Mitsuba.
+Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """
+
+from ..kind import Kind
+from .topics import TOPICS
+
+#: The integrator kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
+KIND = Kind(name="integrator", word="integrator", class_name="Integrator",
+            register="mi.register_integrator", topics=TOPICS, informational=("cost",),
+            object_type="Integrator", tag="integrator", impl=__name__ + ".kind",
+            conformance="docs/conformance-integrators.md")

@@ -1,5 +1,5 @@
-"""The integrator kind of the validator: ``mi.Integrator``, its topics table, its statistical
-tests, its loading (the integrator rebuilt per scene at the scene's depth: :mod:`.setup`) and
+"""The parts of the integrator kind (:data:`phonglab.validate.integrator.KIND`): its statistical
+tests, its runners, its loading (the integrator rebuilt per scene at the scene's depth: :mod:`.setup`) and
 :func:`validate_integrator`.
 
 The statistical tests of an integrator are its bias scenes that apply, the two slopes of
@@ -9,10 +9,14 @@ is exact and ``cost`` informational.
 
 from __future__ import annotations
 
-from ...settings import Loaded
+import mitsuba as mi
+
+from ...settings import Loaded, load_plugin
 from ...verdict import Report
 from .. import core
 from ..inputs import check_topics
+from ..sweep import validate as sweep_validate
+from . import KIND
 from . import agreement as agreement_
 from . import analytic
 from . import gradient as gradient_
@@ -47,37 +51,54 @@ def runners(target, opts, topics, m: int) -> dict:
     }
 
 
-#: The integrator kind: what :mod:`phonglab.validate.core` runs (its plugin is a
-#: :class:`~.setup.Target`, built by :func:`prepare`).
-INTEGRATOR = core.Kind(name="integrator", word="integrator", class_name="Integrator",
-                       register="mi.register_integrator", topics=TOPICS, options=options,
-                       statistical_tests=statistical_tests, runners=runners,
-                       informational=("cost",))
+#: The integrator kind (declared by the package, whose parts this module holds).
+INTEGRATOR = KIND
 
 
-def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
-    """Load the integrator (:func:`phonglab.validate.core.prepare`) and build its
+def load(spec, params, hint) -> Loaded:
+    """Load the integrator (:func:`phonglab.settings.load_plugin`) and build its
     :class:`~.setup.Target`."""
-    loaded = core.prepare(INTEGRATOR, spec, variant=variant, params=params, plugins=plugins)
+    loaded = load_plugin(spec, params, kind=mi.Integrator, word="integrator", hint=hint)
     target = setup_.build(loaded, spec, params)
     meta = {**(loaded.spec or {}), "depth": target.depth_note}
     return Loaded(target, loaded.label, meta)
 
 
+def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
+    """Set the variant, run the plugin files, load the integrator
+    (:func:`phonglab.validate.core.prepare`)."""
+    return core.prepare(INTEGRATOR, spec, variant=variant, params=params, plugins=plugins)
+
+
+def known_for(name: str, params: dict | None) -> dict:
+    """The conformance table's findings of the Mitsuba built-in integrator ``name``."""
+    from ..builtins.kinds import known_for as of_kind
+    return of_kind("integrator", name, None)
+
+
+def catalogue():
+    """The integrator conformance table (:mod:`.builtins`)."""
+    from .builtins import CATALOGUE
+    return CATALOGUE
+
+
 def validate_integrator(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                        known=None, plugins=(), family=1, sizes=None) -> Report:
+                        known=None, plugins=(), family=1, sizes=None, sweep=False,
+                        runner=None) -> Report:
     """Validate one integrator on every topic (or ``topics``); see :mod:`phonglab.validate`.
 
     ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
     ``<integrator>``, or a loaded ``mi.Integrator`` (the last two are run as they are: they
     cannot be rebuilt at the scenes' depths).  ``known``, ``plugins``, ``family``, ``sizes``:
-    as for :func:`phonglab.validate.bsdf.kind.validate_bsdf`.  Bad input raises
-    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
+    ``sweep``, ``runner``: as for :func:`phonglab.validate.bsdf.kind.validate_bsdf`.  Bad input
+    raises :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
     """
+    if sweep:
+        return sweep_validate(INTEGRATOR, spec, variant=variant, params=params, topics=topics,
+                              seed=seed, quick=quick, known=known, plugins=plugins,
+                              family=family, sizes=sizes, runner=runner)
     topics = check_topics(topics, TOPICS)
     target = prepare(spec, variant=variant, params=params, plugins=plugins)
     return core.run(INTEGRATOR, target, topics=topics, seed=seed, quick=quick, known=known,
                     family=family, sizes=sizes)
 
-
-is_integrator = setup_.is_integrator

@@ -32,7 +32,6 @@ import mitsuba as mi
 
 from ...render import max_depth_of
 from ...settings import Loaded
-from .. import core
 
 #: Built-ins without ``max_depth`` and the depth their estimator computes.
 FIXED_DEPTHS = {"direct": 2}
@@ -130,7 +129,3 @@ def build(loaded: Loaded, spec, params: dict | None) -> Target:
                         "so only depth-independent scenes apply")
     return Target(loaded.label, d, integ, depth, fixed, note, aov, splatting, ad)
 
-
-def is_integrator(spec) -> bool:
-    """Whether ``spec`` names an integrator plugin (:func:`phonglab.validate.core.names_plugin`)."""
-    return core.names_plugin(spec, mi.Integrator, mi.ObjectType.Integrator, "integrator")

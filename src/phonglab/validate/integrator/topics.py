@@ -6,16 +6,11 @@ JSON schema and table there) whose topic must be one of :data:`TOPICS`.  No Mits
 
 from __future__ import annotations
 
-from ... import verdict
+from ..kind import topic_row
 
 #: The validator's integrator topics, in the order the table lists them.
 TOPICS = ("finite", "bias", "convergence", "agreement", "gradient", "cost")
 
 
-class Row(verdict.Row):
-    """A :class:`phonglab.verdict.Row` of one of the integrator kind's :data:`TOPICS`."""
-
-    def __post_init__(self):
-        if self.topic not in TOPICS:
-            raise ValueError(f"unknown topic {self.topic!r}; choose one of {', '.join(TOPICS)}")
-        super().__post_init__()
+#: A row of one of :data:`TOPICS` (:func:`phonglab.validate.kind.topic_row`).
+Row = topic_row(TOPICS, "integrator", __name__)

@@ -1,0 +1,127 @@
+r"""What a plugin kind is: one :class:`Kind` record, all the validator needs to know of it.
+
+A kind (BSDF, emitter, integrator, phase function) is one folder of :mod:`phonglab.validate`
+and one line of :data:`phonglab.validate.registry.KINDS`.  Its folder's ``__init__`` declares
+its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its input
+from these records); its *implementation module* (``impl``, the folder's ``kind`` module,
+which imports Mitsuba) holds the parts that run, looked up by name with :meth:`Kind.part`:
+
+==================  ==========================================================================
+``options``         (quick, seed, topics) -> the sizes of a run
+``statistical_tests``  (target, options, topics) -> m, the statistical tests a run makes
+``runners``         (target, options, topics, m) -> {topic: () -> rows}
+``load``            (spec, params, hint) -> :class:`~phonglab.settings.Loaded`: the plugin
+                    loaded and wrapped in what its topics probe (an emitter attached to a
+                    shape, an integrator rebuilt per scene); default: the plugin itself
+``parameters``      (target, spec, pinned) -> the parameters a sweep varies (each with
+                    ``name``, ``value``, ``range``, ``source``); absent: the kind is checked
+                    at its given point only
+``values``          target -> {parameter: value} a documented cause's ``at`` is held against
+``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
+                    of a Mitsuba built-in named by its type
+``catalogue``       () -> its conformance table (:class:`~.builtins.kinds.Catalogue`)
+``validate_<name>`` the public validator of the kind (``validate_bsdf``)
+==================  ==========================================================================
+
+A field given on the record itself (a test's toy kind) takes the place of the module's part.
+:func:`topic_row` makes a kind's row type from its topics, so no kind copies one.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from .. import verdict
+from ..errors import PhonglabError
+
+
+class ValidateError(PhonglabError):
+    """A plugin, plugin file, parameter or topic the validator cannot use."""
+
+
+#: The parts :meth:`Kind.part` resolves (module docstring).
+PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "values",
+         "known_for", "catalogue")
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One plugin kind (module docstring)."""
+
+    name: str                  #: the meta key of the plugin's label and the kind's id ("bsdf")
+    word: str                  #: the kind in messages ("BSDF", "phase function")
+    class_name: str            #: its Mitsuba class ``mi.<class_name>``
+    register: str              #: what a ``--plugin`` file calls ("mi.register_bsdf")
+    topics: tuple[str, ...]    #: every topic, in table order
+    #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
+    informational: tuple[str, ...] = ()
+    object_type: str = ""      #: its ``mi.ObjectType`` member ("BSDF", "PhaseFunction")
+    tag: str = ""              #: its XML element ("bsdf", "phase")
+    impl: str = ""             #: the module holding its parts (module docstring)
+    conformance: str = ""      #: its conformance table (docs/...md)
+    #: parts given here instead of by ``impl`` (a toy kind in a test)
+    options: Callable | None = None
+    statistical_tests: Callable | None = None
+    runners: Callable | None = None
+    parameters: Callable | None = None
+    values: Callable | None = None
+
+    @property
+    def function(self) -> str:
+        """The public validator's name, ``validate_<name>``."""
+        return f"validate_{self.name}"
+
+    @property
+    def assert_helper(self) -> str:
+        """The pytest helper's name in :mod:`phonglab.testing`, ``assert_<name>_valid``."""
+        return f"assert_{self.name}_valid"
+
+    @property
+    def article(self) -> str:
+        return "an" if self.word[0].lower() in "aeiou" else "a"
+
+    def module(self):
+        """The implementation module (imports Mitsuba)."""
+        return importlib.import_module(self.impl)
+
+    def part(self, name: str) -> Any:
+        """The part ``name`` (:data:`PARTS`): the record's own field when set, else the
+        implementation module's attribute, None when neither has it."""
+        own = getattr(self, name, None) if name in self.__dataclass_fields__ else None
+        if own is not None:
+            return own
+        return getattr(self.module(), name, None) if self.impl else None
+
+    def validator(self) -> Callable:
+        """The public validator (``validate_bsdf``) of the kind."""
+        return getattr(self.module(), self.function)
+
+    def check_topics(self, topics) -> tuple[str, ...]:
+        """The topics to run, in table order (all of them when ``topics`` is empty)."""
+        return check_topics(topics, self.topics)
+
+
+def check_topics(topics, table) -> tuple[str, ...]:
+    """The topics to run, in ``table`` order (all of ``table`` when ``topics`` is empty)."""
+    topics = tuple(topics or table)
+    bad = [t for t in topics if t not in table]
+    if bad:
+        raise ValidateError(f"unknown topic {bad[0]!r}; choose from {', '.join(table)}")
+    return tuple(t for t in table if t in topics)
+
+
+def topic_row(topics: tuple[str, ...], word: str, module: str) -> type[verdict.Row]:
+    """A :class:`phonglab.verdict.Row` type whose topic must be one of ``topics``: a misspelt
+    topic fails where the row is built, not later in a report.  ``module`` is where the type
+    is bound to the name ``Row`` (the kind's topics module), so that it pickles."""
+
+    def __post_init__(self):
+        if self.topic not in topics:
+            raise ValueError(f"unknown topic {self.topic!r}; choose one of {', '.join(topics)}")
+        verdict.Row.__post_init__(self)
+
+    return type("Row", (verdict.Row,), {
+        "__post_init__": __post_init__, "__module__": module, "__qualname__": "Row",
+        "__doc__": f"A :class:`phonglab.verdict.Row` of one of the {word} kind's topics."})
