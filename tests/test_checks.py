@@ -21,6 +21,7 @@ from scipy import stats as scipy_stats
 import phonglab
 from phonglab import checks, runtime, stats, verdict
 from phonglab.cli import main
+from phonglab.outputs import write_json
 from phonglab.physics.quadrature import lobe_quadrature
 
 # --- harness ------------------------------------------------------------------------------
@@ -78,7 +79,7 @@ def test_result_status_and_json_round_trip(tmp_path):
     assert [r.status != "fail" for r in res] == [True, False, True, False]
     # One statistical row: z = Φ⁻¹(1 − 0.01/2), tolerance z·SE.
     assert res[3].tolerance == pytest.approx(scipy_stats.norm.isf(0.005) * 0.01)
-    path = verdict.Report({"spp": 1}, res).write_json(tmp_path / "r.json")
+    path = write_json(tmp_path / "r.json", verdict.Report({"spp": 1}, res).to_dict())
     data = json.loads(path.read_text())
     assert [r["name"] for r in data["results"]] == ["a", "b", "c", "d"]
     assert data["results"][2]["status"] == "KNOWN"

@@ -136,3 +136,31 @@ def test_assert_bsdf_valid_sweeps_and_names_the_point(variant_llvm_rgb):
         assert_bsdf_valid("defect_lobe_weight_nan",
                           plugins=[SWEEP_DEFECTS / "lobe_weight_nan.py"], quick=True,
                           topics=["finite"])
+
+
+def test_an_emitter_is_swept_over_its_documented_range(variant_llvm_rgb):
+    """The sweep is every kind's (#35): a built-in emitter across its emitted quantity, from 0
+    (where the identity topics' ratios are 0/0 and the gradient's sampling factor is undefined:
+    skipped there, saying why) to 10; a correct emitter passes at every point."""
+    from phonglab.validate import validate_emitter
+
+    report = validate_emitter("point", quick=True, sweep=True)
+    sw = report.meta["sweep"]
+    assert [(p["name"], p["lo"], p["hi"], p["source"]) for p in sw["parameters"]] == \
+        [("intensity", 0.0, 10.0, "mitsuba")]
+    assert {tuple(sorted(r.point.items())) for r in report.rows} == \
+        {(), (("intensity", 0.0),), (("intensity", 10.0),)}
+    assert report.passed, report.table(report.failing)
+    dark = [r for r in report.rows if r.topic == "gradient" and r.point == {"intensity": 0.0}]
+    assert dark and dark[0].status == "skipped" and "no radiance arrives" in dark[0].reason
+
+
+def test_a_dark_surface_emitter_is_still_chi2_tested(variant_llvm_rgb):
+    """At radiance 0 every weight is 0: the χ² counts samples where pdf_direction > 0 (it
+    failed with 'no sample has a non-zero weight'), and the one-sided back stays untested."""
+    from phonglab.validate import validate_emitter
+
+    report = validate_emitter("area", params={"radiance": 0.0}, quick=True, topics=["chi2"])
+    (row,) = report.rows
+    assert row.status == "pass", row.reason
+    assert all(p.get("dark") or p["status"] == "empty" for p in row.details["points"])

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from phonglab import verdict
+from phonglab.outputs import write_json
 from phonglab.verdict import Report, Row
 
 
@@ -32,7 +33,7 @@ def test_json_is_strict_and_round_trips(tmp_path):
     assert (r["measured"], r["expected"], r["tolerance"]) == ("nan", 0.5, "inf")
     assert r["details"] == {"a": [0, 1, 2], "b": True, "c": 7, "p": "x/y.exr",
                             "(1, 2)": ["-inf"]}
-    path = report.write_json(tmp_path / "sub" / "r.json")
+    path = write_json(tmp_path / "sub" / "r.json", report.to_dict())
     assert json.loads(path.read_text()) == d
     assert Report.from_dict(d).rows[0].details == r["details"]
     assert not report.passed and report.failing == [row]

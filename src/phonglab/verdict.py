@@ -21,7 +21,8 @@ One key of ``details`` has a meaning here: ``relation`` (``"=="``, ``"<="``, ``"
 tolerance); the table shows a one-sided row's expected value as ``≤ x`` or ``≥ x``.  A row
 without it states its comparison in ``reason``.
 
-JSON (:meth:`Report.to_json`, :func:`write_json`): ``{"meta": {...}, "results": [row, ...]}``
+JSON (:meth:`Report.to_json`; :func:`phonglab.outputs.write_json` writes a report's
+:meth:`~Report.to_dict` to a file): ``{"meta": {...}, "results": [row, ...]}``
 with each row's fields exactly those of :class:`Row` (``point`` only on a sweep's rows), made
 strict-JSON-safe by
 :func:`jsonable` (numpy scalars and arrays to Python numbers and lists, NaN/Inf to strings,
@@ -246,15 +247,6 @@ class Report:
 
     def to_json(self, indent: int | None = 1) -> str:
         return json.dumps(self.to_dict(), indent=indent)
-
-    def write_json(self, path: str | Path) -> Path:
-        """:meth:`to_dict` as strict JSON at ``path``, written atomically
-        (:func:`phonglab.outputs.write_json`)."""
-        # Imported here: outputs loads numpy, OpenEXR and Pillow, which the command line's
-        # --help and a report that is only printed do not need.
-        from .outputs import write_json
-
-        return write_json(path, self.to_dict())
 
     @classmethod
     def from_dict(cls, d: dict) -> "Report":

@@ -15,6 +15,7 @@ import mitsuba as mi
 
 from .. import __version__, checks, register
 from ..errors import PhonglabError
+from ..outputs import write_json
 from ..verdict import Report, format_number
 from .options import add_seed
 
@@ -94,7 +95,7 @@ def run(args) -> int:
                   + (f"; known issue: {_issue(r)}" if r.status == "KNOWN" else ""))
     _summary(report, seconds, cfg)
     if args.json:
-        print(f"JSON: {report.write_json(args.json)}")
+        print(f"JSON: {write_json(args.json, report.to_dict())}")
     return 0 if report.passed else 1
 
 

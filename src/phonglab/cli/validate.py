@@ -246,7 +246,8 @@ def run(args) -> int:
     report, label, text = validate_one(args, params)
     print(text)
     if args.json:
-        report.write_json(args.json)
+        from ..outputs import write_json   # lazy: numpy, OpenEXR and Pillow
+        write_json(args.json, report.to_dict())
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)

@@ -28,7 +28,10 @@ round-off bound: a jump moving with x), or whose one-sided quotients at h/2 disa
 (|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within h/2 of x, e.g. a spot lane just outside
 its cutoff, lit for a larger cutoff_angle only, whose central quotient is half the one-sided
 slope at any step while AD gives the left one, 0) are left out and counted.  Tolerance on the
-kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  x is written as an opaque value so
+kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  Lanes along which no radiance arrives
+at x (e₀ = 0: an emitter swept to an emitted quantity of 0) while the weight's derivative is not
+0 have no sampling factor (0/0) and are left out too; where they are most lanes the row is
+skipped, saying so.  x is written as an opaque value so
 the kernels compile once, and restored after each parameter.
 """
 
@@ -68,6 +71,15 @@ def _fixed(setup: Setup, it, u, n: int):
     w0 = probe.to_numpy(w, n)
     e0 = probe.to_numpy(setup.emitter.eval_direction(it, ds), n)
     return ds, np.where((e0 != 0) & np.isfinite(w0), w0 / np.where(e0 != 0, e0, 1.0), 0.0)
+
+
+def _dark(setup: Setup, it, u, n: int) -> np.ndarray:
+    """Per lane: no radiance arrives along the sample at x (e₀ = 0 in every channel), so the
+    sampling factor w₀/e₀ the FD side holds is undefined there (an emitter whose emitted
+    quantity is 0 at the point swept: its FD side is 0 whatever the derivative)."""
+    ds, _ = setup.emitter.sample_direction(it, u)
+    e0 = probe.to_numpy(setup.emitter.eval_direction(it, dr.detach(ds)), n)
+    return np.all(e0 == 0, axis=1)
 
 
 def _set(params, key, value):
@@ -128,6 +140,7 @@ def _one(setup, params, key, it, u, c) -> Row:
     try:
         g = _ad(setup, params, key, v, it, u, c)
         fixed = _fixed(setup, it, u, len(c))
+        dark = _dark(setup, it, u, len(c))
         s0 = _lanes(setup, it, fixed, c)
         s_abs = np.abs(s0)
         for halvings in range(MAX_HALVINGS + 1):
@@ -144,10 +157,22 @@ def _one(setup, params, key, it, u, c) -> Row:
     scale = 0.01 * np.maximum(np.abs(d2), np.abs(g))
     jumps = ((np.abs(d1 - d2) > scale + 4.0 * noise)
              | (np.abs(forward - backward) > scale + 8.0 * noise)) & ~nonfinite
-    keep = ~jumps & ~nonfinite & np.isfinite(d1) & np.isfinite(d2)
+    # no radiance arrives, yet the weight moves with x: the FD side's factor w₀/e₀ is 0/0
+    undefined = dark & (g != 0) & ~nonfinite
+    keep = ~jumps & ~nonfinite & ~undefined & np.isfinite(d1) & np.isfinite(d2)
     ad, f1, f2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
     details = {"fd_h": f1, "fd_h2": f2, "h": h / 2, "halvings": halvings, "lanes": len(g),
                "jump_lanes": int(jumps.sum()), "nonfinite_ad_lanes": int(nonfinite.sum())}
+    left_out = ""
+    if undefined.any():
+        details["undefined_factor_lanes"] = int(undefined.sum())
+        left_out = f", {int(undefined.sum())} with no arriving radiance"
+    if keep.sum() < len(g) // 2 and undefined.sum() > jumps.sum():
+        return Row("gradient", key, ad, f2, None, None, "skipped",
+                   f"no radiance arrives along {int(undefined.sum())} of {len(g)} samples at "
+                   f"this point (the emitted quantity is 0) while the weight's derivative is "
+                   f"not 0: the difference side's sampling factor w₀/e₀ is 0/0 there, nothing "
+                   f"to compare", details)
     if keep.sum() < len(g) // 2:
         return Row("gradient", key, ad, f2, None, None, "skipped",
                    f"the difference quotients do not converge on {int(jumps.sum())} of {len(g)} "
@@ -159,7 +184,8 @@ def _one(setup, params, key, it, u, c) -> Row:
                f"central difference of Σ c·w₀·eval_direction(ds₀)/e₀ (samples held), step "
                f"{h / 2:.3g}·v ({halvings} halvings of 2^-7) over "
                f"{int(keep.sum())} lanes ({int(jumps.sum())} with a jump or kink, "
-               f"{int(nonfinite.sum())} with a non-finite AD derivative left out); tolerance "
+               f"{int(nonfinite.sum())} with a non-finite AD derivative{left_out} left out); "
+               f"tolerance "
                f"4|D(h)−D(h/2)| + 64u(Σ|S|/h + Σ|∂S|)", details)
 
 

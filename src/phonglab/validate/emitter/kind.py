@@ -16,7 +16,7 @@ from ...verdict import Report
 from .. import core
 from ..inputs import ValidateError, check_topics
 from ..sweep import validate as sweep_validate
-from . import KIND
+from . import KIND, ranges
 from . import setup as setup_
 from .config import options
 from .cost import cost
@@ -51,6 +51,10 @@ def runners(target, opts, topics, m: int) -> dict:
 
 #: The emitter kind (declared by the package, whose parts this module holds).
 EMITTER = KIND
+
+#: The sweep's parameters and the values a documented cause's ``at`` is held against.
+parameters = ranges.parameters
+values = ranges.values
 
 
 def load(spec, params, hint) -> Loaded:

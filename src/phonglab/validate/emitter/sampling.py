@@ -34,7 +34,8 @@ of such slivers (sphere_bins); the lattice here has none yet, so the emitter top
 pooling until the two are merged.  A reference point whose histogram is empty while
 ∫pdf > 0 fails; one where both are empty (the back of a one-sided emitter) is not tested.
 ``mi.chi2.EmitterAdapter`` (mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
-reference point is its own test and a sample counts only when its weight is not 0.
+reference point is its own test and a sample counts only when its weight is not 0 (an emitter
+that emits nothing, every weight 0, has its samples counted where pdf_direction > 0).
 
 Delta emitters have no density: for a delta-position light every ds.d must point from the
 reference point at the light's position (ds.d = (P − p)/|P − p|, ds.dist = |P − p|), for a
@@ -245,8 +246,22 @@ def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
     return out.reshape(nc, nphi) / n
 
 
-def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
-    """One χ² test from reference point p; its record (p-value, sums, verdict)."""
+def emits(setup: Setup, points, seed, n: int = 4096) -> bool:
+    """Whether any of ``n`` samples from any of ``points`` has a non-zero weight: False for an
+    emitter that emits nothing (its radiance swept to 0)."""
+    r = np.random.default_rng(seed)
+    for p in points:
+        it = interaction(np.tile(p, (n, 1)))
+        _, w = setup.emitter.sample_direction(it, point2(r.random((n, 2))))
+        if np.any(probe.to_numpy(w, n) != 0):
+            return True
+    return False
+
+
+def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int,
+            dark: bool = False) -> dict:
+    """One χ² test from reference point p; its record (p-value, sums, verdict).  ``dark``: the
+    emitter emits nothing anywhere (:func:`emits`), so its samples count where ds.pdf > 0."""
     basis_, c0 = frame(setup, p)
     n = opts.chi2_samples
     r = np.random.default_rng(seed)
@@ -254,7 +269,13 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     ds, w = setup.emitter.sample_direction(it, point2(r.random((n, 2))))
     weight, pdf = probe.to_numpy(w, n), probe.to_numpy(ds.pdf, n)
     d = probe.to_numpy(ds.d, n)
-    keep = (np.all(np.isfinite(weight), axis=1) & np.any(weight != 0, axis=1)
+    # an emitter that emits nothing (radiance swept to 0) still samples: its directions are
+    # counted where pdf_direction, the expectation's integrand, is positive (the support a
+    # lit emitter's non-zero weights mark: a one-sided area light's back has ds.pdf > 0 but
+    # pdf_direction = 0); a sample outside that support is the `pdf` topic's to catch
+    counts = (np.any(weight != 0, axis=1) if not dark else
+              probe.to_numpy(setup.emitter.pdf_direction(it, ds), n) > 0)
+    keep = (np.all(np.isfinite(weight), axis=1) & counts
             & np.all(np.isfinite(d), axis=1) & (pdf > 0))
     occluded = 0
     if setup.kind == "surface" and keep.any():
@@ -284,7 +305,7 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int) -> dict:
     expected = n * integral
     rec = {"ref": p.tolist(), "c0": c0, "hist_sum": float(keep.sum()) / n,
            "pdf_sum": float(integral.sum()), "outside_domain": outside,
-           "occluded": occluded / n}
+           "occluded": occluded / n, **({"dark": True} if dark else {})}
     if keep.sum() == 0 and integral.sum() < 1e-6:
         return {**rec, "status": "empty"}
     if keep.sum() == 0 or outside > 0:
@@ -303,9 +324,10 @@ def chi2(setup: Setup, opts, m_tests: int) -> list[Row]:
         return [delta_directions(setup, opts)]
     level = stats.sidak(stats.ALPHA, m_tests)
     groups = [g for g in ref_groups(setup, 1, opts.seed) if g.chi2]
+    dark = not emits(setup, [g.p[0] for g in groups], [opts.seed, 35])
     records = []
     for k, g in enumerate(groups):
-        rec = chi2_at(setup, g.p[0], opts, level, seed=[opts.seed, 34, k])
+        rec = chi2_at(setup, g.p[0], opts, level, seed=[opts.seed, 34, k], dark=dark)
         rec.update(group=g.label, where=g.where)
         sph = setup.sphere
         if sph is not None:

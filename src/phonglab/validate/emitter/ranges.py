@@ -1,0 +1,39 @@
+r"""The parameters of an emitter that a sweep varies, and the range of each
+(:mod:`phonglab.validate.ranges` does the kind-independent part: declared, documented or
+probed ranges, the points, the edges).
+
+Mitsuba 3.9.1's built-in emitters are swept over their emitted quantity, the one parameter
+every one of them scales (the plugin reference: ``intensity`` of ``point`` and ``spot`` in
+W/sr, ``radiance`` of ``area`` and ``constant``, ``irradiance`` of ``directional``, ``scale``
+of ``envmap``), from 0 (a light that emits nothing: every ratio of the identity topics is
+0/0 there) to 10; ``spot`` also over its ``cutoff_angle`` in degrees, from a narrow cone to
+the hemisphere (its ``beam_width`` is pinned to its default, 3/4 of the cutoff, whatever the
+cutoff).  An emitter's position and transform are where it sits, not its physics: not swept.
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+
+from ..ranges import Range, parameters as _parameters, traversed
+
+_EMITTED = Range(0.0, 10.0)
+#: Mitsuba 3.9.1's built-in emitters: load-time parameter -> its documented range.
+BUILTIN: dict[str, dict[str, Range]] = {
+    "point": {"intensity": _EMITTED},
+    "spot": {"intensity": _EMITTED, "cutoff_angle": Range(1.0, 90.0)},
+    "area": {"radiance": _EMITTED},
+    "constant": {"radiance": _EMITTED},
+    "directional": {"irradiance": _EMITTED},
+    "envmap": {"scale": _EMITTED},
+}
+
+def parameters(target, spec, pinned=()) -> list:
+    """The swept parameters of the emitter of ``target`` (a :class:`~.setup.Setup`)."""
+    return _parameters(target.emitter, spec, pinned, builtin=BUILTIN, cls=mi.Emitter,
+                       word="emitter")
+
+
+def values(target) -> dict[str, float]:
+    """The emitter's traversed parameter values (a documented cause's ``at``)."""
+    return traversed(target.emitter)
