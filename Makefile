@@ -72,8 +72,8 @@ validate-false-failures: setup
 	$(BIN)/python scripts/false_failures.py --seeds 20
 
 # docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
-# (phonglab.validate.builtins); docs/conformance-emitters.* and docs/conformance-integrators.*:
-# the built-in emitters and integrators (phonglab.validate.builtins.kind_catalogue(kind));
+# (phonglab.validate.bsdf.builtins); docs/conformance-emitters.* and docs/conformance-integrators.*:
+# the built-in emitters and integrators (phonglab.validate.registry.catalogue(kind));
 # CONFORMANCE_ARGS=--quick for the fast sizes.  Each run resumes from its .partial.jsonl.
 .PHONY: conformance
 conformance: setup

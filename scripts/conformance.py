@@ -5,9 +5,9 @@
         [--json docs/conformance.json] [--markdown docs/conformance.md] [--workers N]
     python scripts/conformance.py --from-json docs/conformance.json   # markdown only
 
-The cases, the findings and the markdown renderer live in phonglab.validate.builtins (a
-kind's catalogue: phonglab.validate.builtins.kind_catalogue(kind)); this driver only runs them and
-writes the two files.  Each finished case is kept in
+A kind's cases and findings are its conformance table (phonglab.validate.registry.catalogue(kind),
+the records in phonglab.validate.conformance), the renderer is phonglab.validate.markdown; this
+driver only runs them and writes the two files.  Each finished case is kept in
 ``<json>.partial.jsonl`` at once (phonglab.validate.batch.CaseLog): an interrupted run loses
 none, and the same command resumes from them.
 """
@@ -21,14 +21,15 @@ import time
 from pathlib import Path
 
 from phonglab.parallel import add_arguments, runner_from_args
-from phonglab.validate import batch, builtins
+from phonglab.validate import batch, registry
+from phonglab.validate.markdown import render_markdown, without_plot_data
 from phonglab.outputs import write_json
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--kind", choices=builtins.kinds.KINDS, default="bsdf",
-                    help="which table: built-in BSDFs (default), emitters or integrators")
+    ap.add_argument("--kind", choices=registry.names(), default="bsdf",
+                    help="which kind's table: built-in BSDFs (default), emitters, integrators, ...")
     ap.add_argument("--quick", action="store_true", help="the validator's --quick sizes")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--sweep", action="store_true",
@@ -40,7 +41,7 @@ def main(argv=None) -> int:
                     help="render the markdown from this JSON instead of validating")
     add_arguments(ap)       # --workers N / --scheduler ADDRESS: where the cases run (Dask)
     args = ap.parse_args(argv)
-    cat = builtins.kind_catalogue(args.kind)
+    cat = registry.catalogue(args.kind)
     args.json = args.json or Path(cat.json)
     args.markdown = args.markdown or Path(cat.markdown)
     labels = {c.label for c in cat.cases()}
@@ -59,7 +60,8 @@ def main(argv=None) -> int:
         chosen = [c for c in cat.cases() if not args.only or c.label in args.only]
         options = {"seed": args.seed, "quick": args.quick, "sweep": args.sweep}
         if args.kind != "bsdf":                  # the BSDF JSON keeps its options as they were
-            options = {"kind": args.kind, "seed": args.seed, "quick": args.quick}
+            options = {"kind": args.kind, "seed": args.seed, "quick": args.quick,
+                       **({"sweep": True} if args.sweep else {})}
         log = batch.CaseLog(args.json, options)     # an interrupted run resumes from it
         if log.done:
             print(f"resuming: {len(log.done)} cases already done ({log.path})", flush=True)
@@ -68,12 +70,12 @@ def main(argv=None) -> int:
             data = batch.run_all(chosen, options, progress, runner=runner, log=log)
         data["meta"]["seconds"] = round(time.perf_counter() - t0, 1)
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        data = builtins.without_plot_data(data)
+        data = without_plot_data(data)
         write_json(args.json, data, indent=None, separators=(",", ":"), end="\n")
         log.remove()
         print(f"wrote {args.json} ({data['meta']['seconds']} s)")
     args.markdown.parent.mkdir(parents=True, exist_ok=True)
-    args.markdown.write_text(builtins.render_markdown(data, cat))
+    args.markdown.write_text(render_markdown(data, cat))
     print(f"wrote {args.markdown}")
     return 0
 

@@ -13,7 +13,7 @@ their χ² outcomes coincide.
 With ``--sweep`` each run is a parameter sweep (issue #29): ``diffuse``, ``lambert``, ``phong``,
 GGX ``roughconductor`` and GGX ``roughplastic`` (the Beckmann pdfs are a Mitsuba finding) across
 their parameters, with every documented cause of the conformance table's cases of that plugin
-(``builtins.known_for_plugin``: each explains only its own signature); the Šidák family is the
+(``bsdf.builtins.known_for_plugin``: each explains only its own signature); the Šidák family is the
 points, so each sweep still fails by chance with probability ≤ ALPHA.  Its planted defects are
 ``tests/defects/sweep`` (firing only at a parameter edge).
 
@@ -38,7 +38,7 @@ from scipy import stats as scipy_stats
 
 from phonglab import stats
 from phonglab.validate.batch import false_failures
-from phonglab.validate.builtins import known_for_plugin
+from phonglab.validate.bsdf.builtins import known_for_plugin
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFECTS = ROOT / "tests" / "defects"

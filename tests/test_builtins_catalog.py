@@ -1,4 +1,5 @@
-"""The conformance catalogue (phonglab.validate.builtins): cases, documented causes, renderer."""
+"""The BSDF conformance catalogue (phonglab.validate.bsdf.builtins, .findings; the records in
+phonglab.validate.conformance, the renderer phonglab.validate.markdown): cases, documented causes, renderer."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ from pathlib import Path
 import pytest
 
 from phonglab.scenes import REPO_ROOT
-from phonglab.validate import builtins
+from phonglab.validate import conformance, markdown
+from phonglab.validate.bsdf import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row
-from phonglab.validate.builtins import findings
+from phonglab.validate.bsdf import findings
 from phonglab.verdict import Report
 
 CASES = builtins.cases()
@@ -48,7 +50,7 @@ def test_every_known_entry_names_a_source_line():
 
 def test_findings_name_existing_cases_and_reproducers():
     labels = {c.label for c in CASES}
-    for f in builtins.FINDINGS:
+    for f in findings.FINDINGS:
         assert set(f.labels) <= labels, f.key
         assert (REPO_ROOT / f.reproducer).is_file(), f.reproducer
         assert f.topic in TOPICS
@@ -80,7 +82,7 @@ def test_markdown_renders_a_given_json():
                     rows).to_dict()
     data = {"meta": {"options": {"quick": True, "seed": 3}, "seconds": 12.5},
             "reports": [report]}
-    md = builtins.render_markdown(data)
+    md = markdown.render_markdown(data)
     table_row = next(line for line in md.splitlines() if line.startswith(f"| `{label}`"))
     cells = [c.strip() for c in table_row.strip("|").split("|")][3:]   # after case, variant, points
     assert dict(zip(TOPICS, cells)) == {
@@ -98,9 +100,9 @@ def test_markdown_renders_a_given_json():
 
 def test_cell_status_order():
     rows = [{"status": s} for s in ("pass", "skipped", "KNOWN")]
-    assert builtins.cell_status(rows) == "KNOWN"
-    assert builtins.cell_status(rows + [{"status": "fail"}]) == "fail"
-    assert builtins.cell_status([]) == ""
+    assert markdown.cell_status(rows) == "KNOWN"
+    assert markdown.cell_status(rows + [{"status": "fail"}]) == "fail"
+    assert markdown.cell_status([]) == ""
 
 
 def test_script_renders_from_json(tmp_path):
@@ -120,7 +122,7 @@ def test_script_renders_from_json(tmp_path):
 
 def test_validator_issues_name_existing_cases():
     labels = {c.label for c in CASES}
-    for v in builtins.VALIDATOR_ISSUES:
+    for v in findings.VALIDATOR_ISSUES:
         assert set(v.labels) <= labels, v.key
         assert v.topic in TOPICS
 
@@ -131,7 +133,7 @@ def test_without_plot_data_keeps_the_numbers():
         {"topic": "chi2", "details": {"cells": [
             {"p_value": 0.3, "status": "pass", "messages": "Accepted", "histogram": [[1, 2]]},
             {"p_value": 0.0, "status": "fail", "messages": "Rejected", "pdf": [[1.0, 2.0]]}]}}]}]}
-    out = builtins.without_plot_data(data)
+    out = markdown.without_plot_data(data)
     energy, chi2 = out["reports"][0]["results"]
     assert energy["details"] == {"albedo": [0.5]}
     assert chi2["details"] == {"cells": [{"p_value": 0.3, "status": "pass"},
@@ -146,26 +148,26 @@ def _one_row(label, topic, status):
 
 
 def test_open_validator_issue_shown_only_for_its_failing_rows(monkeypatch):
-    fixed = builtins.VALIDATOR_ISSUES[0]
-    issue = builtins.ValidatorIssue("open-issue", fixed.topic, fixed.labels, "why")
+    fixed = findings.VALIDATOR_ISSUES[0]
+    issue = conformance.ValidatorIssue("open-issue", fixed.topic, fixed.labels, "why")
     monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (issue,))
     label = issue.labels[0]
-    md = builtins.render_markdown(_one_row(label, issue.topic, "fail"))
+    md = markdown.render_markdown(_one_row(label, issue.topic, "fail"))
     assert "### open-issue" in md and "**Unexplained fail**" not in md
-    assert "because of the validator" not in builtins.render_markdown(
+    assert "because of the validator" not in markdown.render_markdown(
         _one_row(label, issue.topic, "pass"))
-    skipped = builtins.ValidatorIssue("open-skip", "chi2", fixed.labels, "why", ("skipped",))
+    skipped = conformance.ValidatorIssue("open-skip", "chi2", fixed.labels, "why", ("skipped",))
     monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (skipped,))
-    assert "### open-skip" in builtins.render_markdown(_one_row(label, "chi2", "skipped"))
+    assert "### open-skip" in markdown.render_markdown(_one_row(label, "chi2", "skipped"))
 
 
 def test_fixed_validator_issue_is_history_and_hides_no_fail():
-    v = next(v for v in builtins.VALIDATOR_ISSUES if v.fixed)
-    assert (v.labels[0], v.topic) not in builtins.validator_issues()
-    md = builtins.render_markdown(_one_row(v.labels[0], v.topic, "pass"))
+    v = next(v for v in findings.VALIDATOR_ISSUES if v.fixed)
+    assert (v.labels[0], v.topic) not in findings.validator_issues()
+    md = markdown.render_markdown(_one_row(v.labels[0], v.topic, "pass"))
     assert f"### {v.key} (fixed)" in md and f"* fixed by: {v.fixed_by}" in md
     assert "* rows now: 1 pass\n" in md
-    md = builtins.render_markdown(_one_row(v.labels[0], v.topic, "fail"))
+    md = markdown.render_markdown(_one_row(v.labels[0], v.topic, "fail"))
     assert f"**Unexplained fail** ({v.topic})" in md and "**still failing**" in md
 
 
@@ -174,13 +176,13 @@ def test_committed_conformance_json_has_no_unexplained_fail():
     Mitsuba findings' rows are KNOWN), so no fixed entry can hide a failing row."""
     import json
     data = json.loads((REPO_ROOT / "docs" / "conformance.json").read_text())
-    open_issues = builtins.validator_issues()
+    open_issues = findings.validator_issues()
     fails = [(rep["meta"]["case"], r["topic"]) for rep in data["reports"]
              for r in rep["results"] if r["status"] == "fail"]
     assert [f for f in fails if f not in open_issues] == []
 
 
-REPRODUCERS = sorted({f.reproducer for f in builtins.FINDINGS})
+REPRODUCERS = sorted({f.reproducer for f in findings.FINDINGS})
 
 
 @pytest.mark.slow
@@ -193,8 +195,8 @@ def test_reproducer_shows_its_finding_in_mitsuba_3_9_1(script):
     from phonglab import runtime
     runtime.configure()      # pins libLLVM before Mitsuba (and Dr.Jit) load
     import mitsuba as mi
-    if mi.__version__ != builtins.MITSUBA_VERSION:
-        pytest.skip(f"the findings are pinned to Mitsuba {builtins.MITSUBA_VERSION}")
+    if mi.__version__ != conformance.MITSUBA_VERSION:
+        pytest.skip(f"the findings are pinned to Mitsuba {conformance.MITSUBA_VERSION}")
     done = subprocess.run([sys.executable, str(REPO_ROOT / script)], capture_output=True,
                           text=True, timeout=300)
     assert done.returncode == 1, done.stdout + done.stderr

@@ -1,4 +1,4 @@
-"""The emitter and integrator conformance tables (phonglab.validate.builtins.kind_catalogue):
+"""The emitter and integrator conformance tables (phonglab.validate.registry.catalogue):
 catalogues load, every 3.9.1 plugin is covered or left out, findings name their cases and
 reproducers, the markdown renders from a small JSON, and the validator fixes the tables led
 to.  Default tier: no validation runs here (``make conformance`` runs the tables)."""
@@ -10,7 +10,7 @@ import re
 import pytest
 
 from phonglab.scenes import REPO_ROOT
-from phonglab.validate import builtins
+from phonglab.validate import conformance, markdown, registry
 from phonglab.verdict import Report, Row
 
 #: src/emitters/*.cpp and src/integrators/*.cpp + src/python/python/ad/integrators/*.py at
@@ -27,7 +27,7 @@ SOURCE_LINE = re.compile(r"^(src|include|plugins)/[\w/]+\.(cpp|h|py):\d+$")
 
 @pytest.fixture(params=["emitter", "integrator"])
 def cat(request, variant_llvm_rgb):
-    return builtins.kind_catalogue(request.param)
+    return registry.catalogue(request.param)
 
 
 def test_catalogue_loads_and_covers_3_9_1(cat):
@@ -56,10 +56,10 @@ def test_findings_name_cases_source_lines_and_reproducers(cat):
 
 
 def test_whitted_and_sphere_findings_are_in_the_tables(variant_llvm_rgb):
-    emitters = {c.label: c for c in builtins.kind_catalogue("emitter").cases()}
+    emitters = {c.label: c for c in registry.catalogue("emitter").cases()}
     keys = {k.key for k in emitters["area (sphere, flip_normals)"].known["pdf"]}
     assert keys == {"sphere_emitter_inside"}
-    integrators = {c.label: c for c in builtins.kind_catalogue("integrator").cases()}
+    integrators = {c.label: c for c in registry.catalogue("integrator").cases()}
     assert integrators["whitted/radiance"].spec == {"type": "whitted", "units": "radiance"}
     assert "plane under a point light" not in {
         n for k in integrators["whitted/radiance"].known["bias"] for n in k.rows}
@@ -71,7 +71,7 @@ def _report(label, kind, rows):
 
 
 def test_markdown_renders_emitter_and_integrator_json():
-    emitter = builtins.kind_catalogue("emitter")
+    emitter = registry.catalogue("emitter")
     reports = [
         _report("area (sphere)", "emitter",
                 [Row("finite", "x", 0.0, 0.0, None, 0.0, "pass", ""),
@@ -83,7 +83,7 @@ def test_markdown_renders_emitter_and_integrator_json():
     ]
     data = {"meta": {"options": {"kind": "emitter", "quick": False, "seed": 0},
                      "seconds": 7.5}, "reports": reports}
-    md = builtins.render_markdown(data)
+    md = markdown.render_markdown(data)
     assert md.startswith("# Conformance of Mitsuba 3.9.1's built-in emitters")
     assert "`docs/conformance-emitters.json`" in md and "validate_emitter" in md
     row = next(line for line in md.splitlines() if line.startswith("| `area (sphere)`"))
@@ -97,12 +97,12 @@ def test_markdown_renders_emitter_and_integrator_json():
     for name in emitter.left_out:
         assert f"* `{name}`:" in md
 
-    integ = builtins.kind_catalogue("integrator")
+    integ = registry.catalogue("integrator")
     data = {"meta": {"options": {"kind": "integrator", "quick": True, "seed": 0}},
             "reports": [_report("whitted/radiance", "integrator",
                                 [Row("bias", "enclosure ρ=0.5 D=2", 2.0, 3.0, 0.01, 0.05,
                                      "KNOWN", "model")])]}
-    md = builtins.render_markdown(data, integ)
+    md = markdown.render_markdown(data, integ)
     assert "built-in integrators" in md and "--quick" in md
     assert "(../plugins/whitted.py#L48)" in md        # phonglab's own source, linked relatively
 
@@ -153,8 +153,8 @@ def test_reproducer_shows_its_finding(script, tmp_path):
     from phonglab import runtime
     runtime.configure()
     import mitsuba as mi
-    if mi.__version__ != builtins.MITSUBA_VERSION:
-        pytest.skip(f"the findings are pinned to Mitsuba {builtins.MITSUBA_VERSION}")
+    if mi.__version__ != conformance.MITSUBA_VERSION:
+        pytest.skip(f"the findings are pinned to Mitsuba {conformance.MITSUBA_VERSION}")
     done = subprocess.run([sys.executable, str(REPO_ROOT / script)], capture_output=True,
                           text=True, timeout=300, cwd=tmp_path)
     assert done.returncode == 1, done.stdout + done.stderr

@@ -277,7 +277,8 @@ def _without_timings(x):
 
 def test_cluster_validate_cases_identical_to_serial(cluster):
     """Conformance cases as jobs on the cluster give the serial reports (timings aside)."""
-    from phonglab.validate import batch, builtins
+    from phonglab.validate import batch
+    from phonglab.validate.bsdf import builtins
 
     address, _ = cluster
     cases = builtins.cases()[:4]

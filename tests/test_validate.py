@@ -194,7 +194,8 @@ def test_cli_bad_input_exit_2(variant_llvm_rgb, capsys, argv, message):
 
 
 def test_cli_all_builtins_with_a_small_catalogue(variant_llvm_rgb, tmp_path, capsys, monkeypatch):
-    from phonglab.validate import batch, builtins
+    from phonglab.validate import batch
+    from phonglab.validate.bsdf import builtins
     small = [builtins.Case("diffuse/test", {"type": "diffuse"}),
              builtins.Case("conductor/test", {"type": "conductor"}, delta=True)]
     monkeypatch.setattr(builtins, "cases", lambda: small)
@@ -291,7 +292,8 @@ def test_all_builtins_keeps_each_case_and_resumes(variant_llvm_rgb, tmp_path, ca
                                                   monkeypatch):
     """Ctrl-C after 45 s of --all-builtins lost every finished case (the JSON was written only
     at the end); now each case is kept as it finishes and a rerun runs only the rest."""
-    from phonglab.validate import batch, builtins
+    from phonglab.validate import batch
+    from phonglab.validate.bsdf import builtins
 
     small = [builtins.Case("diffuse/test", {"type": "diffuse"}),
              builtins.Case("roughconductor/test", {"type": "roughconductor"}),
@@ -403,7 +405,7 @@ def test_a_builtin_named_by_its_type_carries_its_documented_findings(capsys):
 def test_a_builtins_findings_follow_its_microfacet_distribution():
     """The Beckmann normalization finding explains a Beckmann lobe (Mitsuba's default), never a
     GGX one: there a normalization fail stays a fail."""
-    from phonglab.validate.builtins import known_for_plugin
+    from phonglab.validate.bsdf.builtins import known_for_plugin
 
     def keys(given):
         return {getattr(c, "key", "") for c in known_for_plugin("roughconductor", given)

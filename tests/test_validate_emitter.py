@@ -174,14 +174,14 @@ def test_a_builtin_emitter_carries_the_findings_of_its_shape(capsys):
     sphere-emitter finding (sphere.cpp:256); the findings of the catalogue's cases of the same
     shape apply by default (never the sphere's to a rectangle), --no-known shows the raw fail."""
     from phonglab.cli import main
-    from phonglab.validate.builtins.kinds import known_for
+    from phonglab.validate.emitter.kind import known_for
 
     args = ["validate", "area", "--set", "shape.type=sphere", "--set", "shape.flip_normals=true",
             "--quick", "--only", "pdf"]
     assert main(args) == 0
     assert "docs/conformance-emitters.md" in capsys.readouterr().out
     assert main(args + ["--no-known"]) == 1
-    assert known_for("emitter", "area") == {}                       # the rectangle
-    assert known_for("emitter", "area", {"type": "obj", "filename": "m.obj",
-                                         "face_normals": True}) == {}
-    assert set(known_for("emitter", "area", {"type": "obj", "filename": "m.obj"})) == {"chi2"}
+    assert known_for("area") == {}                                  # the rectangle
+    assert known_for("area", {"shape": {"type": "obj", "filename": "m.obj",
+                                        "face_normals": True}}) == {}
+    assert set(known_for("area", {"shape": {"type": "obj", "filename": "m.obj"}})) == {"chi2"}

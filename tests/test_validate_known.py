@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from phonglab.validate import validate_bsdf
-from phonglab.validate.builtins import FINDINGS
+from phonglab.validate.bsdf.findings import FINDINGS
 from phonglab.validate.bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
                                                ComponentOutOfRange, GrazingIncidence, SamplePoint,
                                                bin_mask)
@@ -135,7 +135,7 @@ def test_every_finding_has_a_signature():
 def test_known_for_plugin_unites_the_causes_of_every_case_of_that_plugin_once():
     """A sweep of a built-in meets the findings of all of its table cases: each cause once,
     and only causes of that plugin's cases (each still matches only its own signature)."""
-    from phonglab.validate.builtins import cases, known_for_plugin
+    from phonglab.validate.bsdf.builtins import cases, known_for_plugin
     known = known_for_plugin("roughplastic")
     for topic in {t for case in cases() if case.plugin == "roughplastic" for t in case.known}:
         expected = [c for case in cases() if case.plugin == "roughplastic"

@@ -87,7 +87,7 @@ def add_parser(sub) -> None:
                         "as fails; by default a Mitsuba built-in named by its type carries them, "
                         "each only inside its own signature, as KNOWN rows")
     p.add_argument("--all-builtins", action="store_true",
-                   help="validate every case of the built-in catalogue (phonglab.validate.builtins); "
+                   help="validate every case of the built-in catalogue (phonglab.validate.registry.catalogue: each kind's table); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
                         "and a rerun with the same options resumes from it")
     add_arguments(p)         # --workers / --scheduler: where the --all-builtins cases run

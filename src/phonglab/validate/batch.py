@@ -1,7 +1,7 @@
 """Many BSDFs as independent jobs: :func:`run_case` (picklable, one case -> one report dict).
 
 ``phonglab validate --all-builtins`` maps :func:`run_case` over the cases of
-:func:`phonglab.validate.builtins.cases`.  Each job sets its own variant, loads its own BSDF and
+:func:`phonglab.validate.registry.catalogue` (a kind's conformance table).  Each job sets its own variant, loads its own BSDF and
 returns plain JSON-able data, so an execution layer (a process pool, ``dask.distributed``'s
 ``client.map(run_case, labels, options=...)``) can run them anywhere; Mitsuba/Dr.Jit state is
 per process, so jobs parallelize over processes, not threads.  A case that cannot be loaded
@@ -23,11 +23,11 @@ from ..verdict import Report, Row, point_label
 from . import registry
 from .bsdf.kind import validate_bsdf
 from .bsdf.topics import TOPICS
-from .builtins.kinds import catalogue
+from .registry import catalogue
 
 
 def find_case(case, kind: str = "bsdf"):
-    """A case of ``kind``'s catalogue (:func:`~phonglab.validate.builtins.kinds.catalogue`)
+    """A case of ``kind``'s catalogue (:func:`~phonglab.validate.registry.catalogue`)
     from itself or its label."""
     if not isinstance(case, str):
         return case
@@ -44,11 +44,11 @@ def _validate(case, kind: str, options: dict) -> Report:
         return Report({kind: case.plugin, "variant": case.resolved_variant()},
                       [Row("finite", "the case loads and runs", None, None, None, None,
                            "skipped", case.skip)])
-    if kind == "bsdf":
-        return validate_bsdf(case.spec, **common, sweep=options.get("sweep", False))
-    from .. import registration                  # phonglab's own plugins (whitted) in it
-    registration.register(common["variant"])
+    if kind != "bsdf":
+        from .. import registration              # phonglab's own plugins (whitted) in it
+        registration.register(common["variant"])
     return registry.by_name(kind).validator()(case.spec, **common,
+                                              sweep=options.get("sweep", False),
                                               **getattr(case, "options", {}))
 
 

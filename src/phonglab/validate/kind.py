@@ -19,7 +19,7 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``values``          target -> {parameter: value} a documented cause's ``at`` is held against
 ``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
                     of a Mitsuba built-in named by its type
-``catalogue``       () -> its conformance table (:class:`~.builtins.kinds.Catalogue`)
+``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
 ``validate_<name>`` the public validator of the kind (``validate_bsdf``)
 ==================  ==========================================================================
 

@@ -35,6 +35,11 @@ def names() -> tuple[str, ...]:
     return tuple(k.name for k in KINDS)
 
 
+def catalogue(name: str = "bsdf"):
+    """The conformance table (:class:`~.conformance.Catalogue`) of the kind called ``name``."""
+    return by_name(name).part("catalogue")()
+
+
 def every_topic() -> tuple[str, ...]:
     """Every kind's topics, each once, in the kinds' order."""
     return tuple(dict.fromkeys(t for k in KINDS for t in k.topics))

@@ -73,15 +73,15 @@ BSDF = KIND
 
 def known_for(name: str, params: dict | None) -> dict:
     """The conformance table's findings of the Mitsuba built-in BSDF ``name``, for the
-    microfacet distribution of ``params`` (:func:`phonglab.validate.builtins.known_for_plugin`)."""
-    from ..builtins import known_for_plugin   # the catalogue and its findings: only when asked
+    microfacet distribution of ``params`` (:func:`phonglab.validate.bsdf.builtins.known_for_plugin`)."""
+    from .builtins import known_for_plugin   # the catalogue and its findings: only when asked
     return known_for_plugin(name, params or {})
 
 
 def catalogue():
-    """The BSDF conformance table (:mod:`phonglab.validate.builtins`)."""
-    from ..builtins.kinds import bsdf_catalogue
-    return bsdf_catalogue()
+    """The BSDF conformance table (:mod:`.builtins`)."""
+    from .builtins import catalogue as table
+    return table()
 
 
 def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,

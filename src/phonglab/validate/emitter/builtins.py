@@ -27,8 +27,7 @@ view of the first eleven the tests use.
 
 from __future__ import annotations
 
-from ..builtins.findings import Finding, ValidatorIssue
-from ..builtins.kinds import Catalogue, KindCase, with_known
+from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
 from .signatures import InvalidSample, NegativeOnly, SphereSurfaceBand
 from .topics import TOPICS
 

@@ -14,6 +14,7 @@ import mitsuba as mi
 from ...settings import Loaded, load_plugin
 from ...verdict import Report
 from .. import core
+from ..conformance import known_of
 from ..inputs import ValidateError, check_topics
 from ..sweep import validate as sweep_validate
 from . import KIND, ranges
@@ -92,11 +93,28 @@ def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loade
                         plugins=plugins)
 
 
-def known_for(name: str, params: dict | None) -> dict:
-    """The conformance table's findings of the Mitsuba built-in emitter ``name`` (a surface
-    emitter's of the same shape only: :func:`phonglab.validate.builtins.kinds.known_for`)."""
-    from ..builtins.kinds import known_for as of_kind
-    return of_kind("emitter", name, (params or {}).get("shape"))
+def _shape_key(shape: dict | None) -> dict:
+    """What identifies a surface emitter's shape for its findings: every entry but the file."""
+    return {k: v for k, v in (shape or {}).items() if k != "filename"}
+
+
+def known_for(name: str, params: dict | None = None) -> dict:
+    """topic -> the documented causes of the emitter table's cases of ``name`` (a type name),
+    for that emitter validated outside the table (``phonglab validate area --set
+    shape.type=sphere``).  A surface emitter's cases count only with the same shape
+    (``params["shape"]``: type and flags, boolean flags False when absent; None: the rectangle
+    an area emitter loaded alone is attached to): the vertex-normal mesh finding says nothing
+    of a rectangle, the sphere's nothing of a disk.  Each cause still holds only inside its own
+    signature."""
+    wanted = _shape_key((params or {}).get("shape") or setup_.DEFAULT_SHAPE)
+
+    def same_shape(case) -> bool:
+        if name != "area":
+            return True
+        have = _shape_key(case.options.get("shape") or setup_.DEFAULT_SHAPE)
+        return all(have.get(k, False) == wanted.get(k, False) for k in {*have, *wanted})
+
+    return known_of(catalogue().cases(), name, same_shape)
 
 
 def catalogue():

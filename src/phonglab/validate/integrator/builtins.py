@@ -10,8 +10,7 @@ scene's depth where it takes ``max_depth``, :mod:`.setup`).
 
 from __future__ import annotations
 
-from ..builtins.findings import Finding, ValidatorIssue
-from ..builtins.kinds import Catalogue, KindCase, with_known
+from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
 from .topics import TOPICS
 
 POLARIZED = "llvm_ad_spectral_polarized"

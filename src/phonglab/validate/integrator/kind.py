@@ -14,6 +14,7 @@ import mitsuba as mi
 from ...settings import Loaded, load_plugin
 from ...verdict import Report
 from .. import core
+from ..conformance import known_of
 from ..inputs import check_topics
 from ..sweep import validate as sweep_validate
 from . import KIND
@@ -72,8 +73,7 @@ def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
 
 def known_for(name: str, params: dict | None) -> dict:
     """The conformance table's findings of the Mitsuba built-in integrator ``name``."""
-    from ..builtins.kinds import known_for as of_kind
-    return of_kind("integrator", name, None)
+    return known_of(catalogue().cases(), name)
 
 
 def catalogue():

@@ -1,61 +1,21 @@
-r"""Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table, and every
-row that failed because of the validator itself.
+r"""Every Mitsuba 3.9.1 behaviour behind a failing row of the BSDF conformance table, and every
+row that failed because of the validator itself (the records: :mod:`phonglab.validate.conformance`).
 
-A :class:`Finding` pins a row that fails in Mitsuba to its source line (``file:line`` at tag
+A :class:`~phonglab.validate.conformance.Finding` pins a row that fails in Mitsuba to its source line (``file:line`` at tag
 v3.9.1, commit :data:`MITSUBA_COMMIT`), one sentence of cause, what the probe measures, what a
 correct plugin gives and a reproducer in ``tests/repro/`` that exits 1 while the behaviour is
-present; :func:`known_causes` turns :data:`FINDINGS` into the ``known`` entries of the
-catalogue's cases (their rows are reported as KNOWN).  A :class:`ValidatorIssue` is a row
+present; :func:`phonglab.validate.conformance.known_causes` turns :data:`FINDINGS` into the ``known`` entries of the
+catalogue's cases (their rows are reported as KNOWN).  A :class:`~phonglab.validate.conformance.ValidatorIssue` is a row
 traced to the validator (it stays a fail in the JSON); one with ``fixed_by`` is history.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
                                Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence,
                                MaskedReflection, ParameterAt, Region,
                                SampleEdgeAtNormalIncidence, SamplePoint, Union)
-from ..core import Known
-
-#: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
-MITSUBA_VERSION = "3.9.1"
-#: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
-#: ``a8c3ffd763c8…``, quoted here before, is the tag object itself).
-MITSUBA_COMMIT = "478e193a183c21723f4a8251afc3ad29a8da4c5e"
-SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
-
-
-@dataclass(frozen=True)
-class Finding:
-    """A row that fails for a reason in Mitsuba 3.9.1 itself, pinned to its source line."""
-
-    key: str                 #: short id, e.g. ``roughplastic-pdf-below-horizon``
-    topic: str               #: the validator topic that fails
-    labels: tuple[str, ...]  #: the cases it affects
-    source: str              #: ``path/in/mitsuba3.cpp:LINE`` at tag v3.9.1
-    cause: str               #: one sentence: what that line does wrong (or why it is by design)
-    measured: str            #: what the probe measures
-    expected: str            #: what a correct plugin gives
-    reproducer: str          #: tests/repro/<script>.py: exits 1 while the behaviour is present
-    bug: bool = True         #: False: intended behaviour of the model, documented as KNOWN
-    #: the names of the rows it explains (a parameter name also matches ``nested.<name>``)
-    rows: tuple[str, ...] = ()
-    #: the failing lanes it explains (:mod:`phonglab.validate.bsdf.signatures`); None: all
-    region: Region | None = None
-    #: parameter values it holds at ((name, value) or (name, (lo, hi)), ...; () -- every point)
-    at: tuple[tuple[str, Any], ...] = ()
-
-    def known_text(self) -> str:
-        """The ``known`` entry of a case: ``file:line: cause``."""
-        return f"{self.source}: {self.cause}"
-
-    def known(self) -> Known:
-        """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
-        return Known(self.known_text(), self.rows, self.region, self.key, self.at)
-
+from ..conformance import Finding, ValidatorIssue
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
 #: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).
@@ -502,26 +462,6 @@ FINDINGS: tuple[Finding, ...] = (
 )
 
 
-@dataclass(frozen=True)
-class ValidatorIssue:
-    """A failing row traced to the validator itself, not to Mitsuba (stays a fail in the JSON).
-
-    An issue with ``fixed_by`` is history: it no longer explains any row (a row of its cases
-    that fails again is an unexplained fail), and docs/conformance.md lists it with its fix.
-    """
-
-    key: str
-    topic: str
-    labels: tuple[str, ...]
-    explanation: str         #: what the validator did wrong, with the measurement showing it
-    statuses: tuple[str, ...] = ("fail",)   #: the row statuses it explains (while open)
-    fixed_by: str = ""       #: the commit (subject) and mechanism that fixed it; "" while open
-
-    @property
-    def fixed(self) -> bool:
-        return bool(self.fixed_by)
-
-
 _D815814 = ("commit d815814 (validate: fixes for the validator-side fails found by the "
             "conformance run)")
 
@@ -645,14 +585,3 @@ def validator_issues() -> dict[tuple[str, str], ValidatorIssue]:
     """(label, topic) -> the OPEN validator issue that explains that row's fail (a fixed one
     explains nothing: its row failing again is an unexplained fail)."""
     return {(label, v.topic): v for v in VALIDATOR_ISSUES if not v.fixed for label in v.labels}
-
-
-def known_causes(findings=None) -> dict[str, dict[str, tuple[Known, ...]]]:
-    """label -> {topic: (Known, ...)} from ``findings`` (default :data:`FINDINGS`), each with
-    its signature."""
-    out: dict[str, dict[str, tuple[Known, ...]]] = {}
-    for f in FINDINGS if findings is None else findings:
-        for label in f.labels:
-            topics = out.setdefault(label, {})
-            topics[f.topic] = topics.get(f.topic, ()) + (f.known(),)
-    return out

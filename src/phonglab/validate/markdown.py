@@ -2,18 +2,18 @@ r"""docs/conformance.md from the JSON of ``phonglab validate --all-builtins --js
 JSON as committed (docs/conformance.json, :func:`without_plot_data`).
 
 :func:`render_markdown` turns the document of :func:`phonglab.validate.batch.run_all` (one
-report per case of :func:`phonglab.validate.builtins.cases`) into the conformance table, each
+report per case of a kind's table, :func:`phonglab.validate.registry.catalogue`) into the conformance table, each
 case's rows that do not pass, the Mitsuba findings and the validator's own issues
-(:mod:`.findings`), and the plugins left out; the numbers in ``docs/conformance.md`` come from
+(:mod:`.conformance`), and the plugins left out; the numbers in ``docs/conformance.md`` come from
 that JSON only.
 """
 
 from __future__ import annotations
 
-from ...verdict import point_label
-from ..core import at_text
-from .findings import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL
-from .kinds import Catalogue, catalogue as catalogue_of
+from ..verdict import point_label
+from .conformance import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL, Catalogue
+from .core import at_text
+from .registry import catalogue as catalogue_of
 
 #: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).
 PLOT_ONLY = ("lobes", "histogram", "pdf", "expected")
@@ -129,7 +129,7 @@ def _case_section(report: dict, cat: Catalogue) -> list[str]:
 
 
 def _findings_name(cat: Catalogue) -> str:
-    return ("phonglab.validate.builtins.FINDINGS" if cat.kind == "bsdf"
+    return ("phonglab.validate.bsdf.findings.FINDINGS" if cat.kind == "bsdf"
             else f"phonglab.validate.{cat.kind}.builtins.FINDINGS")
 
 

@@ -5,7 +5,8 @@ r"""The catalogue of Mitsuba 3.9.1's built-in BSDFs (and phonglab's own) that ``
 commit 478e193a183c) that can be built standalone, each at two or more parameter settings, plus
 phonglab's ``lambert`` and ``phong``.  A :class:`Case` holds a ``mi.load_dict`` spec, the variant
 it needs (polarized plugins need a ``*_polarized`` variant) and the rows that are KNOWN to fail
-with their documented cause (from :mod:`.findings`: the Mitsuba source line and one sentence).
+with their documented cause (from :mod:`.findings`: the Mitsuba source line and one sentence);
+:func:`catalogue` is the BSDF kind's conformance table.
 A KNOWN row is still reported; it only does not make the run fail.  :data:`LEFT_OUT` names the
 3.9.1 plugins that are not in the catalogue and why.
 
@@ -21,7 +22,9 @@ from typing import Any
 import numpy as np
 
 from ... import runtime
-from .findings import known_causes
+from ..conformance import Catalogue, known_causes, known_of
+from . import findings
+from .topics import TOPICS
 
 POLARIZED = "llvm_ad_spectral_polarized"
 SPECTRAL = "llvm_ad_spectral"
@@ -246,7 +249,7 @@ def cases() -> list[Case]:
     """Every case of the conformance table, Mitsuba's built-ins first, phonglab's own last."""
     out = (_smooth_and_diffuse() + _rough() + _principled() + _wrappers()
            + _hair_spectral_polarized() + _phonglab())
-    known = known_causes()
+    known = known_causes(findings.FINDINGS)
     return [Case(c.label, c.spec, c.variant, {**c.known, **known.get(c.label, {})}, c.delta,
                  c.note) for c in out]
 
@@ -263,15 +266,19 @@ def known_for_plugin(plugin: str, given: dict | None = None) -> dict[str, tuple]
     (the parameters a user set), only the cases of the same microfacet ``distribution`` (the
     default Beckmann when not given) count: the Beckmann pdf's documented normalization defect
     says nothing about a GGX lobe, so a GGX failure of that row stays a fail."""
-    out: dict[str, tuple] = {}
     wanted = None if given is None else str(given.get("distribution", DEFAULT_DISTRIBUTION))
-    for case in cases():
-        distribution = str(case.spec.get("distribution", DEFAULT_DISTRIBUTION)).lower()
-        if case.plugin == plugin and (wanted is None or distribution == wanted.lower()):
-            for topic, causes in case.known.items():
-                out[topic] = out.get(topic, ()) + tuple(c for c in causes
-                                                        if c not in out.get(topic, ()))
-    return out
+    return known_of(cases(), plugin, lambda case: wanted is None or str(
+        case.spec.get("distribution", DEFAULT_DISTRIBUTION)).lower() == wanted.lower())
+
+
+def catalogue() -> Catalogue:
+    """The BSDF kind's table: :func:`cases`, :data:`~.findings.FINDINGS` and the validator's
+    issues, each looked up at call time (a test patches them)."""
+    return Catalogue("bsdf", "BSDFs", "BSDF", lambda: cases(), TOPICS, "validate_bsdf",
+                     "phonglab.validate.bsdf.builtins.cases()", findings.FINDINGS,
+                     findings.VALIDATOR_ISSUES,
+                     LEFT_OUT, "docs/conformance.json", "docs/conformance.md",
+                     "make conformance", case_text="one BSDF at one parameter setting")
 
 
 #: Mitsuba 3.9.1 BSDF plugins (src/bsdfs/*.cpp) that are not in :func:`cases`, and why.

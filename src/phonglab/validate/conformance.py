@@ -1,0 +1,172 @@
+r"""The records of the conformance tables, one per plugin kind: what ``make conformance``
+(scripts/conformance.py ``--kind bsdf|emitter|integrator``) runs, and what docs/conformance*.md
+are rendered from (:mod:`phonglab.validate.markdown`).
+
+A :class:`Catalogue` names a kind's cases, the validator function that checks one case, its
+topics, its documented Mitsuba findings (:class:`~.findings.Finding`, matched by signature),
+its open and fixed validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
+is :mod:`phonglab.validate.bsdf.builtins`; the emitter and integrator ones are
+:mod:`phonglab.validate.emitter.builtins` and :mod:`phonglab.validate.integrator.builtins`,
+whose cases are :class:`KindCase` (a BSDF :class:`~phonglab.validate.bsdf.builtins.Case` has a
+delta flag and a sweep; these have keyword options of their validator instead, e.g. an area
+emitter's shape).  Each kind's table is its ``catalogue`` part
+(:func:`phonglab.validate.registry.catalogue`).
+
+A :class:`Finding` pins a row that fails in Mitsuba to its source line (``file:line`` at tag
+v3.9.1, commit :data:`MITSUBA_COMMIT`), one sentence of cause, what the probe measures, what a
+correct plugin gives and a reproducer in ``tests/repro/`` that exits 1 while the behaviour is
+present; :func:`known_causes` turns findings into the ``known`` entries of the cases (their
+rows are reported as KNOWN).  A :class:`ValidatorIssue` is a row traced to the validator (it
+stays a fail in the JSON); one with ``fixed_by`` is history.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable
+
+from .. import runtime
+from .core import Known
+
+
+#: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
+MITSUBA_VERSION = "3.9.1"
+#: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
+#: ``a8c3ffd763c8…``, quoted here before, is the tag object itself).
+MITSUBA_COMMIT = "478e193a183c21723f4a8251afc3ad29a8da4c5e"
+SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
+
+
+@dataclass(frozen=True)
+class Finding:
+    """A row that fails for a reason in Mitsuba 3.9.1 itself, pinned to its source line."""
+
+    key: str                 #: short id, e.g. ``roughplastic-pdf-below-horizon``
+    topic: str               #: the validator topic that fails
+    labels: tuple[str, ...]  #: the cases it affects
+    source: str              #: ``path/in/mitsuba3.cpp:LINE`` at tag v3.9.1
+    cause: str               #: one sentence: what that line does wrong (or why it is by design)
+    measured: str            #: what the probe measures
+    expected: str            #: what a correct plugin gives
+    reproducer: str          #: tests/repro/<script>.py: exits 1 while the behaviour is present
+    bug: bool = True         #: False: intended behaviour of the model, documented as KNOWN
+    #: the names of the rows it explains (a parameter name also matches ``nested.<name>``)
+    rows: tuple[str, ...] = ()
+    #: the failing lanes it explains (:mod:`phonglab.validate.bsdf.signatures`); None: all
+    region: Any = None
+    #: parameter values it holds at ((name, value) or (name, (lo, hi)), ...; () -- every point)
+    at: tuple[tuple[str, Any], ...] = ()
+
+    def known_text(self) -> str:
+        """The ``known`` entry of a case: ``file:line: cause``."""
+        return f"{self.source}: {self.cause}"
+
+    def known(self) -> Known:
+        """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
+        return Known(self.known_text(), self.rows, self.region, self.key, self.at)
+
+
+@dataclass(frozen=True)
+class ValidatorIssue:
+    """A failing row traced to the validator itself, not to Mitsuba (stays a fail in the JSON).
+
+    An issue with ``fixed_by`` is history: it no longer explains any row (a row of its cases
+    that fails again is an unexplained fail), and docs/conformance.md lists it with its fix.
+    """
+
+    key: str
+    topic: str
+    labels: tuple[str, ...]
+    explanation: str         #: what the validator did wrong, with the measurement showing it
+    statuses: tuple[str, ...] = ("fail",)   #: the row statuses it explains (while open)
+    fixed_by: str = ""       #: the commit (subject) and mechanism that fixed it; "" while open
+
+    @property
+    def fixed(self) -> bool:
+        return bool(self.fixed_by)
+
+
+@dataclass(frozen=True)
+class KindCase:
+    """One emitter or integrator at one setting."""
+
+    label: str                       #: unique, e.g. ``area (sphere)``
+    spec: Any                        #: the ``mi.load_dict`` dictionary
+    variant: str | None = None       #: None: phonglab's default (``llvm_ad_rgb``)
+    #: topic -> the documented causes (``Known``, with their signatures) of rows known to fail
+    known: dict[str, tuple] = field(default_factory=dict)
+    note: str = ""                   #: what the setting exercises, for the table
+    #: keyword arguments of the kind's validator beyond spec and variant (``shape``)
+    options: dict[str, Any] = field(default_factory=dict)
+    #: why the case is reported as one skipped row instead of being validated ("" -- it runs)
+    skip: str = ""
+
+    @property
+    def plugin(self) -> str:
+        """The plugin type at the top of the spec."""
+        return self.spec["type"]
+
+    def resolved_variant(self) -> str:
+        """The variant the case runs in."""
+        return self.variant or runtime.default_variant()
+
+
+@dataclass(frozen=True)
+class Catalogue:
+    """Everything one kind's conformance table needs."""
+
+    kind: str                        #: "bsdf", "emitter" or "integrator"
+    noun: str                        #: "BSDFs", "emitters", "integrators" (the title's)
+    word: str                        #: one case is one <word> at one setting
+    cases: Callable[[], list]        #: every case, in table order
+    topics: tuple[str, ...]
+    validate: str                    #: the phonglab.validate function name
+    cases_name: str                  #: where :attr:`cases` lives, for the markdown
+    findings: tuple[Finding, ...]
+    validator_issues: tuple[ValidatorIssue, ...]
+    left_out: dict[str, str]
+    json: str                        #: the committed JSON (docs/...)
+    markdown: str                    #: the committed markdown (docs/...)
+    command: str                     #: what regenerates them
+    #: how the markdown's header describes one case ("... at one parameter setting")
+    case_text: str = ""
+
+    def open_issues(self) -> dict[tuple[str, str], ValidatorIssue]:
+        """(label, topic) -> the open validator issue explaining that row's fail."""
+        return {(label, v.topic): v for v in self.validator_issues if not v.fixed
+                for label in v.labels}
+
+    def find(self, label: str):
+        for c in self.cases():
+            if c.label == label:
+                return c
+        raise KeyError(f"no built-in {self.kind} case labelled {label!r}")
+
+
+def with_known(cases: list, findings: tuple[Finding, ...]) -> list:
+    """``cases`` with each one's ``known`` extended by the findings naming its label."""
+    known = known_causes(findings)
+    return [replace(c, known={**c.known, **known.get(c.label, {})}) for c in cases]
+
+
+def known_causes(findings) -> dict[str, dict[str, tuple[Known, ...]]]:
+    """label -> {topic: (Known, ...)} from ``findings``, each with its signature."""
+    out: dict[str, dict[str, tuple[Known, ...]]] = {}
+    for f in findings:
+        for label in f.labels:
+            topics = out.setdefault(label, {})
+            topics[f.topic] = topics.get(f.topic, ()) + (f.known(),)
+    return out
+
+
+def known_of(cases, plugin: str, keep=lambda case: True) -> dict[str, tuple]:
+    """topic -> every documented cause of the ``cases`` of ``plugin`` (a type name) that
+    ``keep`` accepts, each once: the findings of a built-in validated outside its table."""
+    out: dict[str, tuple] = {}
+    for case in cases:
+        if case.plugin != plugin or getattr(case, "skip", "") or not keep(case):
+            continue
+        for topic, causes in case.known.items():
+            out[topic] = out.get(topic, ()) + tuple(c for c in causes
+                                                    if c not in out.get(topic, ()))
+    return out
