@@ -1,12 +1,12 @@
-"""The identities' conditioning estimate (phonglab.validate.bsdf.config): random 8u corners, then, for
-a lane that fails, every float32 wo within 8 ulps (config.refine).  Pure numpy functions stand
+"""The identities' conditioning estimate (phonglab.validate.roundoff): random 8u corners, then, for
+a lane that fails, every float32 wo within 8 ulps (roundoff.refine).  Pure numpy functions stand
 in for a BSDF, so these tests need no Mitsuba."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from phonglab.validate.bsdf import config
+from phonglab.validate import roundoff
 
 #: The grazing retro-reflection lane of roughconductor (beckmann, alpha 0.4, no visible
 #: sampling) at cos theta_i = 1e-4 whose pdf row failed: bs.pdf = 2348.7, pdf(bs.wo) = 0.
@@ -26,7 +26,7 @@ def half_vector_pdf(wi, wo):
 
 
 def test_ulp_box_holds_every_float32_neighbour():
-    box = config.ulp_box(WO, 2)
+    box = roundoff.ulp_box(WO, 2)
     assert box.shape == (125, 3)
     assert np.array_equal(box, box.astype(np.float32).astype(np.float64))
     assert any(np.array_equal(p, WO[0].astype(np.float32)) for p in box)
@@ -38,10 +38,10 @@ def test_thin_set_missed_by_random_corners_is_found_by_the_box():
     pd = half_vector_pdf(WI, WO)
     assert pd[0] == 0.0                                   # the float32 wo misses the window
     rng = np.random.default_rng(0)
-    sens = config.sensitivity(half_vector_pdf, WI, WO, rng, pd)
-    rel = config.rel_diff(np.array([BS_PDF]), pd)
-    assert sens[0] == 0.0 and config.excess(rel, sens)[0] > 1.0      # the old verdict: fail
-    ex, info = config.refine(rel, sens, np.zeros(1), half_vector_pdf, WI, WO, pd)
+    sens = roundoff.sensitivity(half_vector_pdf, WI, WO, rng, pd)
+    rel = roundoff.rel_diff(np.array([BS_PDF]), pd)
+    assert sens[0] == 0.0 and roundoff.excess(rel, sens)[0] > 1.0      # the old verdict: fail
+    ex, info = roundoff.refine(rel, sens, np.zeros(1), half_vector_pdf, WI, WO, pd)
     assert ex[0] <= 1.0
     assert info == {"box_searched": 1, "box_passed": 1, "box_stopped_early": False}
 
@@ -58,19 +58,19 @@ def test_box_keeps_a_well_conditioned_defect_failing():
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
     wi = np.tile([[0.0, 0.6, 0.8]], (64, 1))
     value = _cosine(wi, wo)
-    box = config.box_sensitivity(_cosine, wi, wo, value)
+    box = roundoff.box_sensitivity(_cosine, wi, wo, value)
     assert box.max() < 1e-5
-    rel = np.max(config.rel_diff(1.01 * value, value), axis=1)
-    sens = config.sensitivity(_cosine, wi, wo, rng, value)
-    ex, info = config.refine(rel, sens, np.zeros(64), _cosine, wi, wo, value)
+    rel = np.max(roundoff.rel_diff(1.01 * value, value), axis=1)
+    sens = roundoff.sensitivity(_cosine, wi, wo, rng, value)
+    ex, info = roundoff.refine(rel, sens, np.zeros(64), _cosine, wi, wo, value)
     assert ex.min() > 9.0
     # worst first, one batch, then stop: the row fails, the other lanes keep the random estimate
-    assert info == {"box_searched": config.BOX_BATCH, "box_passed": 0, "box_stopped_early": True}
+    assert info == {"box_searched": roundoff.BOX_BATCH, "box_passed": 0, "box_stopped_early": True}
 
 
 def test_refine_leaves_passing_lanes_alone():
     wi, wo = np.tile([[0.0, 0.6, 0.8]], (4, 1)), np.tile([[0.0, -0.6, 0.8]], (4, 1))
     value = _cosine(wi, wo)
-    rel = np.max(config.rel_diff(value, value), axis=1)
-    ex, info = config.refine(rel, np.zeros(4), np.zeros(4), _cosine, wi, wo, value)
+    rel = np.max(roundoff.rel_diff(value, value), axis=1)
+    ex, info = roundoff.refine(rel, np.zeros(4), np.zeros(4), _cosine, wi, wo, value)
     assert np.all(ex == 0.0) and info["box_searched"] == 0

@@ -49,7 +49,7 @@ def builtin_cases(variant_llvm_rgb, tmp_path):
 
 @pytest.mark.parametrize("name", sorted(PLANTED))
 def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
-    from phonglab.validate.emitter.kind import validate_emitter
+    from phonglab.validate import validate_emitter
 
     report = validate_emitter(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
     assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
@@ -62,7 +62,7 @@ def test_every_topic_but_cost_has_a_planted_defect():
 
 @pytest.mark.parametrize("label", PASSING)
 def test_builtin_emitters_pass_quick(builtin_cases, label):
-    from phonglab.validate.emitter.kind import validate_emitter
+    from phonglab.validate import validate_emitter
 
     spec, shape, known = builtin_cases[label]
     report = validate_emitter(spec, shape=shape, known=known, quick=True)
@@ -70,7 +70,7 @@ def test_builtin_emitters_pass_quick(builtin_cases, label):
 
 
 def test_sphere_inside_finding_is_a_failing_pdf_row_without_its_signature(builtin_cases):
-    from phonglab.validate.emitter.kind import validate_emitter
+    from phonglab.validate import validate_emitter
 
     spec, shape, known = builtin_cases["area (sphere, flip_normals)"]
     plain = validate_emitter(spec, shape=shape, quick=True, topics=["pdf"])
@@ -151,7 +151,7 @@ def test_builtin_emitters_pass_quick_spectral(variant_llvm_spectral, tmp_path, l
     # spectral: sample_ray draws the wavelengths too, radiance.value holds rgb2spec
     # coefficients (a λ² term): the power and gradient topics handle both
     from phonglab.validate.emitter import builtins
-    from phonglab.validate.emitter.kind import validate_emitter
+    from phonglab.validate import validate_emitter
 
     spec, shape, known = builtins.cases(builtins.envmap_file(tmp_path / "env.exr"))[label]
     report = validate_emitter(spec, shape=shape, known=known, quick=True)

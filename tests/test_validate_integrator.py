@@ -32,7 +32,7 @@ FAST = {"path_control", "nan_grazing"}
 @pytest.mark.parametrize("name", [n if n in FAST else pytest.param(n, marks=pytest.mark.slow)
                                   for n in sorted(PLANTED)])
 def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
-    from phonglab.validate.integrator.kind import validate_integrator
+    from phonglab.validate import validate_integrator
 
     report = validate_integrator(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
     assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
@@ -60,7 +60,7 @@ def test_depth_detection(variant_llvm_rgb):
 
 
 def test_aov_is_checked_for_finite_only(variant_llvm_rgb):
-    from phonglab.validate.integrator.kind import validate_integrator
+    from phonglab.validate import validate_integrator
 
     report = validate_integrator({"type": "aov", "aovs": "nn:sh_normal"}, quick=True,
                                  topics=["finite", "bias"])
@@ -94,7 +94,7 @@ def test_assert_integrator_valid(variant_llvm_rgb):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["path", "direct", "volpath", "ptracer", "prb"])
 def test_builtins_pass_default(variant_llvm_rgb, name):
-    from phonglab.validate.integrator.kind import validate_integrator
+    from phonglab.validate import validate_integrator
 
     report = validate_integrator(name)
     assert report.passed, report.table(report.failing)

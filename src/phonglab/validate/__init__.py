@@ -49,14 +49,36 @@ def validate(spec, *, variant=None, params=None, plugins=(), sweep=True, runner=
 
 
 def _face(kind):
-    """``validate_<kind>``: the kind's own validator, imported (with Mitsuba) when called."""
+    """``validate_<kind>``: one plugin of ``kind`` on every topic of its kind."""
 
-    def validate_kind(spec, **options) -> Report:
-        return kind.validator()(spec, **options)
+    def validate_kind(spec, *, params=None, sweep=False, **options) -> Report:
+        from . import sweep as sweep_   # lazy: imports Mitsuba
+        from .inputs import ValidateError
+
+        for name in kind.load_options:
+            value = options.pop(name, None)
+            if value is None:
+                continue
+            if name in (params or {}):
+                raise ValidateError(f"give the {name} once: as {name}= or as --set {name}.*")
+            params = {**(params or {}), name: value}
+        return sweep_.validate(kind, spec, params=params, sweep=sweep, **options)
 
     validate_kind.__name__ = validate_kind.__qualname__ = kind.function
-    validate_kind.__doc__ = (f"Validate {kind.article} {kind.word} on every topic of its kind; "
-                             f"see :func:`{kind.impl}.{kind.function}`.")
+    validate_kind.__doc__ = (
+        f"Validate {kind.article} {kind.word} on every topic of its kind "
+        f"({', '.join(kind.topics)}); one :class:`~phonglab.verdict.Report`.\n\n"
+        f"``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one "
+        f"``<{kind.tag}>``, or a loaded ``mi.{kind.class_name}``; ``params`` are added to a "
+        f"name's or dict's parameters"
+        + "".join(f", and so is ``{o}``" for o in kind.load_options)
+        + ".  ``plugins``: Python files that call ``" + kind.register + "``, run once after "
+        "``variant`` is set.  ``known``: topic -> documented causes (a failing row is KNOWN "
+        "when every failing lane lies in a cause's signature).  ``sweep``: every point of the "
+        "parameter sweep (:mod:`phonglab.validate.sweep`; ``params`` pinned, ``runner`` says "
+        "where the points run), not the given point alone.  ``topics``, ``seed``, ``quick``, "
+        "``family``, ``sizes``: :func:`phonglab.validate.core.run`.  Bad input raises "
+        ":class:`~phonglab.validate.inputs.ValidateError` with one sentence.")
     return validate_kind
 
 

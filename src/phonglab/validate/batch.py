@@ -21,7 +21,8 @@ from ..parallel import Job, Runner
 from ..outputs import jsonable
 from ..verdict import Report, Row, point_label
 from . import registry
-from .bsdf.kind import validate_bsdf
+from . import validate_bsdf
+from .. import validate as face
 from .bsdf.topics import TOPICS
 from .registry import catalogue
 
@@ -47,7 +48,7 @@ def _validate(case, kind: str, options: dict) -> Report:
     if kind != "bsdf":
         from .. import registration              # phonglab's own plugins (whitted) in it
         registration.register(common["variant"])
-    return registry.by_name(kind).validator()(case.spec, **common,
+    return getattr(face, registry.by_name(kind).function)(case.spec, **common,
                                               sweep=options.get("sweep", False),
                                               **getattr(case, "options", {}))
 

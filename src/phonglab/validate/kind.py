@@ -20,8 +20,11 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
                     of a Mitsuba built-in named by its type
 ``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
-``validate_<name>`` the public validator of the kind (``validate_bsdf``)
 ==================  ==========================================================================
+
+The kind's public validator, ``validate_<name>`` (``validate_bsdf``), is made by the package
+face (:mod:`phonglab.validate`) from the record: the same function for every kind, keyword
+options of its own (an emitter's ``shape``) named by :attr:`Kind.load_options`.
 
 A field given on the record itself (a test's toy kind) takes the place of the module's part.
 :func:`topic_row` makes a kind's row type from its topics, so no kind copies one.
@@ -61,6 +64,8 @@ class Kind:
     tag: str = ""              #: its XML element ("bsdf", "phase")
     impl: str = ""             #: the module holding its parts (module docstring)
     conformance: str = ""      #: its conformance table (docs/...md)
+    #: keywords of its validator that are load-time parameters (an emitter's ``shape``)
+    load_options: tuple[str, ...] = ()
     #: parts given here instead of by ``impl`` (a toy kind in a test)
     options: Callable | None = None
     statistical_tests: Callable | None = None
@@ -93,10 +98,6 @@ class Kind:
         if own is not None:
             return own
         return getattr(self.module(), name, None) if self.impl else None
-
-    def validator(self) -> Callable:
-        """The public validator (``validate_bsdf``) of the kind."""
-        return getattr(self.module(), self.function)
 
     def check_topics(self, topics) -> tuple[str, ...]:
         """The topics to run, in table order (all of them when ``topics`` is empty)."""

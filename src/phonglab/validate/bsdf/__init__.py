@@ -7,7 +7,7 @@ both integrate with :mod:`.lobes`), ``reciprocity`` (:mod:`.reciprocity`),
 ``gradient`` (:mod:`.gradient`), ``cost`` (:mod:`.cost`); the lanes they probe
 (:mod:`.lanes`), their sizes and round-off tolerances (:mod:`.config`), the topic list and the
 row that checks it (:mod:`.topics`), the identity rows' reduction (:mod:`.rows`), and the table that ties them to the kind-independent runner
-(:mod:`.kind`: :data:`~.kind.BSDF`, :func:`~.kind.validate_bsdf`).
+(:mod:`.kind`; the validator is :func:`phonglab.validate.validate_bsdf`).
 
 Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """

@@ -62,7 +62,7 @@ import numpy as np
 
 from ... import probe, stats
 from . import lanes, lobes
-from .config import ABS_FLOOR, REL_TOL
+from ..roundoff import ABS_FLOOR, REL_TOL
 from .sampling import DIRECTION_TOL
 from .topics import Row
 

@@ -11,11 +11,10 @@ traced to the validator (it stays a fail in the JSON); one with ``fixed_by`` is 
 
 from __future__ import annotations
 
-from ..bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
-                               Chi2Excess, ComponentOutOfRange, Grazing, GrazingIncidence,
-                               MaskedReflection, ParameterAt, Region,
-                               SampleEdgeAtNormalIncidence, SamplePoint, Union)
 from ..conformance import Finding, ValidatorIssue
+from .signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe, Chi2Excess,
+                         ComponentOutOfRange, Grazing, GrazingIncidence, MaskedReflection,
+                         ParameterAt, SampleEdgeAtNormalIncidence, SamplePoint, Union)
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
 #: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).

@@ -37,7 +37,7 @@ import numpy as np
 
 from ... import probe
 from . import lanes
-from .config import EPS32
+from ..roundoff import EPS32
 from .topics import Row
 
 #: Round-off multiplier of a float32 eval lane (see the module docstring).

@@ -1,7 +1,7 @@
 r"""The deterministic topics: ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``.
 
 Each is an identity that a correct BSDF satisfies lane by lane, so the tolerance is float32
-round-off (:data:`phonglab.validate.bsdf.config.REL_TOL`), not statistics:
+round-off (:data:`phonglab.validate.roundoff.REL_TOL`), not statistics:
 
 * ``finite``: eval, pdf, eval_pdf and sample (weight, pdf, wo) are finite and ≥ 0 (wo a unit
   vector where the weight is non-zero) for random directions on the whole sphere, the mirror
@@ -35,7 +35,7 @@ import numpy as np
 
 from ... import probe
 from . import lanes
-from .config import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
+from ..roundoff import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
 from .rows import BOXED, ROUND_OFF, bounded_row, max_finite, worst_lane
 from .topics import Row
 
@@ -109,7 +109,7 @@ def eval_pdf(bsdf, opts) -> list[Row]:
 
 def _samples(bsdf, opts):
     """Random samples at every incidence cell (shared by ``weight`` and ``pdf``), and the
-    sampler's own sensitivity: the same sample values at wi moved by 8 ulps (config.perturb)."""
+    sampler's own sensitivity: the same sample values at wi moved by 8 ulps (roundoff.perturb)."""
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
     r = lanes.rng(opts.seed, "weight")
     u1, u2 = r.random(len(wi)), r.random((len(wi), 2))

@@ -1,6 +1,7 @@
 """The parts of the BSDF kind (:data:`phonglab.validate.bsdf.KIND`): its statistical tests, its
-runners, its sweep's parameters, its built-ins' findings, and :func:`validate_bsdf` (the
-kind-independent runner :mod:`phonglab.validate.core` does the rest).
+runners, its sweep's parameters and its built-ins' findings (the kind-independent runner
+:mod:`phonglab.validate.core` and sweep :mod:`phonglab.validate.sweep` do the rest;
+:func:`phonglab.validate.validate_bsdf` is the validator).
 
 The statistical tests of a BSDF are the χ² cells and the normalization cells (unless every lobe
 is a delta), when it has a delta lobe the energy cells whose albedo is a mean of sample
@@ -12,9 +13,6 @@ from __future__ import annotations
 
 import mitsuba as mi
 
-from ...verdict import Report
-from .. import core
-from ..sweep import validate as sweep_validate
 from . import KIND, lanes, ranges
 from .config import options
 from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
@@ -82,27 +80,3 @@ def catalogue():
     """The BSDF conformance table (:mod:`.builtins`)."""
     from .builtins import catalogue as table
     return table()
-
-
-def validate_bsdf(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                  known=None, plugins=(), family=1, sizes=None, sweep=False,
-                  runner=None) -> Report:
-    """Validate one BSDF on every topic (or ``topics``); see :mod:`phonglab.validate`.
-
-    ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
-    ``<bsdf>``, or a loaded ``mi.BSDF``; ``params`` are added to a name's or dict's parameters.
-    ``known``: topic -> documented causes (:class:`~phonglab.validate.core.Known` with a
-    signature, or a plain string judging the whole topic): a failing row is KNOWN when every
-    failing lane lies in the signature of a cause that names it; ``plugins``:
-    Python files that call ``mi.register_bsdf``, run after the variant is set.  ``family``,
-    ``sizes``: see :func:`phonglab.validate.core.run`.  ``sweep``: check every point of the
-    plugin's parameter sweep (:mod:`phonglab.validate.sweep`; ``params`` are then pinned and
-    ``runner`` says where the points run), not the given point alone.  Bad input raises
-    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
-    """
-    if sweep:
-        return sweep_validate(BSDF, spec, variant=variant, params=params, topics=topics,
-                              seed=seed, quick=quick, known=known, plugins=plugins,
-                              family=family, sizes=sizes, runner=runner)
-    return core.validate(BSDF, spec, variant=variant, params=params, topics=topics, seed=seed,
-                         quick=quick, known=known, plugins=plugins, family=family, sizes=sizes)

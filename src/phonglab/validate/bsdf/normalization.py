@@ -30,7 +30,7 @@ vanish below the horizon, or it reports density where nothing is counted), with
 an albedo at grazing incidence) and the error max(|Q(n) − Q(n/2)|, |Q(n) − Q(3n/4)|)
 (:func:`.lobes.integrate_with_error`: one coarser rule can agree by accident), or, where it is
 larger, Q's float32 conditioning: its change when wi's norm moves by 8u (by the n/2 rule)
-(:data:`~.config.PERTURB`, the identities' perturbation).  A sampler builds its frame from
+(:data:`phonglab.validate.roundoff.PERTURB`, the identities' perturbation).  A sampler builds its frame from
 wi and draws directions whatever wi's rounding, while a pdf such as cos^p α with
 cos α = ω_o · reflect(ω_i) scales by |ω_i|^p: phonglab's ``phong`` at p = 10⁴ integrates to
 0.99979 at cos θ_i = 0.05 (every sample valid), the 1e-8 by which float32 ω_i misses unit
@@ -56,7 +56,7 @@ import numpy as np
 
 from ... import probe, stats
 from . import lanes, lobes
-from .config import PERTURB
+from ..roundoff import PERTURB
 from .topics import Row
 
 

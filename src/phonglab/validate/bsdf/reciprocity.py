@@ -13,8 +13,8 @@ therefore the adjoint form
     eval_Radiance(ω_i, ω_o) / |cos θ_o|  =  eval_Importance(ω_o, ω_i) / |cos θ_i|,
 
 which for a physically based BTDF is the η² form f(ω_i→ω_o)/η_o² = f(ω_o→ω_i)/η_i².
-Tolerance: float32 round-off (config.REL_TOL) plus the lane's sensitivity to an 8-ulp move
-of both directions (config.sensitivity); pairs with cos < 1e-4 are left out.  mitsuba3#1779.
+Tolerance: float32 round-off (roundoff.REL_TOL) plus the lane's sensitivity to an 8-ulp move
+of both directions (roundoff.sensitivity); pairs with cos < 1e-4 are left out.  mitsuba3#1779.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import numpy as np
 
 from ... import probe
 from . import lanes
-from .config import excess, rel_diff, sensitivity
+from ..roundoff import excess, rel_diff, sensitivity
 from .rows import CONDITIONED, bounded_row, max_finite, worst_lane
 from .topics import Row
 

@@ -16,13 +16,13 @@ import numpy as np
 from .topics import Row
 
 #: The reason text of a row compared at float32 round-off alone.
-ROUND_OFF = "float32 round-off tolerance 2^-10 relative (config.REL_TOL)"
+ROUND_OFF = "float32 round-off tolerance 2^-10 relative (roundoff.REL_TOL)"
 #: ... of a row compared against each lane's round-off plus its sensitivity.
 CONDITIONED = ("measured = max over lanes of rel_diff / (2^-10 + both sides' sensitivity to an "
-               "8-ulp move of their input directions), must be ≤ 1 (config.sensitivity)")
-#: ... of a row whose failing lanes are searched again over an 8-ulp box (config.refine).
+               "8-ulp move of their input directions), must be ≤ 1 (roundoff.sensitivity)")
+#: ... of a row whose failing lanes are searched again over an 8-ulp box (roundoff.refine).
 BOXED = (CONDITIONED[:-1] + "; a lane that fails gets the evaluated side's sensitivity over "
-         "every float32 wo within 8 ulps per component, config.refine)")
+         "every float32 wo within 8 ulps per component, roundoff.refine)")
 
 
 def bounded_row(topic, name, measured, tol, reason, details, expected=0.0, lanes=None) -> Row:

@@ -6,7 +6,7 @@ where it can be sampled and its reference points (:mod:`.setup`), the stacked la
 identity topics (:mod:`.lanes`), sizes and seeds (:mod:`.config`), the topic list and the row
 (:mod:`.topics`), Mitsuba's built-in emitters and their findings (:mod:`.builtins`,
 :mod:`.signatures`), and the table that ties them to the kind-independent runner
-(:mod:`.kind`: :data:`~.kind.EMITTER`, :func:`~.kind.validate_emitter`).
+(:mod:`.kind`; the validator is :func:`phonglab.validate.validate_emitter`).
 
 Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """
@@ -17,4 +17,5 @@ from .topics import TOPICS
 #: The emitter kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
 KIND = Kind(name="emitter", word="emitter", class_name="Emitter", register="mi.register_emitter",
             topics=TOPICS, informational=("cost",), object_type="Emitter", tag="emitter",
-            impl=__name__ + ".kind", conformance="docs/conformance-emitters.md")
+            impl=__name__ + ".kind", conformance="docs/conformance-emitters.md",
+            load_options=("shape",))

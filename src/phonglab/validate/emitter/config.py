@@ -1,7 +1,7 @@
 """The emitter validator's sizes (quick and default) and its seeded random streams.
 
 Round-off tolerances are the BSDF kind's (:mod:`phonglab.validate.bsdf.config`: ``REL_TOL`` =
-2⁻¹⁰ relative, :func:`~phonglab.validate.bsdf.config.rel_diff` with its floor, and the 8u
+2⁻¹⁰ relative, :func:`~phonglab.validate.roundoff.rel_diff` with its floor, and the 8u
 perturbation of a direction for a lane's sensitivity): an emitter's identities are float32
 chains of the same length (a cone or area pdf, a radiance lookup, a division).
 """

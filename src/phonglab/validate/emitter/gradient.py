@@ -42,7 +42,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..bsdf.config import EPS32
+from ..roundoff import EPS32
 from .config import rng
 from .lanes import with_edges
 from .setup import Setup, interaction, point2, ref_groups

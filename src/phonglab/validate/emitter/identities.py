@@ -20,11 +20,11 @@ Mitsuba's conventions (3.9.1, commit 478e193a), which every emitter must keep:
 Rows.  ``finite``: every output of sample_direction, pdf_direction, eval, sample_ray and
 sample_position is finite and ≥ 0 over all reference points and sample values (edges
 included); ``measured`` is the number of bad lanes, tolerance 0.  ``weight``: weight · ds.pdf
-equals eval_direction(ds) (float32 round-off, ``bsdf.config.REL_TOL`` = 2⁻¹⁰ relative, with
+equals eval_direction(ds) (float32 round-off, ``roundoff.REL_TOL`` = 2⁻¹⁰ relative, with
 ``rel_diff``'s floor), and for non-delta emitters it equals the radiance ``eval`` returns at
 the point a ray from it.p along ds.d hits (traced in a scene holding the shape alone; an
 environment's at si.wi = −ds.d), to REL_TOL plus the lane's sensitivity to an 8u move of the
-ray (``bsdf.config.sensitivity``; a textured radiance changes along the surface).  ``pdf``:
+ray (``roundoff.sensitivity``; a textured radiance changes along the surface).  ``pdf``:
 ds.pdf = pdf_direction(ds) on every lane with a non-zero weight, to REL_TOL plus, on a lane
 that exceeds it, pdf_direction's sensitivity to an 8u move of ds.d (the reference point held
 exact: an environment map's pdf near a pole, where θ = acos(d.y) is ill-conditioned); for delta
@@ -37,13 +37,13 @@ from __future__ import annotations
 import numpy as np
 
 from ... import probe
-from ..bsdf.config import REL_TOL, rel_diff, sensitivity
+from ..roundoff import REL_TOL, rel_diff, sensitivity
 from . import lanes as lanes_
 from .config import rng
 from .setup import Setup, float_, point2, sphere_dirs
 from .topics import Row
 
-ROUND_OFF = "float32 round-off tolerance 2^-10 relative (bsdf.config.REL_TOL)"
+ROUND_OFF = "float32 round-off tolerance 2^-10 relative (roundoff.REL_TOL)"
 
 
 def bounded(topic, name, values, tol, reason, details, inputs=None) -> Row:
@@ -188,7 +188,7 @@ def weight(setup: Setup, opts) -> list[Row]:
 
     def traced(p, d):
         # not renormalized: that would undo the move of a component near ±1, the one whose
-        # rounding acos(d.y) (an environment's θ near a pole) amplifies (bsdf.config.perturb)
+        # rounding acos(d.y) (an environment's θ near a pole) amplifies (roundoff.perturb)
         return lanes_.traced_radiance(setup, p, d)[0]
 
     sens = np.zeros(s.n)

@@ -12,11 +12,9 @@ from __future__ import annotations
 import mitsuba as mi
 
 from ...settings import Loaded, load_plugin
-from ...verdict import Report
 from .. import core
 from ..conformance import known_of
-from ..inputs import ValidateError, check_topics
-from ..sweep import validate as sweep_validate
+from ..inputs import ValidateError
 from . import KIND, ranges
 from . import setup as setup_
 from .config import options
@@ -25,7 +23,6 @@ from .gradient import gradient
 from .identities import finite, pdf, weight
 from .power import power
 from .sampling import chi2
-from .topics import TOPICS
 
 
 def statistical_tests(target, opts, topics) -> int:
@@ -123,23 +120,3 @@ def catalogue():
     return CATALOGUE
 
 
-def validate_emitter(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                     known=None, plugins=(), family=1, sizes=None, shape=None, sweep=False,
-                     runner=None) -> Report:
-    """Validate one emitter on every topic (or ``topics``); see :mod:`phonglab.validate`.
-
-    ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
-    ``<emitter>``, or a loaded ``mi.Emitter`` (an area emitter may come attached to its shape);
-    ``shape``: a shape dict a surface emitter without one is attached to (default
-    :data:`~.setup.DEFAULT_SHAPE`).  ``known``, ``plugins``, ``family``, ``sizes``: as for
-    :func:`phonglab.validate.bsdf.kind.validate_bsdf`, and so are ``sweep`` and ``runner``.
-    Bad input raises :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
-    """
-    if sweep:
-        return sweep_validate(EMITTER, spec, variant=variant, params=with_shape(params, shape),
-                              topics=topics, seed=seed, quick=quick, known=known,
-                              plugins=plugins, family=family, sizes=sizes, runner=runner)
-    topics = check_topics(topics, TOPICS)
-    target = prepare(spec, variant=variant, params=params, plugins=plugins, shape=shape)
-    return core.run(EMITTER, target, topics=topics, seed=seed, quick=quick, known=known,
-                    family=family, sizes=sizes)

@@ -35,8 +35,8 @@ standard error, the expectation's own Monte Carlo error (0 for a constant radian
 quadrature; the row passes when |mean − Φ| ≤ z · stderr + 2⁻¹⁰ |Φ| (float32 accumulation),
 z the two-sided normal quantile at the Šidák level of the emitter's m statistical tests.
 
-Laws of delta lights (identities at round-off, ``bsdf.config.REL_TOL``, plus the weight's
-sensitivity to an 8u move of the reference point, ``bsdf.config.sensitivity``): the intensity
+Laws of delta lights (identities at round-off, ``roundoff.REL_TOL``, plus the weight's
+sensitivity to an 8u move of the reference point, ``roundoff.sensitivity``): the intensity
 I = weight · r² of a delta-position light is the same at r = 0.5, 1, 2 along each direction
 (the inverse-square law E = I cos θ / r²; a weight falling as 1/r fails here); a spot's
 I(θ)/I₀ equals f(θ) above, I₀ the weight · r² on its axis (the law's own conditioning added:
@@ -57,7 +57,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe, stats
-from ..bsdf.config import REL_TOL, rel_diff, sensitivity
+from ..roundoff import REL_TOL, rel_diff, sensitivity
 from .config import rng
 from .identities import bounded
 from .setup import (Setup, cone_dirs, float_, interaction, point2, ref_groups, sphere_dirs,
@@ -263,7 +263,7 @@ def _positions(setup, opts) -> list[Row]:
 
 def _intensity_sensitivity(setup, d, r, value, gen) -> np.ndarray:
     """Per direction: the relative change of weight·r² when the reference point P + r d moves
-    by 8u per component (bsdf.config.sensitivity): a spot's I(θ) near its cutoff, where
+    by 8u per component (roundoff.sensitivity): a spot's I(θ) near its cutoff, where
     f → 0 while its slope is 1/(θ_c − θ_b), is ill-conditioned in the point's rounding."""
     def at(p, _):
         it = interaction(p)

@@ -5,8 +5,8 @@ their values in :mod:`.scenes`), ``agreement`` against Mitsuba's ``path`` (:mod:
 ``gradient`` of AD integrators (:mod:`.gradient`), ``cost`` (:mod:`.cost`); the integrator
 rebuilt at each scene's depth and what kind of estimator it is (:mod:`.setup`), sizes and
 seeds (:mod:`.config`), the topic list and the row (:mod:`.topics`), and the table that ties
-them to the kind-independent runner (:mod:`.kind`: :data:`~.kind.INTEGRATOR`,
-:func:`~.kind.validate_integrator`).
+them to the kind-independent runner (:mod:`.kind`; the validator is
+:func:`phonglab.validate.validate_integrator`).
 
 Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """

@@ -4,7 +4,7 @@ r"""Mitsuba 3.9.1's built-in integrators (and phonglab's ``whitted``) as conform
 (:data:`FINDINGS`, matched by their rows) and the plugins left out (:data:`LEFT_OUT`).
 
 Each case is a ``mi.load_dict`` spec validated by
-:func:`phonglab.validate.integrator.kind.validate_integrator` (rebuilt per scene at the
+:func:`phonglab.validate.validate_integrator` (rebuilt per scene at the
 scene's depth where it takes ``max_depth``, :mod:`.setup`).
 """
 

@@ -27,7 +27,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import stats
-from ..bsdf.config import EPS32
+from ..roundoff import EPS32
 from . import scenes
 from .config import seed
 from .setup import Target

@@ -12,11 +12,8 @@ from __future__ import annotations
 import mitsuba as mi
 
 from ...settings import Loaded, load_plugin
-from ...verdict import Report
 from .. import core
 from ..conformance import known_of
-from ..inputs import check_topics
-from ..sweep import validate as sweep_validate
 from . import KIND
 from . import agreement as agreement_
 from . import analytic
@@ -24,7 +21,6 @@ from . import gradient as gradient_
 from . import setup as setup_
 from .config import options
 from .cost import cost
-from .topics import TOPICS
 
 
 def statistical_tests(target, opts, topics) -> int:
@@ -80,25 +76,3 @@ def catalogue():
     """The integrator conformance table (:mod:`.builtins`)."""
     from .builtins import CATALOGUE
     return CATALOGUE
-
-
-def validate_integrator(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                        known=None, plugins=(), family=1, sizes=None, sweep=False,
-                        runner=None) -> Report:
-    """Validate one integrator on every topic (or ``topics``); see :mod:`phonglab.validate`.
-
-    ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
-    ``<integrator>``, or a loaded ``mi.Integrator`` (the last two are run as they are: they
-    cannot be rebuilt at the scenes' depths).  ``known``, ``plugins``, ``family``, ``sizes``:
-    ``sweep``, ``runner``: as for :func:`phonglab.validate.bsdf.kind.validate_bsdf`.  Bad input
-    raises :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
-    """
-    if sweep:
-        return sweep_validate(INTEGRATOR, spec, variant=variant, params=params, topics=topics,
-                              seed=seed, quick=quick, known=known, plugins=plugins,
-                              family=family, sizes=sizes, runner=runner)
-    topics = check_topics(topics, TOPICS)
-    target = prepare(spec, variant=variant, params=params, plugins=plugins)
-    return core.run(INTEGRATOR, target, topics=topics, seed=seed, quick=quick, known=known,
-                    family=family, sizes=sizes)
-
