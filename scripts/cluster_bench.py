@@ -45,7 +45,7 @@ from pathlib import Path
 
 from phonglab.bench.timing import ChildFailed, run_child, spread
 from phonglab.parallel import Job, Runner
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 
 #: Machines the expected time is computed for.
 N_VALUES = (1, 2, 4, 8, 16, 64)

@@ -23,7 +23,7 @@ from pathlib import Path
 from phonglab.parallel import add_arguments, runner_from_args
 from phonglab.validate import batch, registry
 from phonglab.validate.markdown import render_markdown, without_plot_data
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 
 
 def main(argv=None) -> int:

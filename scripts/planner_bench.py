@@ -2,7 +2,7 @@
 
 For each scene (parameters in :data:`SCENES`, a target error E each):
 
-1. a converged reference (max_depth -1, phonglab.references, cached in .bench_cache/references),
+1. a converged reference (max_depth -1, phonglab.engine.references, cached in .bench_cache/references),
    its relative noise at most E/3 (:func:`bench_reference`);
 2. the **default configuration** (llvm_ad_rgb, the scene's path integrator at max_depth 8,
    uniform spp) with its spp *raised until it reaches E*: a fit of e(N)² = b² + c/N (its
@@ -43,10 +43,12 @@ from pathlib import Path
 
 import numpy as np
 
-from phonglab import exr, metrics, planner, references, render, runtime, scenes
+from phonglab import planner, runtime
+
+from phonglab.engine import exr, metrics, references, render, scenes
 from phonglab.bench import timing
 from phonglab.planner import benchmark
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 
 #: The default configuration: ``phonglab render``'s default variant, path at max_depth 8.
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -133,7 +135,7 @@ MAX_REF_SPP = 65536
 
 
 def bench_reference(name: str, params: dict, target: float, spp: int):
-    """The scene's reference (phonglab.references, cached) at ``spp`` samples or more: doubled
+    """The scene's reference (phonglab.engine.references, cached) at ``spp`` samples or more: doubled
     until its relative noise is at most :data:`REF_NOISE_FRACTION` of ``target`` (the spp its
     noise predicts, ∝ 1/√spp, rounded up to a power of two), at most :data:`MAX_REF_SPP`."""
     ref = references.reference(name, spp, params=params)

@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from phonglab.bench.timing import PHONGLAB, run_child, spread
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 
 DEFAULT_BSDFS = ["diffuse", "lambert", "phong", "roughplastic"]
 

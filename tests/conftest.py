@@ -18,7 +18,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import phonglab  # noqa: E402
 from phonglab import runtime  # noqa: E402
-from phonglab.scenes import SCENES_DIR  # noqa: E402
+from phonglab.engine.scenes import SCENES_DIR  # noqa: E402
 
 
 @pytest.fixture

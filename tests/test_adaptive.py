@@ -1,4 +1,4 @@
-"""Adaptive sampling (phonglab.adaptive, ``phonglab render --adaptive``).
+"""Adaptive sampling (phonglab.engine.adaptive, ``phonglab render --adaptive``).
 
 Statistical tests state their expectation and take their tolerance from the Monte Carlo
 standard error (alpha = phonglab.stats.ALPHA, Sidak across a family); seeds are fixed.
@@ -16,7 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage, signal
 
-from phonglab import adaptive, cli, exr, metrics, references, render, scenes, stats
+from phonglab import cli, stats
+
+from phonglab.engine import adaptive, exr, metrics, references, render, scenes
 from phonglab.bench import adaptive_sweeps
 from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
@@ -71,7 +73,7 @@ def test_viridis_table_is_matplotlibs():
     """The spp map's stored colour table is matplotlib's viridis, rounded to 8 bits."""
     from matplotlib import colormaps
 
-    from phonglab.tonemap import VIRIDIS
+    from phonglab.engine.tonemap import VIRIDIS
 
     want = np.round(colormaps["viridis"](np.linspace(0.0, 1.0, 256))[:, :3] * 255)
     np.testing.assert_array_equal(VIRIDIS, want.astype(np.uint8))

@@ -12,7 +12,7 @@ import pytest
 from phonglab import bench
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
-from phonglab.metrics import errors
+from phonglab.engine.metrics import errors
 from phonglab.physics.estimators import METHODS
 from phonglab.physics.roughness import beckmann_alpha
 

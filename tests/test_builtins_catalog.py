@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from phonglab.scenes import REPO_ROOT
+from phonglab.engine.scenes import REPO_ROOT
 from phonglab.validate import conformance, markdown
 from phonglab.validate.bsdf import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row

@@ -21,7 +21,7 @@ from scipy import stats as scipy_stats
 import phonglab
 from phonglab import checks, runtime, stats, verdict
 from phonglab.cli import main
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 from phonglab.physics.quadrature import lobe_quadrature
 
 # --- harness ------------------------------------------------------------------------------

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 import phonglab
-from phonglab import checks, exr, probe, registration, runtime
+from phonglab import checks, probe, registration, runtime
+from phonglab.engine import exr
 from phonglab.cli import main
 
 BROKEN = ("lambert_nopi", "phong_p1", "phong_warped", "phong_badpdf")

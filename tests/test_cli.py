@@ -16,7 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phonglab import cli, exr
+from phonglab import cli
+
+from phonglab.engine import exr
 from phonglab.errors import PhonglabError
 
 UNKNOWN_PY_PARAM = """<scene version="3.0.0">

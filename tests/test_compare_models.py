@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phonglab import cli, exr
-from phonglab.compare_models import compare_models, format_table, pair_stats
+from phonglab import cli
+
+from phonglab.engine import exr
+from phonglab.engine.compare_models import compare_models, format_table, pair_stats
 from phonglab.errors import PhonglabError
 
 

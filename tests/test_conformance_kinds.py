@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from phonglab.scenes import REPO_ROOT
+from phonglab.engine.scenes import REPO_ROOT
 from phonglab.validate import conformance, markdown, registry
 from phonglab.verdict import Report, Row
 

@@ -41,9 +41,9 @@ import pytest
 from scipy import stats
 
 from phonglab.bench import CornellSpec
-from phonglab.metrics import errors
+from phonglab.engine.metrics import errors
 from phonglab.physics.estimators import Problem, ReflectionEstimators, exact_value
-from phonglab.render import render_scene
+from phonglab.engine.render import render_scene
 from phonglab.stats import ALPHA, sidak
 
 N_LIST = [2 ** k for k in range(8, 17)]

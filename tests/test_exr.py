@@ -1,5 +1,5 @@
 """EXR files: round trip with provenance, atomic writes, clear read errors; and the numbers of
-``phonglab.compare`` on synthetic images whose answers are known in closed form.
+``phonglab.engine.compare`` on synthetic images whose answers are known in closed form.
 
 Cheapest first: pure numpy/OpenEXR checks, then one tiny render (provenance), then a
 calibration test of the compare's standard error (statistical: α = 0.01, Šidák over its
@@ -16,9 +16,9 @@ import pytest
 from scipy import stats
 
 from phonglab.stats import ALPHA, sidak
-from phonglab import compare, exr, scenes
+from phonglab.engine import compare, exr, scenes
 from phonglab.errors import CompareError, ExrError
-from phonglab.metrics import REL_EPS
+from phonglab.engine.metrics import REL_EPS
 
 RNG = np.random.default_rng(20261121)
 
@@ -124,7 +124,9 @@ def test_truncated_exr(tmp_path):
 def test_render_file_writes_its_provenance(tmp_path, variant_llvm_rgb):
     import mitsuba as mi
 
-    from phonglab import __version__, render
+    from phonglab import __version__
+
+    from phonglab.engine import render
 
     scene = scenes.scene_path("nb_emitter_distance")
     out = tmp_path / "e.exr"

@@ -23,7 +23,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from phonglab import cli, exr
+from phonglab import cli
+
+from phonglab.engine import exr
 
 TINY = """<scene version="3.0.0">
   <default name="spp" value="4"/>

@@ -25,10 +25,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phonglab import cli, exr, planner, stats
+from phonglab import cli, planner, stats
+
+from phonglab.engine import exr
 from phonglab.errors import SceneError
-from phonglab.render import render_scene
-from phonglab.scenes import load_scene
+from phonglab.engine.render import render_scene
+from phonglab.engine.scenes import load_scene
 
 FILM = ('<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" '
         'target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm">'
@@ -476,7 +478,7 @@ def test_a_seed_outside_32_bits_is_refused_before_any_work(command, bad, capsys)
 def test_distinct_seeds_give_distinct_first_pass_seeds():
     """pass_seed(s, 0) = s·1_000_003 mod 2³² is a bijection of 0..2³² − 1 (the factor is odd):
     no two accepted seeds share their first pass."""
-    from phonglab.render import pass_seed
+    from phonglab.engine.render import pass_seed
 
     seeds = np.random.default_rng(5).integers(0, 1 << 32, 200_000, dtype=np.uint64)
     seeds = np.unique(np.concatenate([seeds, [0, 1, (1 << 32) - 1]]))
@@ -578,7 +580,7 @@ def test_a_wide_film_has_a_bounded_spp_preview(tmp_path):
     a colour bar and labels below the map: 70 pixels, and at least 320 wide)."""
     from PIL import Image
 
-    from phonglab.adaptive import SPP_PNG_MAX_SIDE, write_spp_map_png
+    from phonglab.engine.adaptive import SPP_PNG_MAX_SIDE, write_spp_map_png
 
     for shape in [(4, 4096), (4096, 4), (3, 9000), (16, 16)]:
         path = write_spp_map_png(tmp_path / "m.png", np.full(shape, 4))
@@ -605,7 +607,7 @@ def test_a_uniform_render_removes_the_spp_map_of_an_earlier_adaptive_one(tmp_pat
 def test_a_failing_member_leaves_the_whole_previous_set(tmp_path, capsys, monkeypatch):
     """The members were renamed one by one as each finished: a failure in the last (the spp
     map preview) left a new image beside an old spp map."""
-    from phonglab import adaptive
+    from phonglab.engine import adaptive
 
     out = tmp_path / "x.exr"
     assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.2",
@@ -637,8 +639,8 @@ def test_a_crop_window_renders_its_part_of_the_film(variant_llvm_rgb, tmp_path):
     render are the crop's size and see, in expectation, what the full film sees there.
     Two-sample t-tests of the region's mean, per channel (8 passes against 8 passes, and 6
     adaptive seeds against the full film's passes), Šidák over the 6 tests."""
-    from phonglab import adaptive, scenes
-    from phonglab.render import render_scene
+    from phonglab.engine import adaptive, scenes
+    from phonglab.engine.render import render_scene
 
     text = CONTENT.format(integrator=PATH, fmt="rgb").replace(
         '<string name="pixel_format" value="rgb"/>', '<string name="pixel_format" value="rgb"/>'

@@ -235,7 +235,7 @@ def test_serial_runner_runs_in_order_without_dask():
 def test_local_cluster_reference_passes_bit_identical_to_serial(tmp_path):
     """A reference rendered as one job per pass on a 2-process LocalCluster, merged here,
     equals the serial render's image and standard error bit for bit (box filter)."""
-    from phonglab import references
+    from phonglab.engine import references
     from phonglab.bench.cornell import CornellSpec
 
     spec = CornellSpec(walls="diffuse", boxes="phong", res=8)

@@ -15,7 +15,7 @@ import pytest
 
 from phonglab.bench import report
 from phonglab.bench.report import RunData, cluster_section
-from phonglab.scenes import REPO_ROOT
+from phonglab.engine.scenes import REPO_ROOT
 
 
 @pytest.fixture(scope="module")

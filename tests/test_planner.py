@@ -4,8 +4,8 @@ Cheapest first: scene inspection (XML only) -> variant/backend choice -> plans f
 (res 32) -> achieved error against a converged reference -> the CLI.
 
 The error is phonglab's relative RMSE, E = sqrt(mean((x - r)^2/(r^2 + 0.01))) over every pixel
-and channel, r the converged full-depth image (phonglab.metrics.relative_rmse with the
-reference's noise subtracted; phonglab.references.reference).
+and channel, r the converged full-depth image (phonglab.engine.metrics.relative_rmse with the
+reference's noise subtracted; phonglab.engine.references.reference).
 """
 
 from __future__ import annotations
@@ -20,7 +20,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from phonglab import exr, metrics, planner, references, render, runtime, scenes, stats
+from phonglab import planner, runtime, stats
+
+from phonglab.engine import exr, metrics, references, render, scenes
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
 from phonglab.planner import benchmark
@@ -417,7 +419,7 @@ def test_whitted_radiance_is_path_at_depth_2_under_point_lights(tmp_path, varian
 
 
 def test_cli_render_planned_wavefront(tmp_path, capsys):
-    """A plan that renders through phonglab.adaptive (another model or adaptive sampling)
+    """A plan that renders through phonglab.engine.adaptive (another model or adaptive sampling)
     writes the image, its stderr and the spp map, and reports the achieved or estimated error."""
     scene = _write(tmp_path, POINT_LIT)
     out = tmp_path / "pl.exr"

@@ -119,8 +119,8 @@ def test_plugin_in_every_variant_from_dict_xml_and_twosided(any_variant, kind):
 
 
 def test_scene_renders_in_every_variant(any_variant, scenes_dir):
-    from phonglab.render import render_scene
-    from phonglab.scenes import load_scene
+    from phonglab.engine.render import render_scene
+    from phonglab.engine.scenes import load_scene
 
     spp = 1 if any_variant.startswith("scalar") else 4
     scene = load_scene(scenes_dir / "cornell_phong.xml", any_variant, res=16 if spp == 1 else 32,
@@ -133,8 +133,8 @@ def test_scene_renders_in_every_variant(any_variant, scenes_dir):
 def test_polarized_variants_render_like_unpolarized(variant, scenes_dir):
     """The plugins return an ideal depolarizer (as diffuse.cpp does), so a polarized variant
     renders the scene (no polarizing element in it) exactly as the unpolarized one, seed for seed."""
-    from phonglab.render import render_scene
-    from phonglab.scenes import load_scene
+    from phonglab.engine.render import render_scene
+    from phonglab.engine.scenes import load_scene
 
     images = []
     for v in (variant, variant.replace("_polarized", "")):

@@ -6,9 +6,10 @@ import numpy as np
 from scipy import stats
 
 from phonglab.stats import ALPHA, sidak
-from phonglab import cli, exr
-from phonglab.render import render_scene
-from phonglab.scenes import load_scene
+from phonglab import cli
+from phonglab.engine import exr
+from phonglab.engine.render import render_scene
+from phonglab.engine.scenes import load_scene
 
 
 def test_render_cli_writes_exr_png_and_provenance(tmp_path, capsys, variant_llvm_rgb):
@@ -102,7 +103,7 @@ def test_the_same_test_detects_a_10_percent_darker_lambert(variant_llvm_rgb, sce
 
 
 def test_preview_exposure_only_darkens_images_beyond_one():
-    from phonglab.tonemap import auto_exposure
+    from phonglab.engine.tonemap import auto_exposure
 
     rng = np.random.default_rng(0)
     radiance = rng.random((32, 32, 3)) * 0.9           # a radiance render: previewed as is
@@ -115,7 +116,7 @@ def test_preview_exposure_only_darkens_images_beyond_one():
 
 
 def test_render_file_with_another_sampler_records_it(tmp_path, variant_llvm_rgb):
-    from phonglab import exr, render
+    from phonglab.engine import exr, render
 
     out = tmp_path / "gd.exr"
     r = render.render_file("gray_direct", out, spp=40, sampler="multijitter", progress=False)

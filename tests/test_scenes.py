@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phonglab.render import render_scene
-from phonglab.scenes import load_scene
+from phonglab.engine.render import render_scene
+from phonglab.engine.scenes import load_scene
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes_xml").glob("*.xml"))
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from phonglab import verdict
-from phonglab.outputs import write_json
+from phonglab.engine.outputs import write_json
 from phonglab.verdict import Report, Row
 
 

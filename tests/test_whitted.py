@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from phonglab.scenes import SCENES_DIR as SCENES, load_scene, scene_defaults
+from phonglab.engine.scenes import SCENES_DIR as SCENES, load_scene, scene_defaults
 from phonglab.stats import ALPHA, sidak
 from phonglab.physics import optics
-from phonglab.render import render_scene
+from phonglab.engine.render import render_scene
 
 # ----------------------------------------------------------------------------- helpers
 

@@ -56,7 +56,7 @@ class PluginError(PhonglabError):
 
 
 #: Seeds phonglab takes: Mitsuba's 32-bit unsigned seed.  A render's pass k uses
-#: (seed·1_000_003 + k) mod 2³² (:func:`phonglab.render.pass_seed`), a bijection of the seeds
+#: (seed·1_000_003 + k) mod 2³² (:func:`phonglab.engine.render.pass_seed`), a bijection of the seeds
 #: in this range for each k (1_000_003 is odd); seeds outside it used to alias silently
 #: (-1 and 2³² − 1 rendered the same image while the headers recorded different seeds).
 SEED_MAX = (1 << 32) - 1

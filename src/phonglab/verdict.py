@@ -21,7 +21,7 @@ One key of ``details`` has a meaning here: ``relation`` (``"=="``, ``"<="``, ``"
 tolerance); the table shows a one-sided row's expected value as ``≤ x`` or ``≥ x``.  A row
 without it states its comparison in ``reason``.
 
-JSON (:meth:`Report.to_json`; :func:`phonglab.outputs.write_json` writes a report's
+JSON (:meth:`Report.to_json`; :func:`phonglab.engine.outputs.write_json` writes a report's
 :meth:`~Report.to_dict` to a file): ``{"meta": {...}, "results": [row, ...]}``
 with each row's fields exactly those of :class:`Row` (``point`` only on a sweep's rows), made
 strict-JSON-safe by

@@ -1,11 +1,11 @@
 r"""Bench part ``adaptive``: error against wall time for uniform, adaptive and planned renders.
 
 Per scene of :attr:`Config.adaptive_scenes` (small resolutions), against a converged full-depth
-reference (:func:`phonglab.references.reference`, its noise subtracted from every error):
+reference (:func:`phonglab.engine.references.reference`, its noise subtracted from every error):
 
-* **uniform**: the scene's own integrator through :func:`phonglab.render.render_scene` (one
+* **uniform**: the scene's own integrator through :func:`phonglab.engine.render.render_scene` (one
   pass, ``mi.render``) at the spp ladder of :attr:`Config.adaptive_spps`;
-* **adaptive**: :func:`phonglab.adaptive.render_adaptive` at the targets of
+* **adaptive**: :func:`phonglab.engine.adaptive.render_adaptive` at the targets of
   :attr:`Config.adaptive_targets`, several seeds;
 * **planned**: :func:`phonglab.planner.plan` at each target, then the render it chose
   (:mod:`phonglab.planner.execute`, as ``phonglab render --target-error`` runs it); its
@@ -26,7 +26,7 @@ true relative error exceeds three times its budget e_p* (pixels stopped too earl
 
 **Oracle** (:func:`oracle_row`, issue 28): per scene of :attr:`Config.adaptive_oracle_scenes`,
 at full depth (unbiased against the cached full-depth reference, so every error is noise), the
-speed-up of the best per-pixel allocation, mean(v)/mean(√v)² (:func:`phonglab.adaptive.
+speed-up of the best per-pixel allocation, mean(v)/mean(√v)² (:func:`phonglab.engine.adaptive.
 oracle_speedup`) from a converged variance map (a uniform render of :data:`ORACLE_MAP_SPP`
 samples per pixel, per-sample moments: spp − 1 degrees of freedom a pixel), beside the
 speed-up adaptive sampling achieves at the scene's planner target E (paired with uniform
@@ -48,12 +48,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import adaptive, metrics, planner, references, render, scenes
+from .. import planner
+from ..engine import adaptive, metrics, references, render, scenes
 from ..planner import execute
 from ..runtime import quiet_mitsuba, set_variant
 from .analysis import pareto_front
 from .config import VARIANT, Config
-from ..outputs import write_json
+from ..engine.outputs import write_json
 
 #: The scene whose variance is the same in every pixel (the overhead measurement).
 UNIFORM_SCENE = "check_furnace_enclosure"
@@ -297,7 +298,7 @@ def report_section(out: Path, rel: str = ".") -> list[str]:
     data = json.loads(path.read_text())
     L = ["\n## Adaptive sampling: error against time\n",
          "`phonglab.bench.adaptive_sweeps` (docs/adaptive.md): uniform (`mi.render`), adaptive "
-         "(`phonglab.adaptive`) and planned (`planner.plan` + its render, pilot included) renders "
+         "(`phonglab.engine.adaptive`) and planned (`planner.plan` + its render, pilot included) renders "
          "against a converged reference; steady-state times side by side in one process. "
          "Speed-up at equal error = t_u (e_u/e)²/t against a uniform render made right after "
          "at the same mean spp (the plan's uniform spp for planned); median [min–max] over "

@@ -3,7 +3,7 @@ r"""The Cornell-box set-ups the bench renders: materials swapped in, references,
 Every render comparison starts from ``scenes_xml/cornell_phong.xml`` and swaps the
 material of its two boxes (:func:`cornell_xml`) and of its walls (the scene's ``wall``
 parameter).  A :class:`CornellSpec` names one such set-up; its reference image comes from
-the one reference cache (:func:`phonglab.references.reference`, with the scene's own
+the one reference cache (:func:`phonglab.engine.references.reference`, with the scene's own
 integrator, ``max_depth=None``): the spec's XML text is written once to
 ``<cache>/scenes/cornell-<hash of the text>.xml`` and that file, with the spec's
 parameters, is what the cache keys on.
@@ -28,13 +28,13 @@ import mitsuba as mi
 
 from .. import registration
 from ..errors import PhonglabError
-from ..exr import atomic_path
+from ..engine.exr import atomic_path
 from ..parallel import Runner
 from ..physics.estimators import kernel_stats
 from ..physics.roughness import beckmann_alpha
-from ..references import CACHE_DIR, Reference, reference
-from ..render import render_scene
-from ..scenes import scene_path
+from ..engine.references import CACHE_DIR, Reference, reference
+from ..engine.render import render_scene
+from ..engine.scenes import scene_path
 from .config import RATIO_RES, RENDER_RES
 
 #: Box materials a render comparison can swap in (the walls take ``wall=``).

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import PhonglabError
-from ..exr import atomic_path
+from ..engine.exr import atomic_path
 from .config import LOGS
 
 

@@ -17,7 +17,7 @@ import statistics
 from pathlib import Path
 
 from .timing import PHONGLAB, run_repeated, spread
-from ..outputs import write_json
+from ..engine.outputs import write_json
 
 #: The command the issue times, and its limit in seconds.
 COMMAND = ["fit", "roughconductor", "--set", "alpha=0.2"]

@@ -2,7 +2,7 @@ r"""Sweeps of full renders: error against time per BSDF, variants, and render-ti
 
 * :func:`sweep_renders` — the Cornell box (:func:`phonglab.bench.cornell.render_setups`,
   32 px): RMSE against the cached high-sample reference (its own noise subtracted,
-  :func:`phonglab.metrics.errors`) and steady render time against spp, for ``lambert`` vs
+  :func:`phonglab.engine.metrics.errors`) and steady render time against spp, for ``lambert`` vs
   ``diffuse`` (every surface of that BSDF) and ``phong`` vs ``plastic`` vs ``roughplastic``
   boxes (walls ``diffuse``).
 * :func:`sweep_variants` — ``llvm_ad_rgb`` against ``scalar_rgb`` on a 16 px box
@@ -14,7 +14,7 @@ r"""Sweeps of full renders: error against time per BSDF, variants, and render-ti
   :data:`~phonglab.bench.config.WHITTED_SCENES` (their own settings, only ``units`` swapped):
   ABBA pairs of steady renders, and the JIT kernels each render launches.
 
-Every render goes through :func:`phonglab.render.render_scene` (one pass; its
+Every render goes through :func:`phonglab.engine.render.render_scene` (one pass; its
 ``pass_seconds[0]`` is the timed wall time, image evaluated and copied).
 
 Each sweep is a list of jobs run by :func:`phonglab.bench.jobs.run_jobs`, serially or on a
@@ -36,11 +36,11 @@ import mitsuba as mi
 import numpy as np
 
 from .. import registration
-from ..metrics import errors
+from ..engine.metrics import errors
 from ..parallel import Job, Runner
-from ..references import Reference
-from ..render import render_scene
-from ..scenes import load_scene
+from ..engine.references import Reference
+from ..engine.render import render_scene
+from ..engine.scenes import load_scene
 from .config import (RATIO_COMPARISONS, RATIO_RES, VARIANT, VARIANT_RES, WHITTED_SCENES, WHITTED_SPP,
                      Config)
 from .cornell import CornellSpec, ratio_spec, render_jit, render_setups, timed_render

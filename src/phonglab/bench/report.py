@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..outputs import write_text
+from ..engine.outputs import write_text
 from ..physics.estimators import METHODS
 from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table

@@ -35,7 +35,7 @@ from .config import DEFAULT_OUT, LOGS, PARTS, VARIANT, Config
 from .estimator_sweeps import sweep_estimators, sweep_stability
 from .render_sweeps import sweep_ratios, sweep_renders, sweep_variants, sweep_whitted_units
 from .report import write_markdown
-from ..outputs import write_json
+from ..engine.outputs import write_json
 
 
 def machine_info() -> dict[str, Any]:
@@ -126,7 +126,7 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
               runner: Runner | None = None) -> dict[str, Any]:
     """Run the sweeps into ``out`` (CSV + PNG), then optionally write ``markdown``.
 
-    ``cache`` is the reference cache folder (default: :data:`phonglab.references.CACHE_DIR`).
+    ``cache`` is the reference cache folder (default: :data:`phonglab.engine.references.CACHE_DIR`).
     ``runner`` is where the jobs run (default: serially here); it is entered (a cluster
     started or reached) before any work.  Returns the run record also written to
     ``out/run.json``.

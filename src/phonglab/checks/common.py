@@ -18,9 +18,9 @@ import numpy as np
 
 from .. import stats
 from ..errors import PhonglabError
-from ..render import RenderResult, check_spp, render_scene
+from ..engine.render import RenderResult, check_spp, render_scene
 from ..runtime import available_memory
-from ..scenes import load_scene
+from ..engine.scenes import load_scene
 from ..verdict import Row
 
 #: float32 unit roundoff 2^-24.

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import exr, stats
+from .. import stats
+from ..engine import exr
 from ..verdict import Row
 from .common import Config, Rows, render
 

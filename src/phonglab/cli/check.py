@@ -15,7 +15,7 @@ import mitsuba as mi
 
 from .. import __version__, checks, register
 from ..errors import PhonglabError
-from ..outputs import write_json
+from ..engine.outputs import write_json
 from ..verdict import Report, format_number
 from .options import add_seed
 

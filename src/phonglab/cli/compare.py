@@ -38,10 +38,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .. import compare
-    from ..metrics import REL_EPS
+    from ..engine import compare
+    from ..engine.metrics import REL_EPS
     from ..errors import PhonglabError
-    from ..outputs import check_file, check_folder
+    from ..engine.outputs import check_file, check_folder
 
     if args.eps is not None and not args.eps > 0:
         raise PhonglabError(f"--eps must be > 0 (it keeps dark pixels from dominating the "

@@ -37,8 +37,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     # Imported here, not at the top: `phonglab` imports every subcommand module to build its
     # parser, and these pull in Mitsuba and matplotlib, which `phonglab --help` does not need.
-    from ..compare_models import compare_models, format_table
-    from ..scenes import scene_path
+    from ..engine.compare_models import compare_models, format_table
+    from ..engine.scenes import scene_path
 
     params = dict(args.params)
     path = scene_path(args.scene)

@@ -41,7 +41,7 @@ def run(args) -> int:
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
-    from ..outputs import check_file, check_folder, write_json, write_text
+    from ..engine.outputs import check_file, check_folder, write_json, write_text
 
     for path, what in ((args.json, "JSON file"), (args.report, "report")):
         if path:

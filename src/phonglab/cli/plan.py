@@ -3,7 +3,7 @@
 Lazy imports: the modules that pull in Mitsuba, matplotlib or numpy (planner, references,
 scenes, metrics) are imported inside :func:`run`, because ``phonglab`` builds every subcommand's
 parser at start-up and importing them there would cost every command, ``--help`` included, one
-to two seconds (``python -X importtime -c 'import phonglab.render'``).
+to two seconds (``python -X importtime -c 'import phonglab.engine.render'``).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def add_parser(sub) -> None:
     p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
     p.add_argument("--target-error", type=float, default=0.01,
                    help="relative RMSE to reach, sqrt(mean((x-r)^2/(r^2+0.01))) against a "
-                        "converged reference, depth bias included (phonglab.metrics; "
+                        "converged reference, depth bias included (phonglab.engine.metrics; "
                         "default 0.01 = 1%%)")
     p.add_argument("--json", action="store_true", help="print the plan as JSON")
     p.add_argument("--polarized", action="store_true", help="plan a polarized variant")
@@ -57,8 +57,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .. import metrics, planner, references
-    from ..scenes import scene_path
+    from .. import planner
+    from ..engine import metrics, references
+    from ..engine.scenes import scene_path
 
     path = scene_path(args.scene)
     params = dict(args.params)

@@ -4,7 +4,7 @@ Lazy imports: the modules that pull in Mitsuba, matplotlib or numpy (render, sce
 adaptive) are imported inside :func:`run`, :func:`run_planned` and :func:`run_adaptive`, because
 ``phonglab`` builds every subcommand's parser at start-up and importing them there would cost
 every command, ``--help`` included, one to two seconds (``python -X importtime -c 'import
-phonglab.render'``).
+phonglab.engine.render'``).
 """
 
 from __future__ import annotations
@@ -40,13 +40,13 @@ def add_parser(sub) -> None:
     p.add_argument("--target-error", type=float, default=None, metavar="E",
                    help="plan variant, max_depth and spp for this relative RMSE, the total "
                         "error against a converged reference, depth bias included "
-                        "(phonglab.metrics; see 'phonglab plan'); --spp/--variant/--max-depth "
+                        "(phonglab.engine.metrics; see 'phonglab plan'); --spp/--variant/--max-depth "
                         "given explicitly override the plan")
     p.add_argument("--adaptive", action="store_true",
                    help="with --target-error: adaptive sampling (docs/adaptive.md): after a "
                         "pilot, trace rays only where the estimated error exceeds its budget; "
                         "its noise target is E (no depth-bias estimate: E is the total error "
-                        "of an unbiased render, phonglab.metrics); writes the spp map beside "
+                        "of an unbiased render, phonglab.engine.metrics); writes the spp map beside "
                         "the EXR (<out>.spp.exr, <out>.spp.png)")
     p.add_argument("--max-spp", type=int, default=None, metavar="N",
                    help="with --adaptive: at most N samples in any pixel")
@@ -58,8 +58,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..render import render_file
-    from ..scenes import scene_path
+    from ..engine.render import render_file
+    from ..engine.scenes import scene_path
 
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
@@ -86,7 +86,7 @@ def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan (:func:`phonglab.planner.execute.render_plan`),
     report predicted and achieved error and time."""
     from .. import planner
-    from ..outputs import RenderOutputs, spp_paths
+    from ..engine.outputs import RenderOutputs, spp_paths
     from ..planner import execute
 
     RenderOutputs.beside(out).check()       # before the pilot, not only before the render
@@ -148,8 +148,8 @@ def run_adaptive(args, path: Path, out: Path) -> int:
     if args.spp is not None:
         raise PhonglabError("--adaptive chooses the samples per pixel itself; drop --spp (cap "
                             "them with --max-spp N)")
-    from .. import adaptive   # lazy: imports Mitsuba
-    from ..outputs import spp_paths
+    from ..engine import adaptive  # lazy: imports Mitsuba
+    from ..engine.outputs import spp_paths
     with runtime.quiet_mitsuba():
         result = adaptive.render_file_adaptive(
             path, out, args.target_error, variant=args.variant, seed=args.seed,

@@ -97,7 +97,7 @@ def add_parser(sub) -> None:
 def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     """Every check that needs no Mitsuba, in the order a user would fix them: the --set
     parameters and the topics to run."""
-    from .. import outputs   # lazy: outputs loads matplotlib (tonemap), not needed for --help
+    from ..engine import outputs  # lazy: outputs loads matplotlib (tonemap), not needed for --help
     topics = args.only and check_topics(args.only, registry.every_topic())
     if args.all_builtins:
         if args.bsdf or args.set or args.plugin:
@@ -150,7 +150,7 @@ def sweep_text(report: Report) -> str:
 
 
 def _all_builtins(args) -> int:
-    from ..outputs import write_json   # lazy: numpy, OpenEXR and Pillow, not for --help
+    from ..engine.outputs import write_json   # lazy: numpy, OpenEXR and Pillow, not for --help
     from ..validate import batch
 
     def progress(d):
@@ -246,7 +246,7 @@ def run(args) -> int:
     report, label, text = validate_one(args, params)
     print(text)
     if args.json:
-        from ..outputs import write_json   # lazy: numpy, OpenEXR and Pillow
+        from ..engine.outputs import write_json   # lazy: numpy, OpenEXR and Pillow
         write_json(args.json, report.to_dict())
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)

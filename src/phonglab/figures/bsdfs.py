@@ -18,9 +18,9 @@ import numpy as np
 
 from .. import probe, registration
 from ..physics import radiometry
-from ..render import render_scene
-from ..scenes import load_scene
-from ..tonemap import to_srgb
+from ..engine.render import render_scene
+from ..engine.scenes import load_scene
+from ..engine.tonemap import to_srgb
 from .common import figure, load_bsdf
 
 #: The seed's exponents (D. Zorin, "Lighting": p = 0, 1, 2, 10, 25, 100).
@@ -172,7 +172,7 @@ def fig_albedo(curves: AlbedoCurves):
 
 def render_furnace(spp: int = 64, passes: int = 4, seed: int = 0, **defaults):
     """Render ``nb_furnace_sphere.xml`` (phong sphere under a unit sky, BSDF sampling only);
-    returns phonglab.render.RenderResult (image and per-pixel standard error)."""
+    returns phonglab.engine.render.RenderResult (image and per-pixel standard error)."""
     registration.register()
     scene = load_scene("nb_furnace_sphere", spp=str(spp), **{k: str(v) for k, v in defaults.items()})
     return render_scene(scene, spp, seed=seed, passes=passes)

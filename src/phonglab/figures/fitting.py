@@ -17,8 +17,8 @@ import numpy as np
 from .. import probe
 from ..fit.objective import PHONG
 from ..fit.optimize import FitResult, load_target
-from ..metrics import LUMINANCE
-from ..tonemap import to_srgb
+from ..engine.metrics import LUMINANCE
+from ..engine.tonemap import to_srgb
 from .common import figure, load_bsdf
 
 

@@ -3,7 +3,7 @@ r"""Notebook 01 (radiometry): solid angle, flux, radiance along a ray, the refle
 :func:`fig_solid_angle`, :func:`fig_flux`, :func:`fig_radiance_constancy`,
 :func:`emitter_distance_series` + :func:`fig_emitter_distances`, :func:`fig_reflection_equation`.
 The numbers come from :mod:`phonglab.physics.radiometry` (the formulas and their sources are in
-its docstring), the renders from :mod:`phonglab.render`; this module only plots them.
+its docstring), the renders from :mod:`phonglab.engine.render`; this module only plots them.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ import numpy as np
 
 from .. import probe, registration
 from ..physics import radiometry
-from ..render import render_scene
-from ..scenes import load_scene
-from ..tonemap import to_srgb
+from ..engine.render import render_scene
+from ..engine.scenes import load_scene
+from ..engine.tonemap import to_srgb
 from .common import figure, load_bsdf
 
 

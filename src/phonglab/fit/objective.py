@@ -2,7 +2,7 @@ r"""The fit objective: how far a model BSDF's reflected radiance is from a targe
 
 The norm.  With g = f_r cos θ_o (what a Mitsuba BSDF's ``eval`` returns: the radiance
 reflected towards ω_i per unit radiance arriving from ω_o) reduced to luminance
-(:data:`phonglab.metrics.LUMINANCE`, Rec. 709), the squared distance of a model g_m from a
+(:data:`phonglab.engine.metrics.LUMINANCE`, Rec. 709), the squared distance of a model g_m from a
 target g_t is the cosine-weighted L2 norm over incidence and outgoing directions
 
     E² = ∫_{H+} ∫_{H+} (Δf_r cos θ_i cos θ_o)² dω_o dω_i = ∫_{H+} cos² θ_i ∫_{H+} Δg² dω_o dω_i,
@@ -47,7 +47,7 @@ import mitsuba as mi
 import numpy as np
 
 from .. import probe
-from ..metrics import LUMINANCE
+from ..engine.metrics import LUMINANCE
 from ..physics.quadrature import lobe_quadrature
 
 #: Exponent bounds of the phong model (p = exp(q)).

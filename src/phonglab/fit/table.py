@@ -17,7 +17,7 @@ from pathlib import Path
 from .. import registration
 from ..physics.roughness import blinn_phong_exponent, phong_exponent
 from .optimize import GRAZING_DEG, fit, format_result
-from ..outputs import write_json
+from ..engine.outputs import write_json
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)
 #: (target plugin, distribution)

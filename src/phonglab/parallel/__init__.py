@@ -52,7 +52,7 @@ RETRIES = 2
 #: Local worker processes per core a LocalCluster may start (more only queue for the cores).
 WORKERS_PER_CORE = 4
 #: Memory of one worker process (Python, Mitsuba, Dr.Jit and kernels; a render process is
-#: ~200 MB, phonglab.render.BASE_BYTES), rounded up.
+#: ~200 MB, phonglab.engine.render.BASE_BYTES), rounded up.
 WORKER_BYTES = 256 << 20
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"

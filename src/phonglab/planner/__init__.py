@@ -4,7 +4,7 @@ r"""The planner: the leanest variant, path depth and sample count that meet an e
 RMSE of E, and at what cost?" in four steps, each with a reason the user can read
 (:attr:`Plan.reasons`):
 
-1. **Variant**, from the scene file alone (:func:`phonglab.scenes.inspect_scene`, ElementTree
+1. **Variant**, from the scene file alone (:func:`phonglab.engine.scenes.inspect_scene`, ElementTree
    with the scene's ``<default>`` values and ``$name`` substitutions resolved): ``mono`` when
    every reflectance, texture and emitter is gray (equal RGB components, or a single-valued
    ``<spectrum>``), ``rgb`` otherwise, ``spectral`` only when the scene carries spectral data (a
@@ -50,9 +50,9 @@ RMSE of E, and at what cost?" in four steps, each with a reason the user can rea
    ``T(spp) = a + b·spp`` (medians); a render of N samples in ``p`` passes is predicted to take
    ``p·a + b·N``.
 
-E is phonglab's error target, defined once in :mod:`phonglab.metrics`: the total relative RMSE
-(:func:`phonglab.metrics.relative_rmse`, ε = 0.01) against the converged full-depth image
-(:func:`phonglab.references.reference`), bias included, E² = b² + n²; the achieved error is
+E is phonglab's error target, defined once in :mod:`phonglab.engine.metrics`: the total relative RMSE
+(:func:`phonglab.engine.metrics.relative_rmse`, ε = 0.01) against the converged full-depth image
+(:func:`phonglab.engine.references.reference`), bias included, E² = b² + n²; the achieved error is
 measured with the same definition (:func:`phonglab.planner.execute.error_report`).  Monte
 Carlo noise falls as ``1/√N`` (M. Pharr, W. Jakob, G. Humphreys, *Physically Based
 Rendering*, 4th ed., §2.1.4, and §2.2.4 on Russian roulette).

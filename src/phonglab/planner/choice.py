@@ -16,7 +16,7 @@ image at depth d — and keeps the fastest, with the reason:
   (:meth:`.pilot.Pilot.measure_model`): its relative noise n_m(1) and its time model
   T_m = a_m + b_m·spp; it needs N_m = ⌈n_m(1)² / (E² − b²)⌉ samples.
 
-* **Sampling.**  Uniform: N_m samples everywhere.  Adaptive (:mod:`phonglab.adaptive`):
+* **Sampling.**  Uniform: N_m samples everywhere.  Adaptive (:mod:`phonglab.engine.adaptive`):
   with v_p the pilot's per-pixel relative variance of one sample (:attr:`.pilot.Pilot.
   variance_maps`), guarded as the renderer guards it (v ← max(v, 5×5 mean)), the Neyman
   allocation needs N_p = max(√v_p · mean √v / (E² − b²), MIN_SPP) samples, on average
@@ -49,8 +49,8 @@ from dataclasses import dataclass
 import mitsuba as mi
 import numpy as np
 
-from ..adaptive import MIN_SPP, window_mean
-from ..scenes import SceneInfo, inspect_scene
+from ..engine.adaptive import MIN_SPP, window_mean
+from ..engine.scenes import SceneInfo, inspect_scene
 from .pilot import STRATIFIED_COST, Pilot
 
 #: Passes an adaptive render typically takes (pilot and 2-4 more: measured on the bench scenes).
@@ -169,7 +169,7 @@ def price(pilot: Pilot, model: str, noise1: float, vmap: np.ndarray, time_model,
 def credited_spp(noise1: float, budget2: float, credit: float) -> int:
     """Samples per pixel a uniform render of relative noise ``noise1`` at 1 spp needs when the
     pilot's reusable renders bring the precision ``credit`` (Σ n_j/V_j,
-    :func:`phonglab.render.combine_renders`): the combination's relative variance
+    :func:`phonglab.engine.render.combine_renders`): the combination's relative variance
     1/(credit + n/noise1²) must be <= E² − b², so n = ⌈noise1² (1/(E² − b²) − credit)⌉,
     at least 2 (a render of two passes: its standard error weighs it)."""
     return max(2, math.ceil(noise1 ** 2 * (1.0 / budget2 - credit))) if noise1 > 0 else 2

@@ -4,25 +4,25 @@ its error; the CLI (``phonglab render --target-error E``) and the bench
 
 **The render** (:func:`sampling`, :func:`integrator`):
 
-* uniform ``path`` (``plan.uses_wavefront`` false): :class:`phonglab.render.UniformPasses`
+* uniform ``path`` (``plan.uses_wavefront`` false): :class:`phonglab.engine.render.UniformPasses`
   with :meth:`.Plan.render_kwargs` (the chosen sampler, spp and passes), the scene's own
   integrator at ``plan.max_depth``;
-* anything else, another model or adaptive sampling: :class:`phonglab.adaptive.AdaptiveSampling`
+* anything else, another model or adaptive sampling: :class:`phonglab.engine.adaptive.AdaptiveSampling`
   with the model's integrator (:func:`.choice.model_dict`; the scene's own at
   ``plan.max_depth`` for ``path``) and the noise target √(E² − b²)
-  (:attr:`.Plan.noise_target`, :func:`phonglab.metrics.noise_target`); a uniform one traces
+  (:attr:`.Plan.noise_target`, :func:`phonglab.engine.metrics.noise_target`); a uniform one traces
   ⌈chosen_spp⌉ samples (at least 2: the error estimate needs a variance) in every pixel.
 
 The scene is the one the pilot loaded and inspected (:attr:`.Plan.loaded`, :attr:`.Plan.info`;
-:func:`phonglab.render.open_scene_file`): Mitsuba loads it once per ``render``, not twice, and
+:func:`phonglab.engine.render.open_scene_file`): Mitsuba loads it once per ``render``, not twice, and
 a declared ``$max_depth`` is applied by rebuilding the scene's integrator with the plan's
 depth, the integrator a reload would give.  Pass k has the seed
-:func:`phonglab.render.pass_seed` (seed, k) on either route.
+:func:`phonglab.engine.render.pass_seed` (seed, k) on either route.
 
 **The error report** (:class:`ErrorReport`): E is the total relative error against a converged
-reference, bias included (:mod:`phonglab.metrics`, the one definition).  Achieved: against the
+reference, bias included (:mod:`phonglab.engine.metrics`, the one definition).  Achieved: against the
 reference given, else the cached one of the planned scene and colour model
-(:func:`phonglab.references.cached`), when there is one, the reference's noise subtracted.
+(:func:`phonglab.engine.references.cached`), when there is one, the reference's noise subtracted.
 Estimated: √(n² + b²), n the render's relative noise (from its passes, uniform, weighed by the
 pilot's weights ≈ 1/(r² + ε) rather than by the render's own image, whose fireflies would
 weigh themselves down; the combination's 1/√Σ n_j/V_j when the render is combined with the
@@ -38,11 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import metrics, references
-from ..adaptive import MIN_SPP, AdaptiveResult, AdaptiveSampling
+from ..engine import metrics, references
+from ..engine.adaptive import MIN_SPP, AdaptiveResult, AdaptiveSampling
 from ..registration import register
-from ..references import Reference
-from ..render import (RenderResult, SceneFile, UniformPasses, open_scene_file,
+from ..engine.references import Reference
+from ..engine.render import (RenderResult, SceneFile, UniformPasses, open_scene_file,
                       render_scene_file)
 from ..runtime import quiet_mitsuba
 from . import choice
@@ -149,7 +149,7 @@ def prepare(plan: Plan) -> PreparedPlan:
 def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
                  reference: Reference | None = None) -> ErrorReport:
     """The render's error (module docstring): against ``reference`` (a
-    :class:`phonglab.references.Reference`), else the cached reference, when there is one."""
+    :class:`phonglab.engine.references.Reference`), else the cached reference, when there is one."""
     if isinstance(result, AdaptiveResult):
         noise = result.estimated_error
     elif "combined_noise" in result.metadata:   # 1/√Σ n_j/V_j, with the pilot's weights
@@ -176,7 +176,7 @@ def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
     """Render ``plan`` (module docstring) and report its error.
 
     With ``out`` the render writes its files as ``phonglab render`` does
-    (:func:`phonglab.render.render_scene_file`: image, standard error, preview, and the spp
+    (:func:`phonglab.engine.render.render_scene_file`: image, standard error, preview, and the spp
     map for a wavefront render; the plan in the header, :func:`header`); without, nothing is
     written.  ``reference``: the converged image to measure the achieved error against
     (default: the cached one, when there is one).  ``progress`` shows a uniform render's

@@ -1,7 +1,7 @@
 r"""The planner's pilot: short renders that measure the depth bias, the noise and the time.
 
 With ``P`` passes of ``s`` samples each (pass k of every depth uses the seed
-:func:`phonglab.render.pass_seed` (seed, k), so the passes of two depths follow the same paths
+:func:`phonglab.engine.render.pass_seed` (seed, k), so the passes of two depths follow the same paths
 up to the shallower depth), ``full_k`` the pass images at full depth and ``depth_k`` those at
 depth d, ``D_k = full_k − depth_k`` and per pixel and channel:
 
@@ -40,12 +40,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import render
-from ..metrics import REL_EPS
-from ..scenes import SceneInfo, path_integrator
+from ..engine import render
+from ..engine.metrics import REL_EPS
+from ..engine.scenes import SceneInfo, path_integrator
 from . import ladder
 
-#: ε of the relative error E = √mean((x − r)²/(r² + ε)) (phonglab.metrics.relative_rmse).
+#: ε of the relative error E = √mean((x − r)²/(r² + ε)) (phonglab.engine.metrics.relative_rmse).
 EPS = REL_EPS
 #: The depth bias may use at most this fraction of the target error (b(d) <= BIAS_FRACTION · E).
 BIAS_FRACTION = 0.25
@@ -165,7 +165,7 @@ def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP, repeats
     """((a, b) of T(spp) = a + b·spp, the renders timed) from alternating one-pass renders of
     spp_small and spp_big = max(2·spp_small, ⌈TIME_SAMPLES / pixels⌉) samples per pixel.
 
-    Each render goes through :func:`phonglab.render.render_scene`, the loop the planned render
+    Each render goes through :func:`phonglab.engine.render.render_scene`, the loop the planned render
     runs, and its ``pass_seconds[0]`` (``mi.render``, evaluation and the copy to numpy) is the
     time.  Medians of ``repeats`` renders each, render i with seed ``seed + i`` (their images
     are samples of the scene like any other: :meth:`Pilot.reusable`); the kernel must already
@@ -189,7 +189,7 @@ def _time_model(scene, integrator, seed: int, spp_small: int = TIME_SPP, repeats
 
 def merged(passes_img: np.ndarray, pass_spp: list[int]) -> render.RenderResult:
     """The (P, H, W, C) pass images of ``pass_spp`` samples each as one render
-    (:class:`phonglab.render.PassMerge`: its image and standard error)."""
+    (:class:`phonglab.engine.render.PassMerge`: its image and standard error)."""
     merge = render.PassMerge(int(sum(pass_spp)), len(pass_spp))
     for img, n in zip(passes_img, pass_spp):
         merge.add(img, int(n))
@@ -471,7 +471,7 @@ class Pilot:
 
     def reusable(self, depth: int) -> list[tuple[render.RenderResult, np.ndarray]]:
         r"""The pilot's renders that are samples of the planned render's image at ``depth``,
-        one per independent seed, for :func:`phonglab.render.combine_renders`, each with
+        one per independent seed, for :func:`phonglab.engine.render.combine_renders`, each with
         weights ≈ 1/(r² + ε) from other samples than its own (the second pilot's for every
         render but the second pilot, the first pilot's for it) to measure its precision by.
 

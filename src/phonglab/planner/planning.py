@@ -15,10 +15,10 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanError, SceneError
-from ..metrics import noise_target
-from ..render import MAX_SPP, Prior, check_spp, precision
+from ..engine.metrics import noise_target
+from ..engine.render import MAX_SPP, Prior, check_spp, precision
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
-from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
+from ..engine.scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
 from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
                     PILOT_SPP, DepthSample, Pilot, pilot_size)
@@ -68,7 +68,7 @@ class Plan:
     info: SceneInfo | None = field(default=None, repr=False, compare=False)
     loaded: Any = field(default=None, repr=False, compare=False)
     #: the pilot's renders the chosen uniform render is combined with (:meth:`.pilot.Pilot.
-    #: reusable`, :func:`phonglab.render.combine_renders`); None when it renders alone
+    #: reusable`, :func:`phonglab.engine.render.combine_renders`); None when it renders alone
     reused: Prior | None = field(default=None, repr=False, compare=False)
     #: the pilot's weights ≈ 1/(r² + ε) (from its second render): the render's noise is
     #: measured with them (:func:`.execute.error_report`), not with its own image's
@@ -78,13 +78,13 @@ class Plan:
 
     @property
     def noise_target(self) -> float:
-        """The noise the render may leave, √(E² − bias²) (:func:`phonglab.metrics.noise_target`:
+        """The noise the render may leave, √(E² − bias²) (:func:`phonglab.engine.metrics.noise_target`:
         what a wavefront render aims at)."""
         return noise_target(self.target_error, self.predicted_bias)
 
     @property
     def uses_wavefront(self) -> bool:
-        """True when the render goes through :mod:`phonglab.adaptive` (adaptive sampling, or
+        """True when the render goes through :mod:`phonglab.engine.adaptive` (adaptive sampling, or
         a model other than the scene's path integrator)."""
         return self.sampling == "adaptive" or self.model != "path"
 
@@ -101,7 +101,7 @@ class Plan:
         return json.dumps(self.to_dict(), indent=indent)
 
     def render_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`phonglab.render.render_file` that apply the plan (a
+        """Keyword arguments of :func:`phonglab.engine.render.render_file` that apply the plan (a
         uniform ``path`` render that reaches E on its own: the chosen sampler, spp and passes;
         when the plan combines its render with the pilot's, the uniform spp of
         :attr:`spp`)."""
@@ -176,7 +176,7 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
 
     Args:
         scene_path: scene file, or a name in ``scenes_xml/``.
-        target_error: E, the total relative RMSE, bias included (:mod:`phonglab.metrics`;
+        target_error: E, the total relative RMSE, bias included (:mod:`phonglab.engine.metrics`;
             ``0.01`` = 1 %).
         pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
             of the film: 64, fewer beyond 64² pixels, at least 4) and the passes they are split
@@ -324,8 +324,8 @@ def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
 
 def _reusable(pilot: Pilot, depth: int, overrides: dict[str, Any]) -> tuple[Prior | None, float]:
     """The pilot's renders a uniform ``path`` render at ``depth`` may be combined with
-    (:class:`phonglab.render.Prior`), and the precision Σ n_j/V_j they bring
-    (:func:`phonglab.render.combine_renders`): none when the caller fixed spp or depth (the
+    (:class:`phonglab.engine.render.Prior`), and the precision Σ n_j/V_j they bring
+    (:func:`phonglab.engine.render.combine_renders`): none when the caller fixed spp or depth (the
     render is then the one asked for)."""
     if "spp" in overrides or "max_depth" in overrides:
         return None, 0.0

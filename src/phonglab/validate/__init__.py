@@ -34,7 +34,7 @@ def validate(spec, *, variant=None, params=None, plugins=(), sweep=True, runner=
     set, the ``plugins`` files run once, the plugin loaded once, then checked across its
     kind's parameter sweep (``sweep=False``: at the given point).  ``options``: topics, seed,
     quick, known, family, sizes (:func:`phonglab.validate.core.run`)."""
-    from . import core, sweep as sweep_   # lazy: imports Mitsuba
+    from . import core, sweep as sweep_  # lazy: imports Mitsuba
 
     core.start(variant)
     registered = core.load_plugins(plugins)
@@ -52,7 +52,7 @@ def _face(kind):
     """``validate_<kind>``: one plugin of ``kind`` on every topic of its kind."""
 
     def validate_kind(spec, *, params=None, sweep=False, **options) -> Report:
-        from . import sweep as sweep_   # lazy: imports Mitsuba
+        from . import sweep as sweep_  # lazy: imports Mitsuba
         from .inputs import ValidateError
 
         for name in kind.load_options:

@@ -18,7 +18,7 @@ import traceback
 from pathlib import Path
 
 from ..parallel import Job, Runner
-from ..outputs import jsonable
+from ..engine.outputs import jsonable
 from ..verdict import Report, Row, point_label
 from . import registry
 from . import validate_bsdf
@@ -46,7 +46,7 @@ def _validate(case, kind: str, options: dict) -> Report:
                       [Row("finite", "the case loads and runs", None, None, None, None,
                            "skipped", case.skip)])
     if kind != "bsdf":
-        from .. import registration              # phonglab's own plugins (whitted) in it
+        from .. import registration  # phonglab's own plugins (whitted) in it
         registration.register(common["variant"])
     return getattr(face, registry.by_name(kind).function)(case.spec, **common,
                                               sweep=options.get("sweep", False),

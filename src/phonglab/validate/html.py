@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..outputs import write_text  # noqa: E402
+from ..engine.outputs import write_text  # noqa: E402
 from ..verdict import Report, cells, evidence, header  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}

@@ -22,7 +22,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import stats
-from ...render import render_scene
+from ...engine.render import render_scene
 from . import scenes
 from .config import seed
 from .setup import Target

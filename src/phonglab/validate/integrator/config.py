@@ -2,7 +2,7 @@
 
 Every render is a number of passes of ``spp`` samples per pixel, each pass with its own
 Mitsuba seed (:func:`seed`: the run's seed, the topic and the scene give a stream, the pass
-number its member, :func:`phonglab.render.pass_seed`), so the passes are independent and their
+number its member, :func:`phonglab.engine.render.pass_seed`), so the passes are independent and their
 spread measures the Monte Carlo error.
 """
 

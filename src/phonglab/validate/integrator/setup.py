@@ -8,7 +8,7 @@ level one more bounce).  Whether it has that parameter is found by loading it wi
 Mitsuba refuses an unreferenced property, C++ and Python plugins alike.  An integrator that
 accepts ``max_depth`` but keeps its own (``direct_projective`` sets 2 whatever it is given,
 src/python/python/ad/integrators/direct_projective.py:96-98) is read back
-(:func:`phonglab.render.max_depth_of`, or a Python integrator's ``max_depth`` attribute) and
+(:func:`phonglab.engine.render.max_depth_of`, or a Python integrator's ``max_depth`` attribute) and
 held at the depth it keeps.  Without the parameter the depth is the one the integrator is
 known to compute: :data:`FIXED_DEPTHS` for Mitsuba's built-ins (``direct``: emission plus
 direct illumination, the depth-2 model), a Python plugin's class attribute ``FIXED_DEPTH``;
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import drjit as dr
 import mitsuba as mi
 
-from ...render import max_depth_of
+from ...engine.render import max_depth_of
 from ...settings import Loaded
 
 #: Built-ins without ``max_depth`` and the depth their estimator computes.

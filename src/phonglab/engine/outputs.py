@@ -10,7 +10,7 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
   sentence, and nothing has been computed yet.
 * **Replaced as a set.**  Every file is written to a temporary beside its target, and the
   temporaries are renamed over the targets only once all of them are complete: written,
-  fsync'ed and checked (:func:`phonglab.exr.atomic_paths`).  The set is the image, its
+  fsync'ed and checked (:func:`phonglab.engine.exr.atomic_paths`).  The set is the image, its
   standard error, the preview and, for an adaptive render, the spp map ``x.spp.exr`` and its
   preview ``x.spp.png`` (:func:`spp_paths`).  A member this render does not produce is
   removed once the new set is in place (an old ``x.stderr.exr`` beside a one-pass render, an
@@ -33,9 +33,9 @@ from typing import Any, Callable
 import numpy as np
 
 from . import exr
-from .errors import PhonglabError
+from ..errors import PhonglabError
 from .tonemap import preview_png
-from .verdict import jsonable
+from ..verdict import jsonable
 
 
 def check_file(path: Path, what: str = "output") -> None:
@@ -133,7 +133,7 @@ class RenderOutputs:
 
 def write_text(path: str | Path, text: str) -> Path:
     """``text`` at ``path`` (UTF-8, folders created), written to the end or not at all
-    (:func:`phonglab.exr.atomic_path`: the previous file untouched on any failure)."""
+    (:func:`phonglab.engine.exr.atomic_path`: the previous file untouched on any failure)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with exr.atomic_path(path, path.suffix or ".txt") as tmp:
@@ -145,7 +145,7 @@ def write_json(path: str | Path, data: Any, *, indent: int | None = 1,
                separators: tuple[str, str] | None = None, end: str = "") -> Path:
     """``data`` as strict JSON at ``path`` (folders created): :func:`jsonable` first, never a
     bare NaN (``allow_nan=False``), written to the end or not at all
-    (:func:`phonglab.exr.atomic_path`, the previous file untouched on any failure).  ``indent``,
+    (:func:`phonglab.engine.exr.atomic_path`, the previous file untouched on any failure).  ``indent``,
     ``separators`` and ``end`` (a trailing newline) as each file has always been written."""
     return write_text(path, json.dumps(jsonable(data), indent=indent, separators=separators,
                                        allow_nan=False) + end)

@@ -19,10 +19,10 @@ E[d²] = MSE_true + s_r², so passing ``ref_stderr`` subtracts mean(s_r² / (r²
 mean(s_r²) from the MSE), clamped at 0 (:func:`errors`).
 
 **The error target E** (``--target-error E`` on every route of ``phonglab render`` and
-``phonglab plan``, :func:`phonglab.planner.plan`, :func:`phonglab.adaptive.render_adaptive`;
+``phonglab plan``, :func:`phonglab.planner.plan`, :func:`phonglab.engine.adaptive.render_adaptive`;
 the one definition, which the others refer to) is the *total* relative RMSE of the image
 against a converged reference r: the image at unbounded depth (``max_depth = -1``, paths ended
-by Russian roulette, no depth bias; :func:`phonglab.references.reference`), its own noise
+by Russian roulette, no depth bias; :func:`phonglab.engine.references.reference`), its own noise
 subtracted as above.  Its square splits into bias and noise, E² = b² + n² (MSE = bias² +
 variance: Veach, PhD thesis, Stanford 1997, §2.4.3), with b the relative RMS of what the
 render leaves out systematically (the energy of the bounces past a finite max_depth: the
@@ -49,7 +49,7 @@ import math
 
 import numpy as np
 
-from .errors import CompareError
+from ..errors import CompareError
 
 #: ε of the relative MSE: d² / (r² + REL_EPS).
 REL_EPS = 1e-2

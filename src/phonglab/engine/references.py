@@ -1,8 +1,8 @@
 """The one cache of high-sample reference images that errors are measured against.
 
 A reference is a render of a scene file with many samples per pixel, split into passes so
-that it carries its per-pixel standard error (:func:`phonglab.render.render_scene`); the
-metrics subtract that noise (:func:`phonglab.metrics.errors`).  It is rendered
+that it carries its per-pixel standard error (:func:`phonglab.engine.render.render_scene`); the
+metrics subtract that noise (:func:`phonglab.engine.metrics.errors`).  It is rendered
 
 * at **full depth** (``max_depth=-1``, the default): a ``path`` integrator without a depth
   limit, ended by Russian roulette and so unbiased, keeping the scene's ``rr_depth`` and
@@ -18,9 +18,9 @@ Mitsuba's version; the header records spp, passes, seed and render time.
 A missing reference renders its passes one after the other here, or, given a
 :class:`phonglab.parallel.Runner` that is not serial, as one job per pass on the cluster
 (:func:`reference_pass`: pass k of ``spp_k`` samples with Mitsuba seed
-:func:`~phonglab.render.pass_seed` (seed, k), exactly the pass the serial loop renders).  The
-passes are merged here in pass order by :class:`phonglab.render.PassMerge`, the one merge of
-:func:`~phonglab.render.render_scene`: with N = Σ spp_k and per-pixel pass means x_k,
+:func:`~phonglab.engine.render.pass_seed` (seed, k), exactly the pass the serial loop renders).  The
+passes are merged here in pass order by :class:`phonglab.engine.render.PassMerge`, the one merge of
+:func:`~phonglab.engine.render.render_scene`: with N = Σ spp_k and per-pixel pass means x_k,
 x̄ = Σ spp_k x_k / N and s² = (Σ spp_k x_k² / N − x̄²) · N / (N − N/P) / P (the weighted
 sample variance of the P pass means, over P), so the per-pixel variance is kept and the
 merge is bit-identical to the serial one whenever the pass images are (a box-filtered
@@ -46,11 +46,11 @@ import mitsuba as mi
 import numpy as np
 
 from . import exr
-from .errors import PhonglabError
+from ..errors import PhonglabError
 from .metrics import as_hwc
-from .parallel import Job, Runner
+from ..parallel import Job, Runner
 from .render import PassMerge, pass_seed, pass_spps, render_pass, render_scene
-from .runtime import available_backend, quiet_mitsuba, variant_for
+from ..runtime import available_backend, quiet_mitsuba, variant_for
 from .scenes import (REPO_ROOT, SceneInfo, file_hash, inspect_scene, load_scene, path_integrator,
                      scene_path)
 

@@ -5,7 +5,7 @@ With ``A`` the image under test and ``B`` the reference, per value (pixel i, cha
 
 * RMSE            = √( Σ d_ic² / (nC) )
 * relative MSE    = Σ d_ic² / (B_ic² + ε) / (nC),  ε = 10⁻² guarding dark pixels
-  (:mod:`phonglab.metrics`, the one definition phonglab uses everywhere)
+  (:mod:`phonglab.engine.metrics`, the one definition phonglab uses everywhere)
 * mean difference  d̄ = Σ m_i / n with m_i = Σ_c d_ic / C the pixel's channel mean.
 
 Its standard error comes from one of two sources (:attr:`Comparison.stderr_source`):
@@ -41,10 +41,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from . import exr, metrics
-from .errors import CompareError
+from ..errors import CompareError
 from .exr import stderr_path
 from .metrics import REL_EPS, as_hwc
-from .stats import two_sided_p
+from ..stats import two_sided_p
 
 
 @dataclass

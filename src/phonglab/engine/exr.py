@@ -34,7 +34,7 @@ from typing import Any, Mapping
 import numpy as np
 import OpenEXR
 
-from .errors import ExrError, WriteError
+from ..errors import ExrError, WriteError
 
 PREFIX = "phonglab:"
 #: The four bytes every OpenEXR file starts with (OpenEXR file layout, "magic number").

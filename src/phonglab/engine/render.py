@@ -1,8 +1,8 @@
 """Rendering in passes: the one loop around ``mi.render``, and a scene file to EXR + PNG.
 
 :func:`render_scene_file` is the one render of a scene file, uniform (:class:`UniformPasses`,
-:func:`render_file`) or adaptive (:class:`phonglab.adaptive.AdaptiveSampling`,
-:func:`phonglab.adaptive.render_file_adaptive`): path resolution, output checks, the
+:func:`render_file`) or adaptive (:class:`phonglab.engine.adaptive.AdaptiveSampling`,
+:func:`phonglab.engine.adaptive.render_file_adaptive`): path resolution, output checks, the
 ``<default>`` merge, loading (:func:`open_scene_file`), provenance, exposure and writing.
 
 Rendering in passes (independent seeds, equal sample counts) gives both the image and a
@@ -21,7 +21,7 @@ means, is s = √( Σ spp_k (x_k − x̄)² / (N − N/P) / P ) (:func:`render_s
 independent seeds, each with n_j samples and per-pixel standard error s_j, combine into
 x̂ = Σ α_j x̄_j with Σ α_j = 1, unbiased for any fixed α, with Var x̂ = Σ α_j² s_j² per pixel.
 With V_j = n_j · mean(s_j² w) the relative variance of one of its samples (w ≈ 1/(r² + ε), the
-error metric's weights, :mod:`phonglab.metrics`, drawn from *other* samples than render j's),
+error metric's weights, :mod:`phonglab.engine.metrics`, drawn from *other* samples than render j's),
 α_j ∝ n_j / V_j minimizes the image's relative variance, to 1 / Σ_j n_j/V_j: the
 inverse-variance weights of independent unbiased estimates (Cochran, *Sampling Techniques*,
 3rd ed., §5A.13; Pharr, Jakob & Humphreys, PBR 4th ed., §2.1.4).  The α_j are image-level
@@ -45,10 +45,11 @@ import mitsuba as mi
 import numpy as np
 from tqdm import tqdm
 
-from . import __version__, exr
-from .errors import PhonglabError, SceneError, user_errors
+from .. import __version__
+from . import exr
+from ..errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs
-from .runtime import available_memory, quiet_mitsuba
+from ..runtime import available_memory, quiet_mitsuba
 from .scenes import (SceneInfo, file_hash, inspect_scene, integrator_with_depth, load_scene,
                      scene_defaults, scene_path, sensor_with_sampler)
 from .tonemap import auto_exposure
@@ -121,7 +122,7 @@ def render_scene(scene, spp: int, seed: int = 0, passes: int = 1, sensor: int | 
     every pass image in :attr:`RenderResult.passes`.  ``pass_seconds`` times each pass with
     the image evaluated and copied to numpy (the first includes JIT compilation).
     ``sensor`` is a sensor number of the scene or a sensor of its own
-    (:func:`phonglab.scenes.sensor_with_sampler`); a stratified sampler may round each pass's
+    (:func:`phonglab.engine.scenes.sensor_with_sampler`); a stratified sampler may round each pass's
     count up (:func:`pass_spps`), and the render then has more than ``spp`` samples
     (:attr:`RenderResult.pass_spp`).
     """
@@ -319,7 +320,7 @@ class SceneFile:
     def sensor(self, sampler: str | None = None):
         """The render's sensor, checked by :func:`preflight`: the scene's first, or that
         sensor rebuilt with ``sampler`` when it names another sampler than the scene's
-        (:func:`phonglab.scenes.sensor_with_sampler`); built once per sampler."""
+        (:func:`phonglab.engine.scenes.sensor_with_sampler`); built once per sampler."""
         key = None if sampler is None or sampler == self.inspect().sampler else sampler
         if key not in self.sensors:
             self.sensors[key] = preflight(self.scene, self.path, 0 if key is None
@@ -327,7 +328,7 @@ class SceneFile:
         return self.sensors[key]
 
     def inspect(self) -> SceneInfo:
-        """The scene file read by :func:`phonglab.scenes.inspect_scene` with :attr:`params`
+        """The scene file read by :func:`phonglab.engine.scenes.inspect_scene` with :attr:`params`
         (once)."""
         if self.info is None:
             self.info = inspect_scene(self.path, **self.params)
@@ -469,11 +470,11 @@ def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
     """The one render of a scene file: check, load, render, write ``out`` with provenance.
 
     ``sampling`` is :class:`UniformPasses` (the default) or
-    :class:`phonglab.adaptive.AdaptiveSampling`: its ``check()`` (arguments),
+    :class:`phonglab.engine.adaptive.AdaptiveSampling`: its ``check()`` (arguments),
     ``settings()`` (``<default>`` entries it sets), ``render(scene_file, seed) -> (result,
     header fields)`` and ``extra_files(out, result)`` (members it adds to the file set: the
     spp map).  Everything that can be checked is checked before the render starts: every
-    file of the set (:class:`phonglab.outputs.RenderOutputs`), the arguments, the scene
+    file of the set (:class:`phonglab.engine.outputs.RenderOutputs`), the arguments, the scene
     (:func:`preflight`).  The scene is opened by :func:`open_scene_file` (``variant``,
     ``max_depth``, ``params``, ``integrator``, ``loaded``, ``info``).  ``extra_metadata`` is
     added to the EXR header (the planner records its plan there); with ``png`` a preview is

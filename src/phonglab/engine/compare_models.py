@@ -28,7 +28,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from . import exr
-from .errors import PhonglabError
+from ..errors import PhonglabError
 from .outputs import write_text
 from .metrics import luminance
 from .render import render_scene
@@ -133,7 +133,7 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
         spp: samples per pixel of the two whitted renders (their only noise is pixel
             antialiasing).
         path_spp: samples per pixel of the path tracer (default 8 × spp).
-        seed, variant: as in :func:`phonglab.render.render_scene`.
+        seed, variant: as in :func:`phonglab.engine.render.render_scene`.
         max_depth: path length for all three (default: the scene's whitted, else 5).
         params: values for the scene's other ``<default>`` entries (width, intensity, ...).
     """

@@ -21,11 +21,11 @@ from typing import Any
 import mitsuba as mi
 import numpy as np
 
-from . import registration
-from .errors import SceneError
-from .runtime import quiet_mitsuba
+from .. import registration
+from ..errors import SceneError
+from ..runtime import quiet_mitsuba
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+REPO_ROOT = Path(__file__).resolve().parents[3]
 SCENES_DIR = REPO_ROOT / "scenes_xml"
 
 

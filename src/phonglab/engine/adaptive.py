@@ -11,7 +11,7 @@ phonglab's ``whitted``, any sampling integrator), times the ray weight.  Spectra
 convert each sample to linear sRGB (``mi.spectrum_to_srgb``, linear, so the mean commutes),
 polarized ones keep the unpolarized part; mono films have one channel (alpha and AOVs are not
 written).  Samples come from an ``independent`` sampler seeded per pass with
-:func:`phonglab.render.pass_seed` (seed, k) and the wavefront size, whatever sampler the scene
+:func:`phonglab.engine.render.pass_seed` (seed, k) and the wavefront size, whatever sampler the scene
 names: the samples of a pixel are then i.i.d., which the variance estimate below needs.
 
 **Two accumulations per sample.**  (1) The image: ``mi.ImageBlock`` with the film's own
@@ -35,13 +35,13 @@ samples.  It is scaled by ``D²/(D² − Σ A² N)`` (D the denominator; N/(N−
 unbiased sample variance).  Per-sample moments, not the spread of pass images: every sample
 count is an integer, passes of one pixel differ in size, and the moments give N − 1 degrees
 of freedom instead of passes − 1.  The relative error of pixel p is
-``e_p² = mean_c Var x_pc / (x_pc² + ε)`` (ε = :data:`phonglab.metrics.REL_EPS`, the project's
+``e_p² = mean_c Var x_pc / (x_pc² + ε)`` (ε = :data:`phonglab.engine.metrics.REL_EPS`, the project's
 relative MSE).
 
 **Target and allocation.**  The target E is the image's relative RMSE against a converged
-reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.metrics.relative_rmse`), as far as
+reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.engine.metrics.relative_rmse`), as far as
 noise makes it: the renderer has no depth-bias estimate, so E is the total error only for an
-unbiased render (:mod:`phonglab.metrics`, the one definition of E; the planner passes
+unbiased render (:mod:`phonglab.engine.metrics`, the one definition of E; the planner passes
 √(E² − b²)).  Its square is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative
 variance of one sample), minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
 ``N_p* = √v_p · mean_q √v_q / E²`` — each pixel's budget is ``e_p*² = v_p/N_p* =
@@ -82,11 +82,11 @@ import mitsuba as mi
 import numpy as np
 
 from . import exr
-from .errors import PhonglabError
+from ..errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import spp_paths
 from .render import MAX_SPP, film_channels, pass_seed, preflight, render_scene_file
-from .runtime import available_memory, default_variant
+from ..runtime import available_memory, default_variant
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
 #: Samples every pixel gets in the pilot pass (the first guard).
@@ -517,7 +517,7 @@ def spp_map_image(spp: np.ndarray):
     at the powers of two from the map's least to its most samples, under a line giving mean,
     min and max.
 
-    Drawn with Pillow and :data:`phonglab.tonemap.VIRIDIS`, without matplotlib: a matplotlib
+    Drawn with Pillow and :data:`phonglab.engine.tonemap.VIRIDIS`, without matplotlib: a matplotlib
     figure (:func:`write_spp_png`) cost every adaptive command ~0.5 s of imports and layout,
     and importing matplotlib for its colour table alone ~0.1 s (measured: cProfile of a
     planned glass_slab render, 128²); this takes ~0.02 s.
@@ -558,7 +558,7 @@ def spp_map_image(spp: np.ndarray):
 
 @dataclass
 class AdaptiveSampling:
-    """Adaptive sampling for :func:`phonglab.render.render_scene_file`: :func:`render_adaptive`
+    """Adaptive sampling for :func:`phonglab.engine.render.render_scene_file`: :func:`render_adaptive`
     to ``target_error`` (its arguments), the spp map written beside the image set
     (:func:`spp_paths`)."""
 
@@ -596,7 +596,7 @@ class AdaptiveSampling:
             "passes": len(result.passes), "seed": seed, "integrator": integ.class_name(),
             "max_depth": sf.max_depth if sf.max_depth is not None
             else sf.declared.get("max_depth"),
-            "filter": "the film's, density-normalised (phonglab.adaptive)"}
+            "filter": "the film's, density-normalised (phonglab.engine.adaptive)"}
 
     def extra_files(self, out: Path, result: AdaptiveResult):
         """The spp map, members of the render's file set: ``x.spp.exr`` (channel Y, the
@@ -616,13 +616,13 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
                          extra_metadata: dict[str, Any] | None = None) -> AdaptiveResult:
     """Load ``scene``, render it adaptively and write ``out`` (+ .stderr.exr, .png, .spp.exr, .spp.png).
 
-    :class:`AdaptiveSampling` through :func:`phonglab.render.render_scene_file`, the one
+    :class:`AdaptiveSampling` through :func:`phonglab.engine.render.render_scene_file`, the one
     render of a scene file.  Everything is checked before the render: the arguments (one
     sentence each, first), the five output files, the scene.  ``max_depth`` applies as in
-    :func:`phonglab.render.render_file` (the scene's ``$max_depth`` default, else its
+    :func:`phonglab.engine.render.render_file` (the scene's ``$max_depth`` default, else its
     integrator rebuilt with it); ``integrator`` (a ``mi.load_dict`` dictionary) replaces the
     scene's (the planner's models).  ``target_error`` is a noise target: see
-    :mod:`phonglab.metrics` for what it means against a converged reference.
+    :mod:`phonglab.engine.metrics` for what it means against a converged reference.
     """
     sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp)
     sampling.check()
