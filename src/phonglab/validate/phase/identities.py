@@ -11,7 +11,8 @@ with the six axis directions and the sample-value corners {0, 1 − 2⁻²⁴}³
 sample marked by pdf = weight = 0 may have any wo; tolerance 0 bad lanes.  ``weight``: the
 sample weight equals value/pdf of eval_pdf at the sampled wo, to ``bsdf.config.REL_TOL`` =
 2⁻¹⁰ relative (``rel_diff`` with its floor) plus, on a lane that exceeds it, the ratio's
-sensitivity to an 8u move of (wi, wo) (``bsdf.config.sensitivity``).  ``pdf``: the pdf sample
+sensitivity to an 8u move of (wi, wo) (``bsdf.config.sensitivity``) and, where that is not
+enough, to every wo within ±8 ulps per component (``bsdf.config.refine``, the BSDF topic's).  ``pdf``: the pdf sample
 reports equals eval_pdf's pdf at the sampled wo, to the same tolerance (a g = 0.99 lobe moves
 by 0.3 % per 1e-7 of cos θ: the sensitivity term, never a wider constant).  ``reciprocity``:
 σ(wi) f(wi, wo) = σ(wo) f(wo, wi), f the value of eval_pdf, σ ``projected_area`` (1 for a
@@ -25,13 +26,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bsdf.config import REL_TOL, rel_diff, sensitivity
+from ..bsdf.config import REL_TOL, refine, rel_diff, sensitivity
 from . import lanes
 from .config import rng
 from .topics import Row
 
 ROUND_OFF = ("float32 round-off tolerance 2^-10 relative (bsdf.config.REL_TOL) plus the "
-             "lane's sensitivity to an 8u move of (wi, wo) where it exceeds that")
+             "lane's sensitivity to an 8u move of (wi, wo), or to wo's ±8-ulp box, where it "
+             "exceeds that")
 
 
 def bounded(topic, name, values, tol, reason, details, inputs=None) -> Row:
@@ -116,13 +118,15 @@ def _ratio(phase):
 
 
 def _checked(rel, fn, wi, wo, r, value=None):
-    """rel / (REL_TOL + sensitivity) per lane, the sensitivity taken where rel > REL_TOL."""
+    """rel / (REL_TOL + sensitivity) per lane: the random 8u estimate where rel > REL_TOL, then
+    for lanes still failing the ±8-ulp box of wo (``bsdf.config.refine``, worst first)."""
     sens = np.zeros(len(rel))
     check = np.flatnonzero(rel > REL_TOL)
     if check.size:
-        sens[check] = sensitivity(fn, wi[check], wo[check], r,
-                                  value=None if value is None else value[check])
-    return rel / (REL_TOL + sens)
+        value = fn(wi, wo) if value is None else value
+        sens[check] = sensitivity(fn, wi[check], wo[check], r, value=value[check])
+        return refine(rel, sens, np.zeros(len(rel)), fn, wi, wo, value)[0]
+    return rel / REL_TOL
 
 
 def weight(phase, opts) -> list[Row]:
