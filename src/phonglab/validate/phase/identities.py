@@ -40,6 +40,9 @@ def bounded(topic, name, values, tol, reason, details, inputs=None) -> Row:
     """A row passing when the largest finite lane value is ≤ tol; a failing row records the
     worst lane and the inputs of its failing lanes (``failing_lanes``)."""
     values = np.asarray(values, np.float64)
+    if values.size == 0:
+        return Row(topic, name, None, None, None, tol, "skipped", "no lane to check: every "
+                   "sample is non-finite or has pdf 0 (the finite topic's)", details)
     finite = values[np.isfinite(values)]
     measured = float(finite.max()) if finite.size else 0.0
     ok = measured <= tol

@@ -26,6 +26,12 @@ from .sampling import chi2, normalization
 from .topics import TOPICS
 
 
+# Mitsuba 3.9.1 names the call mi.register_phase (core.REGISTER_CALLS lists
+# "register_phasefunction", which does not exist): record it too, so that core.load_plugins sees
+# a --plugin file register its phase function.  To be folded into core.REGISTER_CALLS.
+core.REGISTER_CALLS.setdefault("register_phase", "phase function")
+
+
 def statistical_tests(phase, opts, topics) -> int:
     """m: one χ² test per incidence."""
     return len(lanes.INCIDENCES) if "chi2" in topics else 1

@@ -51,6 +51,8 @@ def sample(phase, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray):
     """(wo (N, 3), weight (N, C), pdf (N,)) of ``phase.sample`` at wi with sample values
     u1 (N,) and u2 (N, 2)."""
     n = len(wi)
+    if n == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     u1 = mi.Float(np.ascontiguousarray(np.minimum(u1, ONE_MINUS), np.float32))
     u2 = np.ascontiguousarray(np.minimum(u2, ONE_MINUS), np.float32)
     wo, w, pdf = phase.sample(context(), interaction(wi), u1, mi.Point2f(u2[:, 0], u2[:, 1]))
@@ -61,6 +63,8 @@ def sample(phase, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray):
 def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray):
     """(value (N, C), pdf (N,)) of ``phase.eval_pdf`` at (wi, wo) (N, 3) each."""
     n = len(wi)
+    if n == 0:                      # no lanes (every sample dropped): Dr.Jit refuses width 0
+        return np.zeros((0, 3)), np.zeros(0)
     v, p = phase.eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
     v = probe.to_numpy(v, n)
     return (v if v.ndim == 2 else v[:, None]), probe.to_numpy(p, n)
@@ -76,6 +80,8 @@ def value(phase, wi, wo) -> np.ndarray:
 
 def projected_area(phase, wi: np.ndarray) -> np.ndarray:
     """σ(wi): a microflake phase function's projected area (1 for the others)."""
+    if len(wi) == 0:
+        return np.zeros(0)
     return probe.to_numpy(phase.projected_area(interaction(wi)), len(wi))
 
 
