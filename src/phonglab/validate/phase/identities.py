@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bsdf.config import REL_TOL, refine, rel_diff, sensitivity
+from ..emitter.identities import _bad   # NaN, ±inf or negative in any channel, per lane
 from . import lanes
 from .config import rng
 from .topics import Row
@@ -53,16 +54,6 @@ def bounded(topic, name, values, tol, reason, details, inputs=None) -> Row:
         bad = np.isfinite(values) & (values > tol)
         row.failing_lanes = {n: np.asarray(v)[bad] for n, v in inputs.items()}
     return row
-
-
-def _bad(*arrays) -> np.ndarray:
-    out = None
-    for a in arrays:
-        a = np.asarray(a, np.float64)
-        b = ~np.isfinite(a) | (a < 0)
-        b = b.any(axis=1) if b.ndim > 1 else b
-        out = b if out is None else out | b
-    return out
 
 
 def _count(name, bad, total, what, wi, other, label) -> Row:

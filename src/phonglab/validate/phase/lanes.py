@@ -24,7 +24,11 @@ import numpy as np
 from ... import probe
 from ..bsdf.lanes import ONE_MINUS
 from ..bsdf.lanes import sphere as _uniform
-from ..emitter.setup import basis  # noqa: F401  (rows s, t, n of a frame: the χ² frame)
+from ..emitter import setup as _emitter_setup
+
+#: Rows s, t, n of an orthonormal frame with normal n (the emitter kind's, Mitsuba's
+#: coordinate_system): the χ² and normalization frames.
+basis = _emitter_setup.basis
 
 #: Incident directions of the χ² and normalization topics (unit, fixed): the pole, an oblique
 #: direction and one near the xy plane; the histogram frame turns with each (sampling.py).
