@@ -110,3 +110,17 @@ def test_reproducers_exit_1_while_the_behaviour_is_present(script):
     out = subprocess.run([sys.executable, str(REPRO / f"{script}.py")], capture_output=True,
                          text=True, timeout=300, env=env)
     assert out.returncode == 1, out.stdout + out.stderr
+
+
+def test_xml_spec_and_bad_plugin_file(variant_llvm_rgb, tmp_path):
+    from phonglab.validate.inputs import ValidateError
+    from phonglab.validate.phase.kind import is_phase, validate_phase
+
+    xml = tmp_path / "hg.xml"
+    xml.write_text('<phase version="3.0.0" type="hg"><float name="g" value="0.3"/></phase>')
+    assert is_phase(str(xml))
+    report = validate_phase(str(xml), quick=True, topics=["finite", "weight"])
+    assert report.passed and report.meta["phase"]
+    emitter_file = Path(__file__).parent / "defects_emitter" / "point_control.py"
+    with pytest.raises(ValidateError, match="mi.register_phase"):
+        validate_phase("defect_point_control", plugins=[emitter_file], quick=True)
