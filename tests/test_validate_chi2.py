@@ -1,4 +1,4 @@
-"""The validator's own χ² test (stats.pearson_chi2 over validate.bsdf.sphere_bins): analytic
+"""The validator's own χ² test (stats.pearson_chi2 over validate.sphere_bins): analytic
 cases, Mitsuba's pooling, the lobe-adaptive pdf integral, narrow lobes that the fixed 24 × 24
 integration failed, a scalar variant, and the residual map of a failing cell."""
 
@@ -16,7 +16,7 @@ import pytest
 
 from phonglab import stats
 from phonglab.validate import validate_bsdf
-from phonglab.validate.bsdf import sphere_bins
+from phonglab.validate import sphere_bins
 from phonglab.verdict import evidence
 
 DEFECTS = Path(__file__).parent / "defects"

@@ -39,7 +39,7 @@ PLANTED = {
 
 @pytest.mark.parametrize("name", sorted(PLANTED))
 def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
-    from phonglab.validate.phase.kind import validate_phase
+    from phonglab.validate import validate_phase
 
     report = validate_phase(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True)
     assert {r.topic for r in report.failing} == PLANTED[name], report.table(report.failing)
@@ -53,7 +53,7 @@ def test_every_topic_but_cost_has_a_planted_defect():
 @pytest.mark.parametrize("spec", [{"type": "isotropic"}, {"type": "hg", "g": 0.5}],
                          ids=["isotropic", "hg-0.5"])
 def test_builtin_isotropic_and_hg_pass(variant_llvm_rgb, spec):
-    from phonglab.validate.phase.kind import validate_phase
+    from phonglab.validate import validate_phase
 
     report = validate_phase(spec, quick=True)
     assert report.passed, report.table(report.failing)
@@ -63,7 +63,7 @@ def test_builtin_isotropic_and_hg_pass(variant_llvm_rgb, spec):
 @pytest.mark.slow
 def test_catalogue_passes_with_its_findings(variant_llvm_rgb):
     from phonglab.validate.phase.builtins import CATALOGUE
-    from phonglab.validate.phase.kind import validate_phase
+    from phonglab.validate import validate_phase
 
     for case in CATALOGUE.cases():
         report = validate_phase(case.spec, quick=True, known=case.known)
@@ -72,7 +72,7 @@ def test_catalogue_passes_with_its_findings(variant_llvm_rgb):
 
 def test_sggx_findings_are_known_by_signature(variant_llvm_rgb):
     from phonglab.validate.phase.builtins import CATALOGUE
-    from phonglab.validate.phase.kind import validate_phase
+    from phonglab.validate import validate_phase
 
     case = CATALOGUE.find("sggx (0.15, 1, 0.8)")
     plain = validate_phase(case.spec, quick=True, topics=["finite", "chi2"])
@@ -85,7 +85,7 @@ def test_sggx_findings_are_known_by_signature(variant_llvm_rgb):
 
 def test_hg_small_g_finding_holds_only_near_zero(variant_llvm_rgb):
     from phonglab.validate.phase.builtins import CATALOGUE
-    from phonglab.validate.phase.kind import validate_phase
+    from phonglab.validate import validate_phase
 
     known = CATALOGUE.find("hg (g = 1e-05)").known
     small = validate_phase({"type": "hg", "g": 1e-5}, quick=True, topics=["chi2"], known=known)
@@ -96,11 +96,11 @@ def test_hg_small_g_finding_holds_only_near_zero(variant_llvm_rgb):
     assert isinstance(k, Known) and not k.holds_at({"g": 0.5})
 
 
-def test_is_phase(variant_llvm_rgb):
-    from phonglab.validate.phase.kind import is_phase
+def test_the_registry_detects_a_phase_function(variant_llvm_rgb):
+    from phonglab.validate.registry import detect
 
-    assert is_phase("hg") and is_phase({"type": "isotropic"})
-    assert not is_phase("diffuse") and not is_phase("point")
+    assert detect("hg").name == "phase" and detect({"type": "isotropic"}).name == "phase"
+    assert detect("diffuse").name != "phase" and detect("point").name != "phase"
 
 
 @pytest.mark.parametrize("script", ["hg_small_g_sampling", "sggx_sample_frame_transposed",
@@ -114,11 +114,12 @@ def test_reproducers_exit_1_while_the_behaviour_is_present(script):
 
 def test_xml_spec_and_bad_plugin_file(variant_llvm_rgb, tmp_path):
     from phonglab.validate.inputs import ValidateError
-    from phonglab.validate.phase.kind import is_phase, validate_phase
+    from phonglab.validate import validate_phase
+    from phonglab.validate.registry import detect
 
     xml = tmp_path / "hg.xml"
     xml.write_text('<phase version="3.0.0" type="hg"><float name="g" value="0.3"/></phase>')
-    assert is_phase(str(xml))
+    assert detect(str(xml)).name == "phase"
     report = validate_phase(str(xml), quick=True, topics=["finite", "weight"])
     assert report.passed and report.meta["phase"]
     emitter_file = Path(__file__).parent / "defects_emitter" / "point_control.py"

@@ -150,6 +150,18 @@ def excess(rel: np.ndarray, sens: np.ndarray) -> np.ndarray:
     return rel / (REL_TOL + sens)
 
 
+def invalid(*arrays) -> np.ndarray:
+    """Per lane: NaN, ±inf or a negative value in any channel of any of ``arrays`` (a value, a
+    pdf, a weight: none of them may be)."""
+    out = None
+    for a in arrays:
+        a = np.asarray(a, np.float64)
+        b = ~np.isfinite(a) | (a < 0)
+        b = b.any(axis=1) if b.ndim > 1 else b
+        out = b if out is None else out | b
+    return out
+
+
 def rel_diff(a, b) -> np.ndarray:
     """|a − b| / max(|a|, |b|, floor), elementwise; NaN where either side is not finite.
 

@@ -12,9 +12,9 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
+from ..directions import ONE_MINUS, sphere  # noqa: F401  (the lanes every topic draws)
 
 #: 1 − ε for a float32 sample value: the largest float32 below 1.
-ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 
 #: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
 SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
@@ -40,14 +40,6 @@ def incident(cells: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(wi (M·n, 3), cell index (M·n,)) for n lanes per (θ, φ) cell."""
     wi = exact(probe.direction(cells[:, 0], cells[:, 1]))
     return np.repeat(wi, n, axis=0), np.repeat(np.arange(len(cells)), n)
-
-
-def sphere(r: np.random.Generator, n: int) -> np.ndarray:
-    """n uniform directions on the whole sphere (both hemispheres)."""
-    z = 2.0 * r.random(n) - 1.0
-    phi = 2.0 * np.pi * r.random(n)
-    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
 
 
 def special_wo(wi: np.ndarray) -> np.ndarray:

@@ -46,7 +46,8 @@ import math
 import numpy as np
 
 from ... import probe, stats
-from . import lanes, sphere_bins
+from .. import sphere_bins
+from . import lanes
 from .topics import Row
 
 #: Tolerance of a delta sample's direction, per vector component (see the module docstring).

@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import probe
-from ..roundoff import REL_TOL, rel_diff, sensitivity
+from ..roundoff import REL_TOL, invalid, rel_diff, sensitivity
 from . import lanes as lanes_
 from .config import rng
 from .setup import Setup, float_, point2, sphere_dirs
@@ -83,7 +83,7 @@ def _count_row(name, bad, total, what, details=None, values=()) -> Row:
               f"lanes where {what} is NaN, infinite or negative, of {total} (reference "
               f"points x sample values, edges 0 and 1-eps included)", details or {})
     if n_bad and values:
-        row.failing_lanes = {"negative_only": (~_nonfinite(*values) & _bad(*values))[bad]}
+        row.failing_lanes = {"negative_only": (~_nonfinite(*values) & invalid(*values))[bad]}
     return row
 
 
@@ -96,59 +96,49 @@ def _nonfinite(*arrays) -> np.ndarray:
     return out
 
 
-def _bad(*arrays) -> np.ndarray:
-    out = None
-    for a in arrays:
-        a = np.asarray(a, np.float64)
-        b = ~np.isfinite(a) | (a < 0)
-        b = b.any(axis=1) if b.ndim > 1 else b
-        out = b if out is None else out | b
-    return out
-
-
 def finite(setup: Setup, opts) -> list[Row]:
     s = lanes_.sample(setup, opts, "finite")
     e, n = setup.emitter, s.n
     rows = []
     marked = (s.pdf == 0) & np.all(s.weight == 0, axis=1)     # an invalid sample, so marked
-    bad = _bad(s.pdf, s.weight) | (~np.all(np.isfinite(s.d), axis=1) & ~marked)
+    bad = invalid(s.pdf, s.weight) | (~np.all(np.isfinite(s.d), axis=1) & ~marked)
     rows.append(_count_row("sample_direction: ds.pdf, ds.d, weight", bad, n,
                            "ds.pdf or the weight (or ds.d non-finite in a sample not marked "
-                           "invalid by pdf = weight = 0)", _first_bad(s, bad),
+                           "invalid by pdf = weight = 0)", _firstinvalid(s, bad),
                            (s.pdf, s.weight, np.where(marked[:, None], 0.0, s.d))))
     pdf = probe.to_numpy(e.pdf_direction(s.it, s.ds), n)
-    rows.append(_count_row("pdf_direction at the sampled ds", _bad(pdf), n, "pdf_direction",
-                           _first_bad(s, _bad(pdf))))
+    rows.append(_count_row("pdf_direction at the sampled ds", invalid(pdf), n, "pdf_direction",
+                           _firstinvalid(s, invalid(pdf))))
     ev = probe.to_numpy(e.eval_direction(s.it, s.ds), n)
-    row = _count_row("eval_direction at the sampled ds", _bad(ev), n, "eval_direction",
-                     _first_bad(s, _bad(ev)), (ev,))
+    row = _count_row("eval_direction at the sampled ds", invalid(ev), n, "eval_direction",
+                     _firstinvalid(s, invalid(ev)), (ev,))
     if row.status == "fail":           # for documented causes' signatures (the sample's pdf)
-        row.failing_lanes.update(pdf=s.pdf[_bad(ev)], ref=s.p[_bad(ev)])
+        row.failing_lanes.update(pdf=s.pdf[invalid(ev)], ref=s.p[invalid(ev)])
     rows.append(row)
     if not setup.delta:
         d = s.d if setup.kind == "infinite" else sphere_dirs(rng(opts.seed, "finite"), n)
         value, _ = lanes_.traced_radiance(setup, s.p, d)
-        rows.append(_count_row("eval along rays from the reference points", _bad(value), n,
+        rows.append(_count_row("eval along rays from the reference points", invalid(value), n,
                                "eval (radiance seen along a ray)", values=(value,)))
     r = rng(opts.seed, "finite")
     u = lanes_.with_edges(r.random((n, 5)), n)
     ray, w = e.sample_ray(float_(np.zeros(n)), float_(u[:, 4]), point2(u[:, :2]),
                           point2(u[:, 2:4]))
     wr = probe.to_numpy(w, n)
-    bad = _bad(wr) | ~np.all(np.isfinite(probe.to_numpy(ray.d, n)), axis=1) | \
+    bad = invalid(wr) | ~np.all(np.isfinite(probe.to_numpy(ray.d, n)), axis=1) | \
         ~np.all(np.isfinite(probe.to_numpy(ray.o, n)), axis=1)
     rows.append(_count_row("sample_ray: weight, ray", bad, n, "the sample_ray weight (or the "
                            "ray non-finite)", values=(wr, probe.to_numpy(ray.d, n),
                                                       probe.to_numpy(ray.o, n))))
     if setup.kind in ("surface", "position"):
         ps, pw = e.sample_position(float_(np.zeros(n)), point2(u[:, :2]))
-        bad = _bad(probe.to_numpy(ps.pdf, n), probe.to_numpy(pw, n))
+        bad = invalid(probe.to_numpy(ps.pdf, n), probe.to_numpy(pw, n))
         rows.append(_count_row("sample_position: ps.pdf, weight", bad, n,
                                "ps.pdf or the position weight"))
     return rows
 
 
-def _first_bad(s, bad) -> dict:
+def _firstinvalid(s, bad) -> dict:
     if not np.any(bad):
         return {}
     k = int(np.flatnonzero(bad)[0])

@@ -15,11 +15,11 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
+from ..directions import ONE_MINUS
 from .config import rng
 from .setup import RefGroup, Setup, interaction, point2, ref_groups, surface_interaction
 
 #: 1 − ε for a float32 sample value: the largest float32 below 1.
-ONE_MINUS = float(np.nextafter(np.float32(1.0), np.float32(0.0)))
 EDGES = np.array([[0.0, 0.0], [ONE_MINUS, ONE_MINUS], [0.0, ONE_MINUS], [ONE_MINUS, 0.0],
                   [0.5, 0.0], [0.5, ONE_MINUS]])
 

@@ -54,7 +54,8 @@ from scipy import stats as scipy_stats
 from ... import probe, stats
 from . import lanes as lanes_
 from .identities import bounded, lane_inputs
-from .setup import Setup, basis, float_, interaction, point2, ref_groups
+from ..directions import basis
+from .setup import Setup, float_, interaction, point2, ref_groups
 from .topics import Row
 
 #: Tolerance of a delta light's direction, per component of the unit vector.

@@ -37,6 +37,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
+from ..directions import basis
 from ..inputs import ValidateError
 from .config import rng
 
@@ -181,18 +182,6 @@ def cone_dirs(r: np.random.Generator, n: int, axis: np.ndarray, cos_max: float) 
     s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
     local = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
     return local @ basis(axis)
-
-
-def basis(n: np.ndarray) -> np.ndarray:
-    """Rows s, t, n of an orthonormal frame with normal n (Duff et al. 2017, as
-    Mitsuba's coordinate_system)."""
-    n = np.asarray(n, np.float64) / np.linalg.norm(n)
-    sign = math.copysign(1.0, n[2])
-    a = -1.0 / (sign + n[2])
-    b = n[0] * n[1] * a
-    s = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
-    t = np.array([b, sign + n[1] * n[1] * a, -n[1]])
-    return np.array([s, t, n])
 
 
 def ref_groups(setup: Setup, n: int, seed: int) -> list[RefGroup]:

@@ -5,7 +5,17 @@
 the phase function with its incident directions and the calls into Mitsuba (:mod:`.lanes`),
 sizes and seeds (:mod:`.config`), the topic list and the row (:mod:`.topics`), Mitsuba's
 built-in phase functions and their findings (:mod:`.builtins`), and the table that ties them to
-the kind-independent runner (:mod:`.kind`: :data:`~.kind.PHASE`, :func:`~.kind.validate_phase`).
+the kind-independent runner (:mod:`.kind`; the validator is
+:func:`phonglab.validate.validate_phase`).
 
-Importing this package imports nothing; its modules import Mitsuba.
+Importing this package imports no Mitsuba (it declares :data:`KIND`); its modules do.
 """
+
+from ..kind import Kind
+from .topics import TOPICS
+
+#: The phase-function kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
+KIND = Kind(name="phase", word="phase function", class_name="PhaseFunction",
+            register="mi.register_phase", topics=TOPICS, informational=("cost",),
+            object_type="PhaseFunction", tag="phase", impl=__name__ + ".kind",
+            conformance="docs/conformance-phase.md")

@@ -26,8 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..builtins.findings import Finding, ValidatorIssue
-from ..builtins.kinds import Catalogue, KindCase, with_known
+from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
 from .topics import TOPICS
 
 CHI2_ROW = "sampling matches eval_pdf (min p-value)"
@@ -143,7 +142,7 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "1e-4, float32 cancellation) one lane of 8192 differed by 1.7x that (sample 1444.21, "
         "eval_pdf 1441.78)",
         fixed_by="phase/identities: lanes still failing are searched over wo's ±8-ulp box "
-                 "(bsdf.config.refine, the BSDF topic's), as the BSDF pdf topic does"),
+                 "(roundoff.refine, the BSDF topic's), as the BSDF pdf topic does"),
 )
 
 CATALOGUE = Catalogue(

@@ -1,6 +1,6 @@
 """The phase-function validator's sizes (quick and default) and its seeded random streams.
 
-Round-off tolerances are the BSDF kind's (:mod:`phonglab.validate.bsdf.config`: ``REL_TOL`` =
+Round-off tolerances are the BSDF kind's (:mod:`phonglab.validate.roundoff`: ``REL_TOL`` =
 2⁻¹⁰ relative, ``rel_diff`` with its floor, the 8u perturbation of a direction for a lane's
 sensitivity): a phase function's identities are float32 chains of the same length.
 """

@@ -7,7 +7,7 @@ uniform, wo half uniform and half within 0.1 of forward scattering, where a peak
 changes most with g) and c_l ∈ [0.5, 1.5] fixed: the derivative a differentiable volumetric
 path tracer uses for a phase-sampled or light-sampled direction (``sample``'s weight of an
 exactly sampled phase function is the constant 1, hg.cpp line 89, and carries none).  The
-verdict is the emitter topic's, reused as it is (:func:`phonglab.validate.emitter.gradient._one`,
+verdict is the emitter topic's, reused as it is (:func:`phonglab.validate.gradient.verdict`,
 the same derivation as the BSDF topic's): forward-mode AD along v (v_i = |x_i|), FD steps from
 2⁻⁷ halved until the sums agree, lanes with a jump or kink left out, tolerance
 4|D(h) − D(h/2)| + 64u(Σ|S|/h + Σ|∂S|).  Its "sample" there is a fixed direction: the
@@ -24,7 +24,7 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..emitter import gradient as egrad
+from ..gradient import verdict
 from . import lanes
 from .config import rng
 from .topics import Row
@@ -72,4 +72,4 @@ def gradient(phase, opts) -> list[Row]:
     wo[: n // 2] = d / np.linalg.norm(d, axis=1)[:, None]
     setup = SimpleNamespace(emitter=_Fixed(phase))
     it, u, c = lanes.interaction(wi), probe.to_vectors(wo), 0.5 + r.random(n)
-    return [_phase_row(egrad._one(setup, params, key, it, u, c)) for key in keys]
+    return [_phase_row(verdict(setup, params, key, it, u, c)) for key in keys]

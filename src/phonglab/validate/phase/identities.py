@@ -9,10 +9,10 @@ Rows.  ``finite``: every output of sample (wo, weight, pdf) and of eval_pdf, at 
 (wi, wo) over the whole sphere and at the sampled wo, is finite and ≥ 0, over (wi, u) lanes
 with the six axis directions and the sample-value corners {0, 1 − 2⁻²⁴}³ first; an invalid
 sample marked by pdf = weight = 0 may have any wo; tolerance 0 bad lanes.  ``weight``: the
-sample weight equals value/pdf of eval_pdf at the sampled wo, to ``bsdf.config.REL_TOL`` =
+sample weight equals value/pdf of eval_pdf at the sampled wo, to ``roundoff.REL_TOL`` =
 2⁻¹⁰ relative (``rel_diff`` with its floor) plus, on a lane that exceeds it, the ratio's
-sensitivity to an 8u move of (wi, wo) (``bsdf.config.sensitivity``) and, where that is not
-enough, to every wo within ±8 ulps per component (``bsdf.config.refine``, the BSDF topic's).  ``pdf``: the pdf sample
+sensitivity to an 8u move of (wi, wo) (``roundoff.sensitivity``) and, where that is not
+enough, to every wo within ±8 ulps per component (``roundoff.refine``, the BSDF topic's).  ``pdf``: the pdf sample
 reports equals eval_pdf's pdf at the sampled wo, to the same tolerance (a g = 0.99 lobe moves
 by 0.3 % per 1e-7 of cos θ: the sensitivity term, never a wider constant).  ``reciprocity``:
 σ(wi) f(wi, wo) = σ(wo) f(wo, wi), f the value of eval_pdf, σ ``projected_area`` (1 for a
@@ -26,13 +26,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bsdf.config import REL_TOL, refine, rel_diff, sensitivity
-from ..emitter.identities import _bad   # NaN, ±inf or negative in any channel, per lane
+from ..roundoff import REL_TOL, invalid, refine, rel_diff, sensitivity
 from . import lanes
 from .config import rng
 from .topics import Row
 
-ROUND_OFF = ("float32 round-off tolerance 2^-10 relative (bsdf.config.REL_TOL) plus the "
+ROUND_OFF = ("float32 round-off tolerance 2^-10 relative (roundoff.REL_TOL) plus the "
              "lane's sensitivity to an 8u move of (wi, wo), or to wo's ±8-ulp box, where it "
              "exceeds that")
 
@@ -84,17 +83,17 @@ def finite(phase, opts) -> list[Row]:
     wi, u, wo, w, p = draws(phase, opts, "finite")
     n = len(wi)
     marked = (p == 0) & np.all(w == 0, axis=1)
-    bad = _bad(p, w) | (~np.all(np.isfinite(wo), axis=1) & ~marked)
+    bad = invalid(p, w) | (~np.all(np.isfinite(wo), axis=1) & ~marked)
     rows = [_count("sample: wo, weight, pdf", bad, n, "the pdf or the weight (or wo, in a sample "
                    "not marked invalid by pdf = weight = 0)", wi, u, "u")]
     r = rng(opts.seed, "finite")
     wi2, wo2 = lanes.sphere(r, n), lanes.sphere(r, n)[::-1]
     v, q = lanes.eval_pdf(phase, wi2, wo2)
-    rows.append(_count("eval_pdf at uniform (wi, wo): value, pdf", _bad(v, q), n,
+    rows.append(_count("eval_pdf at uniform (wi, wo): value, pdf", invalid(v, q), n,
                        "eval_pdf's value or pdf", wi2, wo2, "wo"))
     ok = np.all(np.isfinite(wo), axis=1)
     v, q = lanes.eval_pdf(phase, wi[ok], wo[ok])
-    rows.append(_count("eval_pdf at the sampled wo: value, pdf", _bad(v, q), int(ok.sum()),
+    rows.append(_count("eval_pdf at the sampled wo: value, pdf", invalid(v, q), int(ok.sum()),
                        "eval_pdf's value or pdf", wi[ok], wo[ok], "wo"))
     return rows
 
@@ -113,7 +112,7 @@ def _ratio(phase):
 
 def _checked(rel, fn, wi, wo, r, value=None):
     """rel / (REL_TOL + sensitivity) per lane: the random 8u estimate where rel > REL_TOL, then
-    for lanes still failing the ±8-ulp box of wo (``bsdf.config.refine``, worst first)."""
+    for lanes still failing the ±8-ulp box of wo (``roundoff.refine``, worst first)."""
     sens = np.zeros(len(rel))
     check = np.flatnonzero(rel > REL_TOL)
     if check.size:

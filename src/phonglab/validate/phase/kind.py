@@ -14,22 +14,14 @@ import mitsuba as mi
 import numpy as np
 
 from ...settings import Loaded
-from ...verdict import Report
 from .. import core
-from ..inputs import check_topics
-from . import lanes
+from ..conformance import known_of
+from . import KIND, lanes
 from .config import options
 from .cost import cost
 from .gradient import gradient
 from .identities import finite, pdf, reciprocity, weight
 from .sampling import chi2, normalization
-from .topics import TOPICS
-
-
-# Mitsuba 3.9.1 names the call mi.register_phase (core.REGISTER_CALLS lists
-# "register_phasefunction", which does not exist): record it too, so that core.load_plugins sees
-# a --plugin file register its phase function.  To be folded into core.REGISTER_CALLS.
-core.REGISTER_CALLS.setdefault("register_phase", "phase function")
 
 
 def statistical_tests(phase, opts, topics) -> int:
@@ -64,12 +56,10 @@ def values(phase) -> dict:
     return out
 
 
-#: The phase-function kind: what :mod:`phonglab.validate.core` runs (its plugin is the
-#: ``mi.PhaseFunction`` itself; every topic builds its own MediumInteraction3f, :mod:`.lanes`).
-PHASE = core.Kind(name="phase", word="phase function", class_name="PhaseFunction",
-                  register="mi.register_phase", topics=TOPICS, options=options,
-                  statistical_tests=statistical_tests, runners=runners,
-                  informational=("cost",), values=values)
+#: The phase-function kind (declared by the package, whose parts this module holds): its
+#: plugin is the ``mi.PhaseFunction`` itself; every topic builds its own MediumInteraction3f
+#: (:mod:`.lanes`).
+PHASE = KIND
 
 
 def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
@@ -82,21 +72,12 @@ def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
     return core.prepare(PHASE, spec, variant=variant, params=params, plugins=plugins)
 
 
-def validate_phase(spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-                   known=None, plugins=(), family=1, sizes=None) -> Report:
-    """Validate one phase function on every topic (or ``topics``).
-
-    ``spec``: a plugin type name, a dict for ``mi.load_dict``, an XML file holding one
-    ``<phase>``, or a loaded ``mi.PhaseFunction``.  ``known``, ``plugins``, ``family``,
-    ``sizes``: as for :func:`phonglab.validate.bsdf.kind.validate_bsdf`.  Bad input raises
-    :class:`~phonglab.validate.inputs.ValidateError` with one sentence.
-    """
-    topics = check_topics(topics, TOPICS)
-    target = prepare(spec, variant=variant, params=params, plugins=plugins)
-    return core.run(PHASE, target, topics=topics, seed=seed, quick=quick, known=known,
-                    family=family, sizes=sizes)
+def known_for(name: str, params: dict | None = None) -> dict:
+    """The conformance table's findings of the Mitsuba built-in phase function ``name``."""
+    return known_of(catalogue().cases(), name)
 
 
-def is_phase(spec) -> bool:
-    """Whether ``spec`` names a phase-function plugin (:func:`core.names_plugin`)."""
-    return core.names_plugin(spec, mi.PhaseFunction, mi.ObjectType.PhaseFunction, "phase")
+def catalogue():
+    """The phase-function conformance table (:mod:`.builtins`)."""
+    from .builtins import CATALOGUE
+    return CATALOGUE

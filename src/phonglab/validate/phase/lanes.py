@@ -22,13 +22,8 @@ import mitsuba as mi
 import numpy as np
 
 from ... import probe
-from ..bsdf.lanes import ONE_MINUS
-from ..bsdf.lanes import sphere as _uniform
-from ..emitter import setup as _emitter_setup
-
-#: Rows s, t, n of an orthonormal frame with normal n (the emitter kind's, Mitsuba's
-#: coordinate_system): the χ² and normalization frames.
-basis = _emitter_setup.basis
+from ..directions import ONE_MINUS, basis  # noqa: F401  (basis: the χ² and normalization frames)
+from ..directions import sphere as _uniform
 
 #: Incident directions of the χ² and normalization topics (unit, fixed): the pole, an oblique
 #: direction and one near the xy plane; the histogram frame turns with each (sampling.py).

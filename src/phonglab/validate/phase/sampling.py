@@ -3,13 +3,13 @@ r"""The ``chi2`` and ``normalization`` topics: does ``sample`` draw directions w
 
 ``chi2``.  At each incidence of :data:`.lanes.INCIDENCES`, N directions from ``sample`` with
 seeded uniforms, histogrammed in the (φ, cos θ) bins of ``mi.chi2.SphericalDomain``
-(:class:`phonglab.validate.bsdf.sphere_bins.Grid`, the BSDF topic's grid) in a frame turned so
+(:class:`phonglab.validate.sphere_bins.Grid`, the BSDF topic's grid) in a frame turned so
 that the forward direction −wi lies on the grid's equator, half a column off a column edge:
 mi.chi2 bins about the world's pole, where a |g| ≥ 0.9 lobe aimed at the pole would fall into
 the thin wedges of the first row.  Expected counts N·∫pdf per bin from the BSDF topic's
 lobe-adaptive Gauss-Legendre quadrature with its stated error bound
-(:func:`~phonglab.validate.bsdf.sphere_bins.expected_counts`, re-integrating bins that
-contradict their count by > 4σ, :func:`~phonglab.validate.bsdf.sphere_bins.recheck`), Pearson's
+(:func:`~phonglab.validate.sphere_bins.expected_counts`, re-integrating bins that
+contradict their count by > 4σ, :func:`~phonglab.validate.sphere_bins.recheck`), Pearson's
 χ² with Mitsuba's pooling (:func:`phonglab.stats.pearson_chi2`).  The test is of the density's
 shape: expected counts are scaled to the samples counted (the scale is ``normalization``'s), as
 the BSDF topic does.  Each incidence is one test at the Šidák level ``stats.sidak(ALPHA, m)``,
@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from ... import stats
-from ..bsdf import sphere_bins
+from .. import sphere_bins
 from . import lanes
 from .config import rng
 from .topics import Row

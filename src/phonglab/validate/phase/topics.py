@@ -6,16 +6,11 @@ A phase-function validator row is a :class:`phonglab.verdict.Row` whose topic mu
 
 from __future__ import annotations
 
-from ... import verdict
+from ..kind import topic_row
 
 #: The validator's phase-function topics, in the order the table lists them.
 TOPICS = ("finite", "weight", "pdf", "chi2", "normalization", "reciprocity", "gradient", "cost")
 
 
-class Row(verdict.Row):
-    """A :class:`phonglab.verdict.Row` of one of the phase kind's :data:`TOPICS`."""
-
-    def __post_init__(self):
-        if self.topic not in TOPICS:
-            raise ValueError(f"unknown topic {self.topic!r}; choose one of {', '.join(TOPICS)}")
-        super().__post_init__()
+#: A row of one of :data:`TOPICS` (:func:`phonglab.validate.kind.topic_row`).
+Row = topic_row(TOPICS, "phase function", __name__)
