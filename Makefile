@@ -73,10 +73,12 @@ validate-false-failures: setup
 
 # docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
 # (phonglab.validate.bsdf.builtins); docs/conformance-emitters.* and docs/conformance-integrators.*:
-# the built-in emitters and integrators (phonglab.validate.registry.catalogue(kind));
+# the built-in emitters and integrators, docs/conformance-phase.*: the phase functions
+# (phonglab.validate.registry.catalogue(kind));
 # CONFORMANCE_ARGS=--quick for the fast sizes.  Each run resumes from its .partial.jsonl.
 .PHONY: conformance
 conformance: setup
 	$(BIN)/python scripts/conformance.py $(CONFORMANCE_ARGS) --json docs/conformance.json --markdown docs/conformance.md
 	$(BIN)/python scripts/conformance.py --kind emitter $(CONFORMANCE_ARGS) --json docs/conformance-emitters.json --markdown docs/conformance-emitters.md
 	$(BIN)/python scripts/conformance.py --kind integrator $(CONFORMANCE_ARGS) --json docs/conformance-integrators.json --markdown docs/conformance-integrators.md
+	$(BIN)/python scripts/conformance.py --kind phase $(CONFORMANCE_ARGS) --json docs/conformance-phase.json --markdown docs/conformance-phase.md

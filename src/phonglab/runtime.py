@@ -39,6 +39,8 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import PhonglabError
+
 #: Major versions Dr.Jit 1.5 crashes with (process abort, not an exception).
 BROKEN_MAJORS = frozenset({15, 16})
 #: Dr.Jit 1.5 refuses anything older than this.
@@ -391,3 +393,18 @@ def available_memory() -> int | None:
     if soft != resource.RLIM_INFINITY:
         limits.append(soft)
     return min(limits) if limits else None
+
+
+def require_memory(need: int, what: str, fix, *, why: str = "", error=None,
+                   have: int | None = None) -> None:
+    """The one memory guard, before anything is allocated: one sentence ("``what`` would need
+    about N GiB of memory``why`` but M GiB is available; ``fix``") raised as ``error`` (default
+    :class:`~phonglab.errors.PhonglabError`) when ``need`` bytes exceed ``have`` (default
+    :func:`available_memory`; nothing when it is unknown).  ``fix`` may be a function of the
+    bytes available."""
+    have = available_memory() if have is None else have
+    if have is None or need <= have:
+        return
+    fix = fix(have) if callable(fix) else fix
+    raise (error or PhonglabError)(f"{what} would need about {need / 2**30:.1f} GiB of memory"
+                                   f"{why} but {have / 2**30:.1f} GiB is available; {fix}")

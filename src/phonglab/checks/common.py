@@ -19,7 +19,7 @@ import numpy as np
 from .. import stats
 from ..errors import PhonglabError
 from ..engine.render import RenderResult, check_spp, render_scene
-from ..runtime import available_memory
+from ..runtime import require_memory
 from ..engine.scenes import load_scene
 from ..verdict import Row
 
@@ -151,12 +151,9 @@ class Config:
                                 f"for their standard errors), got {self.spp}.")
         self.spp = int(self.spp)
         check_spp(self.spp)
-        need = CHECK_BASE_BYTES + CHECK_BYTES_PER_SPP * self.spp
-        have = available_memory()
-        if have is not None and need > have:
-            raise PhonglabError(f"--spp {self.spp} would need about {need / 2**30:.1f} GiB "
-                                f"(the BSDF checks draw 1024 directions and 4096 χ² samples per "
-                                f"spp) but {have / 2**30:.1f} GiB is available; lower --spp")
+        require_memory(CHECK_BASE_BYTES + CHECK_BYTES_PER_SPP * self.spp, f"--spp {self.spp}",
+                       "lower --spp", why=" (the BSDF checks draw 1024 directions and 4096 χ² "
+                       "samples per spp)")
         if self.samples is None:
             self.samples = 1024 * self.spp
         if self.chi2_samples is None:

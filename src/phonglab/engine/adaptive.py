@@ -86,7 +86,7 @@ from ..errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import spp_paths
 from .render import MAX_SPP, film_channels, pass_seed, preflight, render_scene_file
-from ..runtime import available_memory, default_variant
+from ..runtime import default_variant, require_memory
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
 #: Samples every pixel gets in the pilot pass (the first guard).
@@ -201,12 +201,9 @@ class Wavefront:
         self.offsets = [(iy - radius, ix - radius) for iy in range(self.A.shape[0])
                         for ix in range(self.A.shape[1]) if self.A[iy, ix] > 0]
         npix = self.width * self.height
-        need = HOST_BYTES_PER_PIXEL_OFFSET * len(self.offsets) * npix
-        have = available_memory()
-        if have is not None and need > have:
-            raise PhonglabError(f"{path}: adaptive sampling of a {self.width} x {self.height} "
-                                f"film keeps about {need / 2**30:.1f} GiB of per-pixel sums but "
-                                f"{have / 2**30:.1f} GiB is available; lower the resolution")
+        require_memory(HOST_BYTES_PER_PIXEL_OFFSET * len(self.offsets) * npix,
+                       f"{path}: adaptive sampling of a {self.width} x {self.height} film",
+                       "lower the resolution", why=" for its per-pixel sums")
         self.n = np.zeros(npix, dtype=np.int64)
         self.s1 = np.zeros((npix, self.channels))
         self.s2 = np.zeros((npix, self.channels))

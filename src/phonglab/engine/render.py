@@ -49,7 +49,7 @@ from .. import __version__
 from . import exr
 from ..errors import PhonglabError, SceneError, user_errors
 from .outputs import RenderOutputs
-from ..runtime import available_memory, quiet_mitsuba
+from ..runtime import quiet_mitsuba, require_memory
 from .scenes import (SceneInfo, file_hash, inspect_scene, integrator_with_depth, load_scene,
                      scene_defaults, scene_path, sensor_with_sampler)
 from .tonemap import auto_exposure
@@ -549,12 +549,9 @@ def preflight(scene, path: str | Path, sensor: int | mi.Sensor = 0):
     if width < 1 or height < 1:
         raise SceneError(f"{path}: the film is {width} x {height} pixels; give it a width and "
                          f"height of at least 1 (e.g. res=64)")
-    need = BASE_BYTES + BYTES_PER_PIXEL * width * height
-    have = available_memory()
-    if have is not None and need > have:
-        raise SceneError(f"{path}: a {width} x {height} render needs about {need / 2**30:.1f} GiB "
-                         f"of memory but {have / 2**30:.1f} GiB is available; lower the "
-                         f"resolution (res=...)")
+    require_memory(BASE_BYTES + BYTES_PER_PIXEL * width * height,
+                   f"{path}: a {width} x {height} render", "lower the resolution (res=...)",
+                   error=SceneError)
     return sensors[sensor]
 
 

@@ -43,7 +43,7 @@ from tqdm import tqdm
 
 from ..errors import PhonglabError
 from ..registration import register
-from ..runtime import available_memory
+from ..runtime import require_memory
 
 #: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
 CONNECT_TIMEOUT = 5.0
@@ -122,12 +122,9 @@ def check_local_workers(workers: int, cores: int | None = None,
                             f"per core on this {cores}-core machine; give at most "
                             f"{WORKERS_PER_CORE * cores} (--workers {cores} uses every core), or "
                             f"spread them over machines with --scheduler")
-    memory = available_memory() if memory is None else memory
-    if memory is not None and workers * WORKER_BYTES > memory:
-        raise PhonglabError(f"--workers {workers} would need about "
-                            f"{workers * WORKER_BYTES / 2**30:.1f} GiB ({WORKER_BYTES >> 20} MiB "
-                            f"per worker process) but {memory / 2**30:.1f} GiB is available; "
-                            f"give at most {max(1, memory // WORKER_BYTES)}")
+    require_memory(workers * WORKER_BYTES, f"--workers {workers}",
+                   lambda have: f"give at most {max(1, have // WORKER_BYTES)}",
+                   why=f" ({WORKER_BYTES >> 20} MiB per worker process)", have=memory)
 
 
 def check_address(address: str) -> str:
