@@ -7,11 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from phonglab.scenes import REPO_ROOT
 from phonglab.validate import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row
 from phonglab.validate.builtins import findings
 from phonglab.verdict import Report
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 CASES = builtins.cases()
 SOURCE_LINE = re.compile(r"^(src|include)/[\w/]+\.(cpp|h):\d+: \S")

@@ -1,7 +1,10 @@
 """Scenes: resolving a scene name once, its ``<default>`` parameters, loading with clear errors, inspection.
 
-A scene is given as a path to a Mitsuba XML file or as the name of one in ``scenes_xml/``
-(``cornell_phong``); :func:`scene_path` resolves it.  :func:`load_scene` registers
+A scene is given as a path to a Mitsuba XML file or as the name of one of the scenes phonglab
+ships (``cornell_phong``); :func:`scene_path` resolves it.  The shipped scenes, and the textures
+they name by paths relative to themselves, are package data in ``phonglab/scenes_xml/``, found
+through :mod:`importlib.resources`, so an installed phonglab renders them from any working
+directory.  :func:`load_scene` registers
 phonglab's plugins and loads it, turning Mitsuba's loader errors into one sentence naming the
 problem and the fix (:func:`explain_load_error`); XML that does not parse is reported by
 :func:`malformed` alone.  :func:`inspect_scene` reads what the file says about colour,
@@ -13,6 +16,7 @@ from __future__ import annotations
 import difflib
 import hashlib
 import re
+from importlib import resources
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,12 +29,13 @@ from . import registration
 from .errors import SceneError
 from .runtime import quiet_mitsuba
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-SCENES_DIR = REPO_ROOT / "scenes_xml"
+#: The shipped scenes.  Mitsuba opens a scene and its textures from the file system, and pip
+#: installs a wheel's package data as plain files, so the resource folder is a real folder.
+SCENES_DIR = Path(str(resources.files(__package__) / "scenes_xml"))
 
 
 def scene_path(name: str | Path) -> Path:
-    """Resolve a scene given as a path or as a name in ``scenes_xml/`` (``cornell_phong``)."""
+    """Resolve a scene given as a path or as the name of a shipped scene (``cornell_phong``)."""
     p = Path(name)
     if p.is_file():
         return p
@@ -199,7 +204,7 @@ def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
     """Load a Mitsuba XML scene with phonglab's plugins registered.
 
     Args:
-        path: scene file, or a scene name from ``scenes_xml/``.
+        path: scene file, or the name of a shipped scene (``cornell_phong``).
         variant: Mitsuba variant to set first (default: the active one, else llvm_ad_rgb).
         **params: values for the scene's ``<default name=...>`` entries (spp, ...).
 

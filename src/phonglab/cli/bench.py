@@ -29,7 +29,9 @@ def add_parser(sub) -> None:
                    help=f"run only these parts ({', '.join(PARTS)})")
     p.add_argument("--quick-run", default=None,
                    help="run.json of a --quick run, whose wall time the report quotes")
-    p.add_argument("--cache", default=None, help="reference-image cache folder (default .bench_cache/, or $PHONGLAB_CACHE)")
+    p.add_argument("--cache", default=None,
+                   help="reference-image cache folder (default $PHONGLAB_CACHE, else .bench_cache/ "
+                        "in a checkout, ~/.cache/phonglab when installed)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_arguments(p)
     p.set_defaults(func=run)

@@ -19,7 +19,7 @@ def add_parser(sub) -> None:
         epilog="examples:\n  phonglab compare-models exponent_series --spp 16 -o out/exponent_series\n"
                "  phonglab compare-models attenuation_demo -D c=1 -D a=0",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. exponent_series)")
+    p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. exponent_series)")
     p.add_argument("--spp", type=int, default=16,
                    help="samples per pixel of the whitted renders (default 16)")
     p.add_argument("--path-spp", type=int, default=None,

@@ -24,11 +24,11 @@ def add_parser(sub) -> None:
                     "RMSE, with the predicted time and the reasons. See docs/planner.md.",
         epilog="examples:\n"
                "  phonglab plan cornell_phong --target-error 0.02\n"
-               "  phonglab plan scenes_xml/gray_direct.xml --target-error 0.01 --json\n"
+               "  phonglab plan gray_direct --target-error 0.01 --json\n"
                "  phonglab plan glass_slab --set res=64 --make-reference 4096\n"
                "  phonglab plan cornell_phong --make-reference 65536 --workers 2",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
+    p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. cornell_phong)")
     p.add_argument("--target-error", type=float, default=0.01,
                    help="relative RMSE to reach, sqrt(mean((x-r)^2/(r^2+0.01))) against a "
                         "converged reference, depth bias included (phonglab.metrics; "
@@ -51,7 +51,7 @@ def add_parser(sub) -> None:
                         "one hour; 'inf' allows any)")
     p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
                    help="also render a converged reference (max_depth -1, SPP samples) into "
-                        ".bench_cache/, which 'phonglab render --target-error' compares with")
+                        "the reference cache (.bench_cache/ in a checkout), which 'phonglab render --target-error' compares with")
     add_arguments(p)      # where the reference's passes render (--workers / --scheduler)
     p.set_defaults(func=run)
 

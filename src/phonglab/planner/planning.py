@@ -175,7 +175,7 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
 
     Args:
-        scene_path: scene file, or a name in ``scenes_xml/``.
+        scene_path: scene file, or the name of a shipped scene (``cornell_phong``).
         target_error: E, the total relative RMSE, bias included (:mod:`phonglab.metrics`;
             ``0.01`` = 1 %).
         pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
