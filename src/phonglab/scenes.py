@@ -42,6 +42,11 @@ def scene_path(name: str | Path) -> Path:
     for cand in (SCENES_DIR / p, SCENES_DIR / (str(p) + ".xml")):
         if cand.is_file():
             return cand
+    if p.is_dir():
+        inside = sorted(p.glob("*.xml"))
+        such = f" such as {inside[0]}" if inside else ""
+        raise SceneError(f"the scene {name} is a folder; give the path of a Mitsuba XML "
+                         f"file{such}")
     raise SceneError(f"scene file not found: {name} (give a path to a Mitsuba XML file, or "
                         f"one of: {', '.join(sorted(q.stem for q in SCENES_DIR.glob('*.xml')))})")
 

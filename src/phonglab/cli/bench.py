@@ -39,7 +39,16 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..bench.run import run_bench  # lazy: the sweeps load scipy, matplotlib and Mitsuba (~1.5 s)
+    from ..outputs import check_input_file, check_output_file, check_output_folder
 
+    # Every path before the first sweep: the report and the rows must have somewhere to go.
+    check_output_folder(args.out, "bench output folder (--out)")
+    if args.markdown:
+        check_output_file(args.markdown, "Markdown report (--markdown)")
+    if args.cache:
+        check_output_folder(args.cache, "reference cache (--cache)")
+    if args.quick_run:
+        check_input_file(args.quick_run, "run.json of a --quick run (--quick-run)")
     rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
                     markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
                     cache=Path(args.cache) if args.cache else None,

@@ -38,11 +38,13 @@ def run(args) -> int:
     # Imported here, not at the top: `phonglab` imports every subcommand module to build its
     # parser, and these pull in Mitsuba and matplotlib, which `phonglab --help` does not need.
     from ..compare_models import compare_models, format_table
+    from ..outputs import check_output_folder
     from ..scenes import scene_path
 
     params = dict(args.params)
     path = scene_path(args.scene)
-    out = Path(args.output or Path("out") / f"compare_{path.stem}")
+    out = check_output_folder(args.output or Path("out") / f"compare_{path.stem}",
+                              "output folder (-o)")
     result = compare_models(path, out, spp=args.spp, path_spp=args.path_spp, seed=args.seed,
                             max_depth=args.max_depth, variant=args.variant, progress=True,
                             params=params)

@@ -13,6 +13,7 @@ import contextlib
 
 from ..errors import PhonglabError
 from ..parallel import add_arguments, runner_from_args
+from ..settings import check_max_seconds
 from .options import add_scene_params
 
 
@@ -60,6 +61,8 @@ def run(args) -> int:
     from .. import metrics, planner, references
     from ..scenes import scene_path
 
+    if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
+        check_max_seconds(args.max_seconds)
     path = scene_path(args.scene)
     params = dict(args.params)
     kwargs = {}
@@ -74,6 +77,9 @@ def run(args) -> int:
     runner = runner_from_args(args)
     rendering = (args.make_reference is not None and
                  references.cached(path, params, min_spp=args.make_reference) is None)
+    if rendering:       # where it will be cached, before the pilot
+        from ..outputs import check_output_folder
+        check_output_folder(references.CACHE_DIR / "references", "reference cache")
     with runner if rendering else contextlib.nullcontext():
         p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
                          max_depth=args.max_depth, spp=args.spp, params=params,

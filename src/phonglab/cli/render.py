@@ -15,6 +15,7 @@ from pathlib import Path
 
 from .. import runtime
 from ..errors import PhonglabError
+from ..settings import check_max_seconds
 from .options import add_scene_params, add_seed
 
 
@@ -61,6 +62,8 @@ def run(args) -> int:
     from ..render import render_file
     from ..scenes import scene_path
 
+    if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
+        check_max_seconds(args.max_seconds)
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
     if out.is_dir() or out.suffix.lower() != ".exr":

@@ -19,6 +19,7 @@ from ..metrics import noise_target
 from ..render import MAX_SPP, Prior, check_spp, precision
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
+from ..settings import ParameterError, check_max_seconds
 from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
                     PILOT_SPP, DepthSample, Pilot, pilot_size)
@@ -203,6 +204,11 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     t_start = time.perf_counter()
     _check_arguments(target_error, PILOT_SPP if pilot_spp is None else pilot_spp, pilot_passes,
                      spp, max_depth)
+    if max_seconds is not None:
+        try:
+            check_max_seconds(max_seconds)
+        except ParameterError as exc:
+            raise PlanError(str(exc)) from None
     params = {k: v for k, v in (params or {}).items() if v is not None}
     info = inspect_scene(scene_path, **params)
     if info.integrator != "path":
