@@ -2,11 +2,11 @@
 
 Deterministic (fixed seed), so the committed files can be re-made bit for bit:
 
-* ``scenes_xml/textures/tiles.png``: 8-bit sRGB floor tiles, 128×128: 4×4 tiles of warm
-  ochre/terracotta, each with its own brightness and a little per-texel noise, and dark grout
+* ``src/phonglab/scenes_xml/textures/tiles.png``: 8-bit sRGB floor tiles, 128×128: 4×4 tiles
+  of warm ochre/terracotta, each with its own brightness and a little per-texel noise, and dark grout
   lines (the kind of 8-bit texture users bring).
-* ``scenes_xml/textures/sky.exr``: a 128×64 equirectangular (lat-long) sky in linear RGB: a
-  blue zenith fading to a pale horizon, a dim brown ground below it, and a sun 3° across at
+* ``src/phonglab/scenes_xml/textures/sky.exr``: a 128×64 equirectangular (lat-long) sky in
+  linear RGB: a blue zenith fading to a pale horizon, a dim brown ground below it, and a sun 3° across at
   35° elevation holding about 40 % of the power it sends in (an outdoor light whose power is
   concentrated: what emitter sampling of an ``envmap`` has to find).
 
@@ -21,7 +21,7 @@ import numpy as np
 import OpenEXR
 from PIL import Image
 
-OUT = Path(__file__).resolve().parents[1] / "scenes_xml" / "textures"
+OUT = Path(__file__).resolve().parents[1] / "src" / "phonglab" / "scenes_xml" / "textures"
 
 
 def tiles(size: int = 128, n: int = 4, seed: int = 3) -> np.ndarray:

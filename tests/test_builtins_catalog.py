@@ -8,12 +8,13 @@ from pathlib import Path
 
 import pytest
 
-from phonglab.engine.scenes import REPO_ROOT
 from phonglab.validate import conformance, markdown
 from phonglab.validate.bsdf import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row
 from phonglab.validate.bsdf import findings
 from phonglab.verdict import Report
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 CASES = builtins.cases()
 SOURCE_LINE = re.compile(r"^(src|include)/[\w/]+\.(cpp|h):\d+: \S")

@@ -10,12 +10,14 @@ from __future__ import annotations
 import copy
 import importlib.util
 import json
+from pathlib import Path
 
 import pytest
 
 from phonglab.bench import report
 from phonglab.bench.report import RunData, cluster_section
-from phonglab.engine.scenes import REPO_ROOT
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")

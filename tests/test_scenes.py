@@ -1,4 +1,4 @@
-"""Every scene in scenes_xml/ loads, renders finite and non-black, and documents itself.
+"""Every scene phonglab ships (src/phonglab/scenes_xml/) loads, renders finite and non-black, and documents itself.
 
 A scene's header comment must say what it shows and what to expect (STYLE §6), and each one
 must declare the sample count as a `<default name="spp">` so that tests and charts can vary it.
@@ -7,15 +7,14 @@ must declare the sample count as a `<default name="spp">` so that tests and char
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from phonglab.engine.render import render_scene
-from phonglab.engine.scenes import load_scene
+from phonglab.engine.scenes import SCENES_DIR, load_scene
 
-SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes_xml").glob("*.xml"))
+SCENES = sorted(SCENES_DIR.glob("*.xml"))
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])

@@ -3,8 +3,9 @@
 Importing phonglab sets no Mitsuba variant; :func:`register` does that work::
 
     import mitsuba as mi, phonglab
+    from phonglab.engine.scenes import scene_path
     phonglab.register()                 # llvm_ad_rgb unless a variant is already set
-    scene = mi.load_file("scenes_xml/cornell_phong.xml")
+    scene = mi.load_file(str(scene_path("cornell_phong")))   # a scene shipped with phonglab
 
 It pins ``DRJIT_LIBLLVM_PATH`` to a libLLVM Dr.Jit 1.5 can use (see
 :mod:`phonglab.runtime`) before Dr.Jit loads one.

@@ -104,6 +104,21 @@ def library_major(path: str | os.PathLike) -> int | None:
     return None
 
 
+#: The first bytes of a shared library: ELF, and Mach-O (32/64-bit, either byte order, fat).
+_LIBRARY_MAGIC = (b"\x7fELF", b"\xfe\xed\xfa\xce", b"\xfe\xed\xfa\xcf", b"\xce\xfa\xed\xfe",
+                  b"\xcf\xfa\xed\xfe", b"\xca\xfe\xba\xbe")
+
+
+def is_shared_library(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a file that starts like a shared library (a folder, a text file or
+    an unreadable file is not); whether it is libLLVM only loading it tells."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(4) in _LIBRARY_MAGIC
+    except OSError:
+        return False
+
+
 def candidates() -> list[tuple[int, str]]:
     """Usable libLLVM files on this machine, newest first, as (major, path)."""
     found: dict[str, tuple[int, str]] = {}
@@ -139,11 +154,20 @@ def configure(force: bool = False) -> LLVMChoice:
             _choice = LLVMChoice(None, major, "environment",
                                  f"{ENV}={user} does not exist; install Debian's libllvm19 "
                                  f"(apt-get install -y libllvm19) or unset {ENV}")
+        elif os.path.isdir(user):
+            _choice = LLVMChoice(None, major, "environment",
+                                 f"{ENV}={user} is a folder; point {ENV} at the libLLVM file "
+                                 f"itself (e.g. {user.rstrip('/')}/libLLVM-19.so), or unset it")
         elif major is not None and not _major_ok(major):
             _choice = LLVMChoice(None, major, "environment",
                                  f"{ENV}={user} is libLLVM {major}, which Dr.Jit 1.5 cannot use "
                                  f"(it aborts with 15 and 16, refuses < {MIN_MAJOR}); install "
                                  f"libllvm19 and point {ENV} at it")
+        elif not is_shared_library(user):
+            _choice = LLVMChoice(None, major, "environment",
+                                 f"{ENV}={user} is not a shared library (no ELF or Mach-O "
+                                 f"header), so Dr.Jit cannot load it; point {ENV} at a libLLVM "
+                                 f"such as Debian's libLLVM-19.so, or unset it")
         else:
             _choice = LLVMChoice(user, major, "environment", f"using {user} from {ENV}")
         return _choice

@@ -70,6 +70,16 @@ def check_seed(seed) -> int:
     return seed
 
 
+def check_max_seconds(seconds, option: str = "--max-seconds") -> float:
+    """A time limit as a float > 0 (``inf``: none), else :class:`ParameterError`: a negative,
+    zero or NaN limit used to be taken and refuse every plan after its pilot."""
+    if (isinstance(seconds, bool) or not isinstance(seconds, (int, float))
+            or not seconds > 0):
+        raise ParameterError(f"{option} must be a positive number of seconds ('inf' for no "
+                             f"limit), got {seconds!r}")
+    return float(seconds)
+
+
 def split(text: str) -> tuple[str, str] | None:
     """``NAME=VALUE`` -> (NAME, VALUE) as written (split at the first ``=``); None when there
     is no ``=`` or no name before it."""

@@ -17,7 +17,7 @@ rows already present, so an interrupted bench resumes — :mod:`.csvlog`):
   explained by the estimator's own standard error (|z| > z_crit at
   :data:`phonglab.stats.ALPHA`, Šidák over all cells: bias, or a "silent" failure where no
   sample found the light and the reported standard error is 0) — :mod:`.analysis`.
-* ``renders`` — the Cornell box (``scenes_xml/cornell_phong.xml``, 32 px): RMSE
+* ``renders`` — the Cornell box (``phonglab/scenes_xml/cornell_phong.xml``, 32 px): RMSE
   against a cached high-sample reference (:mod:`phonglab.engine.references`, the scene's own
   integrator) versus spp and time for ``lambert`` vs ``diffuse`` (every surface of that
   BSDF) and ``phong`` vs ``plastic`` vs ``roughplastic`` boxes (walls ``diffuse``; the

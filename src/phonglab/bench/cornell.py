@@ -1,6 +1,6 @@
 r"""The Cornell-box set-ups the bench renders: materials swapped in, references, timed renders.
 
-Every render comparison starts from ``scenes_xml/cornell_phong.xml`` and swaps the
+Every render comparison starts from ``phonglab/scenes_xml/cornell_phong.xml`` and swaps the
 material of its two boxes (:func:`cornell_xml`) and of its walls (the scene's ``wall``
 parameter).  A :class:`CornellSpec` names one such set-up; its reference image comes from
 the one reference cache (:func:`phonglab.engine.references.reference`, with the scene's own
@@ -58,7 +58,7 @@ def _box_block(boxes: str, exponent: float) -> str | None:
 
 
 def cornell_xml(boxes: str = "phong", exponent: float = 30.0, rfilter: str = "box") -> str:
-    """The text of ``scenes_xml/cornell_phong.xml`` with its two boxes made of ``boxes``.
+    """The text of ``phonglab/scenes_xml/cornell_phong.xml`` with its two boxes made of ``boxes``.
 
     ``rfilter`` replaces the scene's Gaussian reconstruction filter (``"gaussian"`` keeps
     it).  The convergence measurements use ``box``: with a wider filter each pixel is a
@@ -74,12 +74,12 @@ def cornell_xml(boxes: str = "phong", exponent: float = 30.0, rfilter: str = "bo
     if rfilter != "gaussian":
         text, count = re.subn(r'<rfilter type="gaussian"\s*/>', f'<rfilter type="{rfilter}"/>', text)
         if count != 1:
-            raise PhonglabError("scenes_xml/cornell_phong.xml no longer has its gaussian <rfilter>; "
+            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml no longer has its gaussian <rfilter>; "
                                 "update phonglab.bench.cornell.cornell_xml")
     if block is not None:
         text, count = _GLOSSY_BLOCK.subn(block, text)
         if count != 1:
-            raise PhonglabError("scenes_xml/cornell_phong.xml no longer has its "
+            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml no longer has its "
                                 "<bsdf type=\"phong\" id=\"glossy\"> block; update phonglab.bench")
     return text
 

@@ -199,7 +199,7 @@ def phong_dict(name, kd, ks, p) -> dict:
 
 def render(cfg: Config, scene_name: str, stream: int, integrator=None, spp=None, passes=None,
            **params) -> RenderResult:
-    """Load a scenes_xml/ scene with ``params`` and render it in passes (seed from ``stream``)."""
+    """Load a shipped scene with ``params`` and render it in passes (seed from ``stream``)."""
     scene = load_scene(scene_name, **{k: str(v) for k, v in params.items()})
     spp = int(spp or cfg.spp)
     return render_scene(scene, spp, seed=cfg.seed * 1000 + stream, passes=passes or cfg.passes,

@@ -29,7 +29,9 @@ def add_parser(sub) -> None:
                    help=f"run only these parts ({', '.join(PARTS)})")
     p.add_argument("--quick-run", default=None,
                    help="run.json of a --quick run, whose wall time the report quotes")
-    p.add_argument("--cache", default=None, help="reference-image cache folder (default .bench_cache/, or $PHONGLAB_CACHE)")
+    p.add_argument("--cache", default=None,
+                   help="reference-image cache folder (default $PHONGLAB_CACHE, else .bench_cache/ "
+                        "in a checkout, ~/.cache/phonglab when installed)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_arguments(p)
     p.set_defaults(func=run)
@@ -37,7 +39,16 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..bench.run import run_bench  # lazy: the sweeps load scipy, matplotlib and Mitsuba (~1.5 s)
+    from ..engine.outputs import check_input_file, check_output_file, check_output_folder
 
+    # Every path before the first sweep: the report and the rows must have somewhere to go.
+    check_output_folder(args.out, "bench output folder (--out)")
+    if args.markdown:
+        check_output_file(args.markdown, "Markdown report (--markdown)")
+    if args.cache:
+        check_output_folder(args.cache, "reference cache (--cache)")
+    if args.quick_run:
+        check_input_file(args.quick_run, "run.json of a --quick run (--quick-run)")
     rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
                     markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
                     cache=Path(args.cache) if args.cache else None,

@@ -15,9 +15,12 @@ import mitsuba as mi
 
 from .. import __version__, checks, register
 from ..errors import PhonglabError
-from ..engine.outputs import write_json
+from ..engine.outputs import check_output_file, check_output_folder, write_json
 from ..verdict import Report, format_number
 from .options import add_seed
+
+#: Where difference images of a failing scene check go unless --out-dir says (made only then).
+DEFAULT_OUT_DIR = "out/checks"
 
 
 def add_parser(sub) -> None:
@@ -37,8 +40,9 @@ def add_parser(sub) -> None:
                    help="samples per pixel of the statistical renders (default 256; BSDF-level "
                         "estimates use 1024x this many directions, chi-square 4096x)")
     add_seed(p)
-    p.add_argument("--out-dir", default="out/checks",
-                   help="where difference images of a failing scene check go (default out/checks)")
+    p.add_argument("--out-dir", default=None,
+                   help=f"where difference images of a failing scene check go (default "
+                        f"{DEFAULT_OUT_DIR})")
     p.add_argument("--lambert", default="lambert", metavar="PLUGIN",
                    help="registered BSDF checked as the Lambertian (default lambert)")
     p.add_argument("--phong", default="phong", metavar="PLUGIN",
@@ -55,8 +59,12 @@ def run(args) -> int:
 
     from .. import stats
 
-    # Config refuses a bad --spp: built first, before the plugins load.
-    cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir,
+    # Config refuses a bad --spp: built first, before the plugins load; the outputs next.
+    if args.json:
+        check_output_file(args.json, "JSON file (--json)")
+    if args.out_dir is not None:
+        check_output_folder(args.out_dir, "folder of difference images (--out-dir)")
+    cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir or DEFAULT_OUT_DIR,
                         lambert=args.lambert, phong=args.phong)
     names = args.only or list(checks.CHECK_NAMES)
     _require_plugins(args.lambert, args.phong)

@@ -41,7 +41,7 @@ def run(args) -> int:
     from ..engine import compare
     from ..engine.metrics import REL_EPS
     from ..errors import PhonglabError
-    from ..engine.outputs import check_file, check_folder
+    from ..engine.outputs import check_output_file
 
     if args.eps is not None and not args.eps > 0:
         raise PhonglabError(f"--eps must be > 0 (it keeps dark pixels from dominating the "
@@ -50,8 +50,7 @@ def run(args) -> int:
         raise PhonglabError(f"--diff writes a PNG image, but {args.diff} does not end in .png; "
                             f"give a path like out/a_minus_b.png")
     if args.diff:      # the output rules of `phonglab render`: checked before any work
-        check_file(Path(args.diff), "difference image")
-        check_folder(Path(args.diff), "difference image")
+        check_output_file(args.diff, "difference image")
     result, img_a, img_b, meta_a, meta_b = compare.compare_files(
         args.a, args.b, args.stderr_a, args.stderr_b, auto_stderr=not args.no_stderr_files,
         eps=args.eps if args.eps is not None else REL_EPS)

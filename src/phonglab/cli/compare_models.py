@@ -19,7 +19,7 @@ def add_parser(sub) -> None:
         epilog="examples:\n  phonglab compare-models exponent_series --spp 16 -o out/exponent_series\n"
                "  phonglab compare-models attenuation_demo -D c=1 -D a=0",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. exponent_series)")
+    p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. exponent_series)")
     p.add_argument("--spp", type=int, default=16,
                    help="samples per pixel of the whitted renders (default 16)")
     p.add_argument("--path-spp", type=int, default=None,
@@ -38,11 +38,13 @@ def run(args) -> int:
     # Imported here, not at the top: `phonglab` imports every subcommand module to build its
     # parser, and these pull in Mitsuba and matplotlib, which `phonglab --help` does not need.
     from ..engine.compare_models import compare_models, format_table
+    from ..engine.outputs import check_output_folder
     from ..engine.scenes import scene_path
 
     params = dict(args.params)
     path = scene_path(args.scene)
-    out = Path(args.output or Path("out") / f"compare_{path.stem}")
+    out = check_output_folder(args.output or Path("out") / f"compare_{path.stem}",
+                              "output folder (-o)")
     result = compare_models(path, out, spp=args.spp, path_spp=args.path_spp, seed=args.seed,
                             max_depth=args.max_depth, variant=args.variant, progress=True,
                             params=params)

@@ -20,9 +20,18 @@ def run(args) -> int:
     from .. import runtime, register
 
     choice = runtime.configure()
-    print(f"libLLVM : {choice.reason}")
-    print(f"mitsuba : {mi.__version__}; variants: {', '.join(mi.variants())}")
     variant = register()
+    # A library phonglab took as usable that Dr.Jit could not load (a file that is not
+    # libLLVM): register() fell back to a scalar variant, which is what doctor must say.
+    fell_back = choice.usable and not variant.startswith(("llvm", "cuda"))
+    if fell_back:
+        print(f"libLLVM : {choice.path} (from {choice.source}) could not be loaded by Dr.Jit "
+              f"as libLLVM, so phonglab fell back to {variant} (Python plugins run about 150x "
+              f"slower); point {runtime.ENV} at a libLLVM such as Debian's libLLVM-19.so, or "
+              f"unset it")
+    else:
+        print(f"libLLVM : {choice.reason}")
+    print(f"mitsuba : {mi.__version__}; variants: {', '.join(mi.variants())}")
     import drjit as dr
 
     extra = ""
@@ -32,4 +41,4 @@ def run(args) -> int:
     for name in ("lambert", "phong"):
         mi.load_dict({"type": name})
         print(f"plugin  : {name} loads in {variant}")
-    return 0 if choice.usable else 1
+    return 0 if choice.usable and not fell_back else 1

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from ..errors import PhonglabError
 from ..settings import parse_sets
@@ -41,12 +40,11 @@ def run(args) -> int:
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
-    from ..engine.outputs import check_file, check_folder, write_json, write_text
+    from ..engine.outputs import check_output_file, write_json, write_text
 
-    for path, what in ((args.json, "JSON file"), (args.report, "report")):
+    for path, what in ((args.json, "JSON file (--json)"), (args.report, "report (--report)")):
         if path:
-            check_file(Path(path), what)
-            check_folder(Path(path), what)
+            check_output_file(path, what)
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
     from .. import registration, runtime
     from ..fit.optimize import fit, format_result
@@ -63,7 +61,6 @@ def run(args) -> int:
     if args.report:
         write_text(args.report, text + "\n")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         write_json(args.json, result.as_dict(), indent=1, end="\n")
     print(text)
     return 0

@@ -13,6 +13,7 @@ import contextlib
 
 from ..errors import PhonglabError
 from ..parallel import add_arguments, runner_from_args
+from ..settings import check_max_seconds
 from .options import add_scene_params
 
 
@@ -24,11 +25,11 @@ def add_parser(sub) -> None:
                     "RMSE, with the predicted time and the reasons. See docs/planner.md.",
         epilog="examples:\n"
                "  phonglab plan cornell_phong --target-error 0.02\n"
-               "  phonglab plan scenes_xml/gray_direct.xml --target-error 0.01 --json\n"
+               "  phonglab plan gray_direct --target-error 0.01 --json\n"
                "  phonglab plan glass_slab --set res=64 --make-reference 4096\n"
                "  phonglab plan cornell_phong --make-reference 65536 --workers 2",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
+    p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. cornell_phong)")
     p.add_argument("--target-error", type=float, default=0.01,
                    help="relative RMSE to reach, sqrt(mean((x-r)^2/(r^2+0.01))) against a "
                         "converged reference, depth bias included (phonglab.engine.metrics; "
@@ -51,7 +52,7 @@ def add_parser(sub) -> None:
                         "one hour; 'inf' allows any)")
     p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
                    help="also render a converged reference (max_depth -1, SPP samples) into "
-                        ".bench_cache/, which 'phonglab render --target-error' compares with")
+                        "the reference cache (.bench_cache/ in a checkout), which 'phonglab render --target-error' compares with")
     add_arguments(p)      # where the reference's passes render (--workers / --scheduler)
     p.set_defaults(func=run)
 
@@ -61,6 +62,8 @@ def run(args) -> int:
     from ..engine import metrics, references
     from ..engine.scenes import scene_path
 
+    if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
+        check_max_seconds(args.max_seconds)
     path = scene_path(args.scene)
     params = dict(args.params)
     kwargs = {}
@@ -75,6 +78,9 @@ def run(args) -> int:
     runner = runner_from_args(args)
     rendering = (args.make_reference is not None and
                  references.cached(path, params, min_spp=args.make_reference) is None)
+    if rendering:       # where it will be cached, before the pilot
+        from ..outputs import check_output_folder
+        check_output_folder(references.CACHE_DIR / "references", "reference cache")
     with runner if rendering else contextlib.nullcontext():
         p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
                          max_depth=args.max_depth, spp=args.spp, params=params,

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from .. import runtime
 from ..errors import PhonglabError
+from ..settings import check_max_seconds
 from .options import add_scene_params, add_seed
 
 
@@ -23,11 +24,11 @@ def add_parser(sub) -> None:
         "render", help="render a scene to EXR + PNG",
         description="Render a Mitsuba XML scene (phonglab's plugins registered) to a float "
                     "OpenEXR file with its provenance in the header, and a PNG preview.",
-        epilog="examples:\n  phonglab render scenes_xml/cornell_phong.xml --spp 128 -o out/cornell.exr\n"
+        epilog="examples:\n  phonglab render cornell_phong --spp 128 -o out/cornell.exr\n"
                "  phonglab render cornell_phong --target-error 0.02   (planned: see 'phonglab plan')\n"
                "  phonglab render gray_direct --adaptive --target-error 0.01 --max-seconds 60",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", help="scene XML file, or a name from scenes_xml/ (e.g. cornell_phong)")
+    p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. cornell_phong)")
     p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
     add_seed(p)
@@ -61,6 +62,8 @@ def run(args) -> int:
     from ..engine.render import render_file
     from ..engine.scenes import scene_path
 
+    if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
+        check_max_seconds(args.max_seconds)
     path = scene_path(args.scene)
     out = Path(args.output or Path("out") / (path.stem + ".exr"))
     if out.is_dir() or out.suffix.lower() != ".exr":

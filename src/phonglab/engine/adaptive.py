@@ -87,6 +87,7 @@ from .metrics import REL_EPS
 from .outputs import spp_paths
 from .render import MAX_SPP, film_channels, pass_seed, preflight, render_scene_file
 from ..runtime import default_variant, require_memory
+from ..settings import check_max_seconds
 from .tonemap import VIRIDIS, auto_exposure, to_srgb
 
 #: Samples every pixel gets in the pilot pass (the first guard).
@@ -353,10 +354,8 @@ def _check(target_error, max_seconds, max_spp, min_spp) -> None:
             and 0 < target_error < 10):
         raise PhonglabError(f"the target error must be a relative RMSE in (0, 10), e.g. 0.02 "
                             f"for 2 %, got {target_error!r}")
-    if max_seconds is not None and not (isinstance(max_seconds, (int, float))
-                                        and max_seconds > 0 and not math.isnan(max_seconds)):
-        raise PhonglabError(f"--max-seconds must be a positive number of seconds, got "
-                            f"{max_seconds!r}")
+    if max_seconds is not None:
+        check_max_seconds(max_seconds)
     if not (isinstance(min_spp, int) and 2 <= min_spp <= MAX_SPP):
         raise PhonglabError(f"the pilot needs 2 to {MAX_SPP} samples per pixel (it estimates a "
                             f"variance), got {min_spp!r}")

@@ -128,7 +128,7 @@ def compare_models(scene: str | Path, out_dir: str | Path | None = None, spp: in
     """Render ``scene`` three ways and compare; write images and a figure to ``out_dir``.
 
     Args:
-        scene: scene file or name in scenes_xml/.
+        scene: scene file, or the name of a shipped scene (``cornell_phong``).
         out_dir: folder for the EXR/PNG files and ``figure.png`` (None: write nothing).
         spp: samples per pixel of the two whitted renders (their only noise is pixel
             antialiasing).

@@ -25,6 +25,7 @@ space, file too large, I/O error), or OpenEXR's own write error, becomes one
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import tempfile
@@ -92,9 +93,10 @@ def atomic_paths(targets):
 
     Every temporary is written, fsync'ed and checked (none may be empty) before the first
     rename, so a failure in any member (a full disk, an exception, Ctrl-C) leaves every
-    previous file of the set untouched and no temporary behind.
+    previous file of the set untouched and no temporary behind.  A target that is a symbolic
+    link is written through: the file it points to is replaced, and the link stays.
     """
-    paths = [Path(p) for p, _ in targets]
+    paths = [Path(os.path.realpath(p)) if os.path.islink(p) else Path(p) for p, _ in targets]
     temps: list[str] = []
     try:
         for path, (_, suffix) in zip(paths, targets):
@@ -144,6 +146,17 @@ def _remove(tmp: str) -> None:
         os.unlink(tmp)
 
 
+def _advice(cause: BaseException | str) -> str:
+    """What to do about a failed write, by its cause (a full disk unless the error says
+    otherwise: OpenEXR's errors carry no errno)."""
+    code = getattr(cause, "errno", None)
+    if code in (errno.EACCES, errno.EPERM, errno.EROFS):
+        return "make that folder writable or choose another one"
+    if code in (errno.ENOENT, errno.ENOTDIR):
+        return "files cannot be created there; choose another folder"
+    return "free space on that disk or choose another folder"
+
+
 def write_error(path: Path, cause: BaseException | str) -> WriteError:
     """The one sentence for a write of ``path`` that failed (``cause``: an exception or words);
     its ``reason`` is kept, so a caller that wrote into a temporary names the real target."""
@@ -152,8 +165,8 @@ def write_error(path: Path, cause: BaseException | str) -> WriteError:
     else:
         reason = getattr(cause, "reason", None) or getattr(cause, "strerror", None) or \
             str(cause).split(". ")[-1].rstrip(".") or type(cause).__name__
-    err = WriteError(f"cannot write {path} ({reason}); free space on that disk or choose "
-                     f"another folder; the previous {path.name}, if any, is unchanged")
+    err = WriteError(f"cannot write {path} ({reason}); {_advice(cause)}; the previous "
+                     f"{path.name}, if any, is unchanged")
     err.reason, err.path = reason, Path(path)
     return err
 

@@ -7,7 +7,11 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
   folder; an existing file must be writable (its owner's write bit set: a file or folder made
   read-only is never written, even by root); the nearest existing folder above it must be a
   writable folder in which a file can actually be created (probed with a temporary file).  A problem is one
-  sentence, and nothing has been computed yet.
+  sentence, and nothing has been computed yet.  Every command checks its outputs this way,
+  before its work: :func:`check_output_file` for a file (a name ending in ``/`` names a
+  folder and is refused), :func:`check_output_folder` for a folder of results.  An output
+  that is a symbolic link is checked, and written, at the file it points to: the link stays
+  (:func:`phonglab.engine.exr.atomic_paths` replaces the target, not the link).
 * **Replaced as a set.**  Every file is written to a temporary beside its target, and the
   temporaries are renamed over the targets only once all of them are complete: written,
   fsync'ed and checked (:func:`phonglab.engine.exr.atomic_paths`).  The set is the image, its
@@ -38,9 +42,14 @@ from .tonemap import preview_png
 from ..verdict import jsonable
 
 
+def _through_links(path: Path) -> Path:
+    """Where a write to ``path`` lands: a symbolic link's target, else ``path``."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
 def check_file(path: Path, what: str = "output") -> None:
     """Raise :class:`PhonglabError` when ``path`` is a folder or a read-only file."""
-    path = Path(path)
+    path = _through_links(Path(path))
     if path.is_dir():
         raise PhonglabError(f"the {what} {path} is a folder; give a file name instead")
     if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
@@ -50,8 +59,11 @@ def check_file(path: Path, what: str = "output") -> None:
 
 def check_folder(path: Path, what: str = "output") -> None:
     """Raise :class:`PhonglabError` unless a file can be created where ``path`` goes."""
-    path = Path(path)
-    folder = path.parent
+    _check_creatable(_through_links(Path(path)).parent, Path(path), what)
+
+
+def _check_creatable(folder: Path, path: Path, what: str) -> None:
+    """A file can be created in ``folder``, or in the folders that would be made for it."""
     while not folder.exists():
         folder = folder.parent
     if not folder.is_dir():
@@ -66,6 +78,39 @@ def check_folder(path: Path, what: str = "output") -> None:
     except OSError as exc:
         raise PhonglabError(f"cannot create files in {folder} ({exc.strerror}); choose a "
                             f"writable folder for the {what}") from None
+
+
+def check_output_file(path: str | Path, what: str = "output") -> Path:
+    """One output file, checked before the work that fills it (:func:`check_file`,
+    :func:`check_folder`); a name ending in ``/`` is a folder's, refused rather than written
+    as a file named like the folder."""
+    if str(path).endswith(("/", os.sep)):
+        raise PhonglabError(f"the {what} {path} ends in '/', which names a folder; give the "
+                            f"name of a file (in that folder, or elsewhere)")
+    check_file(Path(path), what)
+    check_folder(Path(path), what)
+    return Path(path)
+
+
+def check_output_folder(path: str | Path, what: str = "output folder") -> Path:
+    """A folder of results: a folder already, or one that can be made, with files creatable
+    in it; an existing file there is refused before the work, not met by ``mkdir``."""
+    real = _through_links(Path(path))
+    if real.exists() and not real.is_dir():
+        raise PhonglabError(f"the {what} {path} is a file, not a folder; give a folder name, "
+                            f"or move the file away")
+    _check_creatable(real, Path(path), what)
+    return Path(path)
+
+
+def check_input_file(path: str | Path, what: str = "input file") -> Path:
+    """A file to read: it exists and is not a folder (each said as such)."""
+    path = Path(path)
+    if path.is_dir():
+        raise PhonglabError(f"the {what} {path} is a folder; give the path of a file")
+    if not path.is_file():
+        raise PhonglabError(f"the {what} {path} does not exist; check the path")
+    return path
 
 
 def spp_paths(out: str | Path) -> tuple[Path, Path]:

@@ -27,8 +27,10 @@ merge is bit-identical to the serial one whenever the pass images are (a box-fil
 scene's are; a wider filter's float32 atomic splats may differ by a few ulps,
 docs/exr_and_compare.md).  A cached
 reference with at least the asked spp is reused; a missing one (a clean clone) is rendered.
-The cache lives in ``.bench_cache/`` at the repository root (git-ignored), or where
-``PHONGLAB_CACHE`` points.
+The cache lives where ``PHONGLAB_CACHE`` points; else in ``.bench_cache/`` of the source
+checkout phonglab runs from (git-ignored); else, for an installed phonglab, whose own folder
+may not be writable, in the user's cache folder (``$XDG_CACHE_HOME/phonglab`` or
+``~/.cache/phonglab``).
 """
 
 from __future__ import annotations
@@ -51,11 +53,23 @@ from .metrics import as_hwc
 from ..parallel import Job, Runner
 from .render import PassMerge, pass_seed, pass_spps, render_pass, render_scene
 from ..runtime import available_backend, quiet_mitsuba, variant_for
-from .scenes import (REPO_ROOT, SceneInfo, file_hash, inspect_scene, load_scene, path_integrator,
+from .scenes import (SceneInfo, file_hash, inspect_scene, load_scene, path_integrator,
                      scene_path)
 
-#: Default cache folder (git-ignored); ``PHONGLAB_CACHE`` overrides it.
-CACHE_DIR = Path(os.environ.get("PHONGLAB_CACHE", REPO_ROOT / ".bench_cache"))
+
+def default_cache_dir() -> Path:
+    """``PHONGLAB_CACHE``; else the checkout's ``.bench_cache/`` (phonglab imported from
+    ``src/phonglab`` beside a ``pyproject.toml``); else the user's cache folder."""
+    if os.environ.get("PHONGLAB_CACHE"):
+        return Path(os.environ["PHONGLAB_CACHE"])
+    package = Path(__file__).resolve().parents[1]           # src/phonglab
+    if package.parent.name == "src" and (package.parents[1] / "pyproject.toml").is_file():
+        return package.parents[1] / ".bench_cache"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "phonglab"
+
+
+#: Default cache folder; ``PHONGLAB_CACHE`` overrides it (:func:`default_cache_dir`).
+CACHE_DIR = default_cache_dir()
 #: Seed of reference renders: far from the seeds renders under test use (0, 1, 5000, ...).
 REFERENCE_SEED = 1_000_000
 #: Passes of a reference render (its standard error has PASSES − 1 degrees of freedom).
@@ -128,7 +142,7 @@ def reference(scene: str | Path, spp: int, params: dict[str, Any] | None = None,
     """The reference of ``scene`` with at least ``spp`` samples: from the cache, else rendered.
 
     Args:
-        scene: scene file, or a name in ``scenes_xml/``.
+        scene: scene file, or the name of a shipped scene (``cornell_phong``).
         spp: samples per pixel the reference must have at least.
         params: values for the scene's ``<default>`` entries.
         variant: Mitsuba variant (default: :func:`default_variant`).

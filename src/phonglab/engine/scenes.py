@@ -1,7 +1,10 @@
 """Scenes: resolving a scene name once, its ``<default>`` parameters, loading with clear errors, inspection.
 
-A scene is given as a path to a Mitsuba XML file or as the name of one in ``scenes_xml/``
-(``cornell_phong``); :func:`scene_path` resolves it.  :func:`load_scene` registers
+A scene is given as a path to a Mitsuba XML file or as the name of one of the scenes phonglab
+ships (``cornell_phong``); :func:`scene_path` resolves it.  The shipped scenes, and the textures
+they name by paths relative to themselves, are package data in ``phonglab/scenes_xml/``, found
+through :mod:`importlib.resources`, so an installed phonglab renders them from any working
+directory.  :func:`load_scene` registers
 phonglab's plugins and loads it, turning Mitsuba's loader errors into one sentence naming the
 problem and the fix (:func:`explain_load_error`); XML that does not parse is reported by
 :func:`malformed` alone.  :func:`inspect_scene` reads what the file says about colour,
@@ -13,6 +16,7 @@ from __future__ import annotations
 import difflib
 import hashlib
 import re
+from importlib import resources
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,18 +29,24 @@ from .. import registration
 from ..errors import SceneError
 from ..runtime import quiet_mitsuba
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
-SCENES_DIR = REPO_ROOT / "scenes_xml"
+#: The shipped scenes.  Mitsuba opens a scene and its textures from the file system, and pip
+#: installs a wheel's package data as plain files, so the resource folder is a real folder.
+SCENES_DIR = Path(str(resources.files("phonglab") / "scenes_xml"))
 
 
 def scene_path(name: str | Path) -> Path:
-    """Resolve a scene given as a path or as a name in ``scenes_xml/`` (``cornell_phong``)."""
+    """Resolve a scene given as a path or as the name of a shipped scene (``cornell_phong``)."""
     p = Path(name)
     if p.is_file():
         return p
     for cand in (SCENES_DIR / p, SCENES_DIR / (str(p) + ".xml")):
         if cand.is_file():
             return cand
+    if p.is_dir():
+        inside = sorted(p.glob("*.xml"))
+        such = f" such as {inside[0]}" if inside else ""
+        raise SceneError(f"the scene {name} is a folder; give the path of a Mitsuba XML "
+                         f"file{such}")
     raise SceneError(f"scene file not found: {name} (give a path to a Mitsuba XML file, or "
                         f"one of: {', '.join(sorted(q.stem for q in SCENES_DIR.glob('*.xml')))})")
 
@@ -199,7 +209,7 @@ def load_scene(path: str | Path, variant: str | None = None, **params) -> Any:
     """Load a Mitsuba XML scene with phonglab's plugins registered.
 
     Args:
-        path: scene file, or a scene name from ``scenes_xml/``.
+        path: scene file, or the name of a shipped scene (``cornell_phong``).
         variant: Mitsuba variant to set first (default: the active one, else llvm_ad_rgb).
         **params: values for the scene's ``<default name=...>`` entries (spp, ...).
 

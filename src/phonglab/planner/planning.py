@@ -19,6 +19,7 @@ from ..engine.metrics import noise_target
 from ..engine.render import MAX_SPP, Prior, check_spp, precision
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..engine.scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
+from ..settings import ParameterError, check_max_seconds
 from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
                     PILOT_SPP, DepthSample, Pilot, pilot_size)
@@ -175,7 +176,7 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
 
     Args:
-        scene_path: scene file, or a name in ``scenes_xml/``.
+        scene_path: scene file, or the name of a shipped scene (``cornell_phong``).
         target_error: E, the total relative RMSE, bias included (:mod:`phonglab.engine.metrics`;
             ``0.01`` = 1 %).
         pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
@@ -203,6 +204,11 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
     t_start = time.perf_counter()
     _check_arguments(target_error, PILOT_SPP if pilot_spp is None else pilot_spp, pilot_passes,
                      spp, max_depth)
+    if max_seconds is not None:
+        try:
+            check_max_seconds(max_seconds)
+        except ParameterError as exc:
+            raise PlanError(str(exc)) from None
     params = {k: v for k, v in (params or {}).items() if v is not None}
     info = inspect_scene(scene_path, **params)
     if info.integrator != "path":

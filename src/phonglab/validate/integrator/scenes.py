@@ -5,7 +5,7 @@ Every film uses the ``box`` filter of radius ½: each sample lands in its own pi
 pixels are independent and a pixel's value is the mean of the radiance over its footprint.
 
 **Closed furnace enclosure** (:func:`enclosure`; the geometry of
-scenes_xml/check_furnace_enclosure.xml, which ``phonglab check`` renders): the camera inside
+phonglab/scenes_xml/check_furnace_enclosure.xml, which ``phonglab check`` renders): the camera inside
 a closed ``cube`` (normals flipped inwards) whose walls are ``diffuse`` of albedo ρ and emit
 Le.  Every wall point sees only walls, so L is the same everywhere and the rendering equation
 L = Le + ρL is truncated by the path length: with ``max_depth`` D (D vertices, Mitsuba's
