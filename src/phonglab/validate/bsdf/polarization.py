@@ -219,37 +219,48 @@ def fibonacci(k: int) -> np.ndarray:
     return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
 
 
-def _g(m: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """s0' − |s'| of M (…, 4, 4) applied to (1, u) (…, K, 3): (…, K)."""
-    s = np.concatenate([np.ones(u.shape[:-1] + (1,)), u], axis=-1)
-    out = np.einsum("...ij,...kj->...ki", m, s)
-    return out[..., 0] - np.linalg.norm(out[..., 1:], axis=-1)
+def _g(m: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """s0' − |s'| of M (N, 4, 4) applied to the Stokes vectors s (N or 1, K, 4): (N, K)."""
+    out = np.matmul(m, np.swapaxes(s, -1, -2))                # (N, 4, K)
+    return out[:, 0] - np.sqrt(np.sum(out[:, 1:] ** 2, axis=1))
 
 
 def stokes_margin(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per matrix (…, 4, 4): (min over unit u of s0' − |s'| for s = (1, u), the minimizing u).
 
     A matrix keeps the Stokes cone iff the margin is ≥ 0 (the module docstring).  A grid of
-    :data:`GRID` directions, then 40 steps of a shrinking local search around the best grid
-    point (the margin is Lipschitz with constant ≤ 2·‖M‖, so the grid alone is within
-    ≈ 2‖M‖·0.11 of the minimum and the search brings that to round-off)."""
+    :data:`GRID` directions, then 40 steps of a shrinking local search (6 candidates a step)
+    around the best grid point: the margin is Lipschitz in u with constant ≤ 2·max|M_ij|·√3,
+    so the grid (covering radius ≈ 0.16 at 512 points) is within a fraction of the scale of
+    the minimum and the search, whose step shrinks from 0.15 to 1e-5, brings that to
+    round-off.  The zero matrix (margin 0) is not searched."""
     shape = m.shape[:-2]
     mm = m.reshape(-1, 4, 4)
-    grid = fibonacci(GRID)
-    g = _g(mm[:, None], grid[None, None])[:, 0]              # (N, K)
-    best = grid[np.argmin(g, axis=1)]
-    val = g.min(axis=1)
-    step = 0.15
-    rng = np.random.default_rng(7)
-    for _ in range(40):
-        cand = best[:, None, :] + step * rng.normal(size=(len(mm), 6, 3))
-        cand /= np.linalg.norm(cand, axis=-1, keepdims=True)
-        gc = _g(mm[:, None], cand[:, None])[:, 0]            # (N, 6)
-        k = np.argmin(gc, axis=1)
-        better = gc[np.arange(len(mm)), k] < val
-        best = np.where(better[:, None], cand[np.arange(len(mm)), k], best)
-        val = np.where(better, gc[np.arange(len(mm)), k], val)
-        step *= 0.8
+    val = np.zeros(len(mm))
+    best = np.zeros((len(mm), 3))
+    best[:, 2] = 1.0
+    live = np.flatnonzero(np.any(mm != 0, axis=(1, 2)))
+    if live.size:
+        mv = mm[live]
+        grid = fibonacci(GRID)
+        s = np.concatenate([np.ones((GRID, 1)), grid], axis=1)[None]
+        g = _g(mv, s)                                          # (n, K)
+        k = np.argmin(g, axis=1)
+        b, v = grid[k], g[np.arange(len(mv)), k]
+        step = 0.15
+        rng = np.random.default_rng(7)
+        idx = np.arange(len(mv))
+        for _ in range(40):
+            cand = b[:, None, :] + step * rng.normal(size=(len(mv), 6, 3))
+            cand /= np.linalg.norm(cand, axis=-1, keepdims=True)
+            sc = np.concatenate([np.ones((len(mv), 6, 1)), cand], axis=-1)
+            gc = _g(mv, sc)                                    # (n, 6)
+            j = np.argmin(gc, axis=1)
+            better = gc[idx, j] < v
+            b = np.where(better[:, None], cand[idx, j], b)
+            v = np.where(better, gc[idx, j], v)
+            step *= 0.75
+        val[live], best[live] = v, b
     return val.reshape(shape), best.reshape(shape + (3,))
 
 
@@ -299,7 +310,7 @@ def _realizable_rows(what, m, wi, wo, lam) -> list[Row]:
              "s0' − |s'| of the image of s = (1, u)"),
             ("Cloude: coherency matrix ≥ 0 (a deterministic mixture)", lam_min,
              "smallest eigenvalue of the coherency matrix H")):
-        ex = np.where(ok, -val / scale, 0.0)                  # > 0: violated, relative
+        ex = np.where(ok, np.maximum(-val / scale, 0.0), 0.0)   # > 0: violated, relative
         per_lane = ex.max(axis=1)
         details = {"lanes": int(len(m)), "wavelengths": [float(x) for x in lam],
                    "nonfinite_dropped": int((~ok).sum())}
@@ -385,6 +396,7 @@ def mueller_identities(bsdf, opts) -> list[Row]:
     wis, _ = lanes.incident(opts.cells(), n_s)
     u1, u2 = r.random(len(wis)), r.random((len(wis), 2))
     swo, w, spdf, stype = mueller_sample(bsdf, wis, u1, u2)
+    rows.append(_continuity(bsdf, wis, u1, u2, swo, w, stype, r))
     live = ((spdf > 0) & ~lanes.delta_mask(stype) & np.all(np.isfinite(swo), axis=1)
             & np.any(w != 0, axis=(1, 2, 3)))
     if not live.any():
@@ -410,6 +422,47 @@ def mueller_identities(bsdf, opts) -> list[Row]:
                             _worst(ex, wis, swo, w, ratio, ("weight", "eval_over_pdf")),
                             lanes=(ex, {"wi": wis, "wo": swo})))
     return rows
+
+
+#: A delta lobe's matrix may move by at most this much (entry-wise, relative to M00) when wi
+#: moves by 8 ulps: a continuous matrix moves by ~κ·8·2⁻²⁴; 1 % is a jump.
+JUMP_TOL = 1e-2
+
+
+def _continuity(bsdf, wis, u1, u2, wo1, w1, t1, r) -> Row:
+    """Delta-lobe sample matrices are continuous in wi, compared in common Stokes frames.
+
+    The same sample values at wi moved by 8 ulps per component (config.perturb) must pick the
+    same delta lobe, the same wo (within 1e-4) and a matrix that differs by at most
+    :data:`JUMP_TOL` once the moved lane's matrix is re-expressed in the first lane's frames
+    (``stokes_basis`` itself jumps where a direction's z changes sign, which is no physical
+    change: the rotation R_out M Rᵀ_in takes it out).  Lanes with |cos θ_i| < 1e-3 are left out
+    (a two-sided element legitimately flips there).  The incidence cells at φ = 0 have
+    wi.y = 0 exactly, so the move crosses that plane -- where mitsuba3#1963 puts the
+    retarder's jump."""
+    wi2 = perturb(wis, r)
+    wo2, w2, _, t2 = mueller_sample(bsdf, wi2, u1, u2)
+    keep = (lanes.delta_mask(t1) & (t1 == t2) & np.all(np.isfinite(wo1), axis=1)
+            & np.all(np.isfinite(wo2), axis=1) & (np.abs(wo1 - wo2).max(axis=1) < 1e-4)
+            & np.any(w1 != 0, axis=(1, 2, 3)) & (np.abs(wis[:, 2]) >= 1e-3))
+    name = "delta-lobe matrices continuous in wi (8-ulp move, common frames)"
+    if not keep.any():
+        return Row("mueller_identities", name, None, None, None, None, "skipped",
+                   "no delta-lobe sample with a non-zero weight away from grazing: nothing to "
+                   "compare", {})
+    a, b, m1, m2 = wis[keep], wi2[keep], w1[keep], w2[keep]
+    o1, o2 = wo1[keep], wo2[keep]
+    r_in = rotate_stokes_basis(-o2, stokes_basis(-o2), stokes_basis(-o1))
+    r_out = rotate_stokes_basis(b, stokes_basis(b), stokes_basis(a))
+    m2 = r_out[:, None] @ m2 @ np.swapaxes(r_in, -1, -2)[:, None]
+    d = _entry_diff(m2, m1)
+    return bounded_row("mueller_identities", name, max_finite(d), JUMP_TOL,
+                       f"max over entries of |M(wi') − M(wi)| / M00 for delta-lobe samples, wi' "
+                       f"wi moved by 8 ulps per component, the same sample values, lobe and wo, "
+                       f"M(wi') rotated into M(wi)'s Stokes frames; ≤ {JUMP_TOL:g} (a "
+                       f"continuous matrix moves by ~1e-6); {int(keep.sum())} samples",
+                       _worst(d, a, o1, m1, m2, ("matrix", "matrix_moved")),
+                       lanes=(d, {"wi": a, "wo": o1}))
 
 
 # ----------------------------------------------------------------------------- reciprocity
@@ -443,8 +496,8 @@ def rotate_stokes_basis(forward, current, target) -> np.ndarray:
     ta = target / np.linalg.norm(target, axis=1, keepdims=True)
     dot = np.clip(np.sum(cu * ta, axis=1), -1.0, 1.0)
     # unit_angle: 2·asin(|a − b|/2) (accurate near 0 and π)
-    theta = np.where(dot < 0, np.pi - 2 * np.arcsin(np.linalg.norm(cu + ta, axis=1) / 2),
-                     2 * np.arcsin(np.linalg.norm(cu - ta, axis=1) / 2))
+    half = lambda v: 2 * np.arcsin(np.minimum(np.linalg.norm(v, axis=1) / 2, 1.0))  # noqa: E731
+    theta = np.where(dot < 0, np.pi - half(cu + ta), half(cu - ta))
     flip = np.sum(forward * np.cross(current, target), axis=1) < 0
     return rotator(np.where(flip, -theta, theta))
 
@@ -539,7 +592,7 @@ def provenance(bsdf):
     :class:`phonglab.settings.Loaded` whose ``plugin`` is ``bsdf`` (its spec, with ``--set``
     values merged), and the ``plugins`` (``--plugin`` files) of the run.  A Python plugin's
     own file (run by :func:`phonglab.validate.core.load_plugins` as ``__phonglab_plugin__``)
-    is found from its class too."""
+    is found from its class's functions too (the command line prepares the target itself)."""
     from ...settings import Loaded
 
     spec, files = None, []
@@ -550,18 +603,20 @@ def provenance(bsdf):
             if isinstance(v, Loaded) and v.plugin is bsdf:
                 spec, found = v.spec, True
         p = frame.f_locals.get("plugins")
-        if found and isinstance(p, (list, tuple)) and not files:
+        if isinstance(p, (list, tuple)) and not files:
             files = [str(Path(x).resolve()) for x in p]
         frame = frame.f_back
     del frame
     cls = type(bsdf)
     if cls.__module__ == "__phonglab_plugin__":
-        try:
-            f = str(Path(inspect.getfile(cls)).resolve())
-            if f not in files:
-                files.append(f)
-        except (TypeError, OSError):
-            pass
+        # the file's module is gone once runpy returns; its functions still name the file
+        codes = [getattr(v, "__code__", None) for v in vars(cls).values()]
+        for code in codes:
+            if code is not None and Path(code.co_filename).is_file():
+                f = str(Path(code.co_filename).resolve())
+                if f not in files:
+                    files.append(f)
+                break
     if not found or spec is None:
         return None
     return spec, files
