@@ -53,7 +53,9 @@ def test_controls_pass_every_topic(polarized, name):
                            variant=POLARIZED)
     assert report.passed, report.table(report.failing)
     ran = {r.topic for r in report.rows if r.status == "pass"}
-    assert {"mueller", "intensity", "mueller_reciprocity"} <= ran
+    assert {"mueller", "intensity", "mueller_identities"} <= ran
+    if name != "wrapped_conductor":                  # every lobe a delta: eval is 0, skipped
+        assert "mueller_reciprocity" in ran
 
 
 def test_defect_rows_name_the_lane_and_the_violated_quantity(polarized):
