@@ -27,7 +27,7 @@ POLAR_TOPICS = list(pol.POLAR_TOPICS)
 
 #: defect file -> the one topic it must fail in a polarized variant
 PLANTED = {"over_polarizing": "mueller", "conjugating": "mueller",
-           "dim_intensity": "intensity"}
+           "dim_intensity": "intensity", "nan_offdiagonal": "mueller"}
 #: control file -> its registered name
 CONTROLS = {"depolarizing_lambert": "pol_depolarizing_lambert",
             "wrapped_conductor": "pol_wrapped_conductor",
