@@ -55,11 +55,14 @@ registered per variant), loads the same spec and writes its numbers back.  A BSD
 loaded object (no spec to reload) is ``skipped``.  Tolerance: REL_TOL relative, per entry.
 
 ``mueller_identities`` -- the deterministic identities of :mod:`.identities` entry by entry:
-``eval_pdf``'s matrix = eval's, and each non-delta sample's weight matrix = eval/pdf at its ω_o.
-Entries are compared relative to the larger M00 of the two sides (|M_ij| ≤ M00 for a physical
-matrix: an entry is off when it is off by more than round-off *of the intensity*).  The weight
-row's tolerance is REL_TOL plus the lane's sensitivity to an 8-ulp move of both directions
-(:func:`phonglab.validate.bsdf.config.perturb`), as the unpolarized weight topic.
+``eval_pdf``'s matrix = eval's, and each non-delta sample's weight matrix = eval/pdf at its ω_o;
+and a delta lobe's sample matrix is continuous in ω_i (:func:`_continuity`).  Each matrix is
+divided by its own M00 first: these rows compare the *polarization part* M/M00 (entries in
+[−1, 1] for a physical matrix), and M00 itself stays the intensity topics' (``eval_pdf``,
+``weight``, ``reciprocity``, with their box search of ill-conditioned lanes and their
+findings), so a defect of the intensity fails one topic, not two.  The weight row's tolerance
+is REL_TOL plus the lane's sensitivity to an 8-ulp move of both directions
+(:func:`phonglab.validate.bsdf.config.perturb`), as the unpolarized weight topic's.
 
 ``mueller_reciprocity`` -- Helmholtz reciprocity as matrices.  Derivation.  For a reciprocal
 scatterer the Jones matrix of the reversed path is the transpose of the forward one, J_rev =
@@ -89,14 +92,15 @@ rotate_stokes_basis(ω_o, stokes_basis(−ω_o) → stokes_basis(ω_o)) (mueller
 rotation ``rotate_mueller_basis`` applies), ported to numpy here.  Evidence beyond the
 derivation: roughconductor (a Fresnel Jones matrix per microfacet, physically reciprocal)
 meets this form to 5e-4 of the tolerance and fails it by > 10× with Q replaced by I, P or D
-(the tests).  Reflection pairs on the upper hemisphere (cos θ ≥ 1e-4), entries relative to
-M00, tolerance REL_TOL plus the lane's sensitivity (both sides).  Transmission pairs are not
+(the tests).  Reflection pairs on the upper hemisphere (cos θ ≥ 1e-4), the polarization parts
+M/M00 compared (the intensity's reciprocity is the ``reciprocity`` topic's), tolerance REL_TOL
+plus the lane's sensitivity (both sides).  Transmission pairs are not
 checked in this physical form (the η² scaling of radiance across the interface and the
 Importance-mode adjoint as matrices: future work); a BSDF whose lobes are all deltas is
 ``skipped`` (eval is 0; a sample-based check is future work).  A second row checks Mitsuba's
 own adjoint convention, which needs no physics: eval_Importance(ω_o, ω_i)/|cos θ_i| describes
 the same light path in the same frames as eval_Radiance(ω_i, ω_o)/|cos θ_o| (light along −ω_o
-then ω_i, conductor.cpp:277), so the two matrices must be equal entry by entry, over
+then ω_i, conductor.cpp:277), so the two matrices M/M00 must be equal entry by entry, over
 reflection and transmission pairs (the matrix form of the ``reciprocity`` topic's adjoint row).
 """
 
@@ -132,7 +136,8 @@ STARTS = 3
 #: Why a topic is skipped in a variant that is not polarized.
 NOT_POLARIZED = "not a polarized variant: {} returns intensities, not Mueller matrices"
 #: The reason text of the entry-wise comparisons.
-ENTRYWISE = ("max over entries of |A_ij − B_ij| / max(A00, B00); " + ROUND_OFF)
+ENTRYWISE = ("max over entries of |A_ij/A00 − B_ij/B00| (the polarization part; M00 is the "
+             "intensity topics'); " + ROUND_OFF)
 
 _RNG_SEED = SEED_OFFSETS
 
@@ -386,17 +391,29 @@ def _wavelengths() -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- identities
+#: Below this |M00| a matrix has no polarization state to compare (its intensity is 0).
+TINY = 1e-30
+
+
 def _entry_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Per lane: max over wavelengths and entries of |a − b| / max(a00, b00, floor)."""
-    scale = np.maximum(np.maximum(np.abs(a[..., 0, 0]), np.abs(b[..., 0, 0])), ABS_FLOOR)
-    d = np.abs(a - b).max(axis=(-1, -2)) / scale
-    d = np.where(np.all(np.isfinite(a), axis=(-1, -2)) & np.all(np.isfinite(b), axis=(-1, -2)),
-                 d, np.nan)
-    return d.max(axis=-1)
+    """Per lane: max over wavelengths and entries of |a/a00 − b/b00|, the matrices' polarization
+    parts (|M_ij/M00| ≤ 1 for a physical matrix).  M00 itself is the intensity topics' (``eval_pdf``,
+    ``weight``, ``reciprocity``, with their conditioning and box search): a defect of the
+    intensity fails there, not here too.  Both M00 = 0: 0; one of them 0, or a non-finite
+    entry: NaN (not compared; counted in the rows' ``not_compared``)."""
+    a00, b00 = np.abs(a[..., 0, 0]), np.abs(b[..., 0, 0])
+    both = (a00 > TINY) & (b00 > TINY)
+    na = a / np.where(both, a[..., 0, 0], 1.0)[..., None, None]
+    nb = b / np.where(both, b[..., 0, 0], 1.0)[..., None, None]
+    d = np.abs(na - nb).max(axis=(-1, -2))
+    d = np.where(both, d, np.where((a00 <= TINY) & (b00 <= TINY), 0.0, np.nan))
+    finite = np.all(np.isfinite(a), axis=(-1, -2)) & np.all(np.isfinite(b), axis=(-1, -2))
+    return np.where(finite, d, np.nan).max(axis=-1)
 
 
 def _sens(fn, wi, wo, value, r) -> np.ndarray:
-    """Per lane: the largest entry-wise change (relative to M00) of fn over 4 8-ulp moves."""
+    """Per lane: the largest change of fn's polarization part (:func:`_entry_diff`) over 4
+    8-ulp moves of both directions."""
     n = len(wi)
     moved = fn(perturb(np.tile(wi, (4, 1)), r), perturb(np.tile(wo, (4, 1)), r))
     d = _entry_diff(np.tile(value, (4, 1, 1, 1)), moved)
@@ -405,7 +422,7 @@ def _sens(fn, wi, wo, value, r) -> np.ndarray:
 
 def _worst(ex, wi, wo, a, b, names) -> dict:
     finite = np.isfinite(ex)
-    d = {"lanes": int(ex.size), "nonfinite_dropped": int((~finite).sum())}
+    d = {"lanes": int(ex.size), "not_compared": int((~finite).sum())}
     if finite.any() and ex.size:
         k = int(np.nanargmax(np.where(finite, ex, -1.0)))
         d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
@@ -451,7 +468,7 @@ def mueller_identities(bsdf, opts) -> list[Row]:
     ex = rel / (REL_TOL + _sens(ratio_of, wis, swo, ratio, r))
     rows.append(bounded_row("mueller_identities", "weight matrix = eval/pdf per sample",
                             max_finite(ex), 1.0,
-                            f"max over entries of |weight_ij − (eval/pdf)_ij| / max(00 entries) "
+                            f"max over entries of |weight_ij/weight_00 − (eval/pdf)_ij/(eval/pdf)_00| "
                             f"per non-delta sample, over (2^-10 + the lane's sensitivity to an "
                             f"8-ulp move of wi, wo); must be ≤ 1; {int(live.sum())} samples",
                             _worst(ex, wis, swo, w, ratio, ("weight", "eval_over_pdf")),
@@ -459,7 +476,7 @@ def mueller_identities(bsdf, opts) -> list[Row]:
     return rows
 
 
-#: A delta lobe's matrix may move by at most this much (entry-wise, relative to M00) when wi
+#: A delta lobe's matrix may move by at most this much (entry-wise, of M/M00) when wi
 #: moves by 8 ulps: a continuous matrix moves by ~κ·8·2⁻²⁴; 1 % is a jump.
 JUMP_TOL = 1e-2
 
@@ -492,7 +509,8 @@ def _continuity(bsdf, wis, u1, u2, wo1, w1, t1, r) -> Row:
     m2 = r_out[:, None] @ m2 @ np.swapaxes(r_in, -1, -2)[:, None]
     d = _entry_diff(m2, m1)
     return bounded_row("mueller_identities", name, max_finite(d), JUMP_TOL,
-                       f"max over entries of |M(wi') − M(wi)| / M00 for delta-lobe samples, wi' "
+                       f"max over entries of |M(wi')/M00(wi') − M(wi)/M00(wi)| for delta-lobe "
+                       f"samples, wi' "
                        f"wi moved by 8 ulps per component, the same sample values, lobe and wo, "
                        f"M(wi') rotated into M(wi)'s Stokes frames; ≤ {JUMP_TOL:g} (a "
                        f"continuous matrix moves by ~1e-6); {int(keep.sum())} samples",
@@ -581,7 +599,7 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
     rows = [bounded_row("mueller_reciprocity",
                         "f(wo, wi) = R_out Q f(wi, wo)ᵀ Q R_inᵀ, reflection",
                         max_finite(ex), 1.0,
-                        "max over entries of the difference relative to M00 over random and "
+                        "max over entries of the difference of M/M00 over random and "
                         "grid reflection pairs, over (2^-10 + both sides' sensitivity to an "
                         "8-ulp move); Q = diag(1, 1, −1, 1), R the Stokes-frame rotations "
                         "(module docstring); must be ≤ 1",
@@ -604,7 +622,7 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
     rows.append(bounded_row("mueller_reciprocity",
                             "f_Radiance(wi, wo) = f_Importance(wo, wi) (same light path)",
                             max_finite(ex), 1.0,
-                            "max over entries of the difference relative to M00 over reflection "
+                            "max over entries of the difference of M/M00 over reflection "
                             "and transmission pairs, over (2^-10 + both sides' sensitivity); "
                             "the same path in the same Stokes frames (conductor.cpp:275); "
                             "must be ≤ 1",
