@@ -720,6 +720,10 @@ def intensity(bsdf, opts) -> list[Row]:
     if not mi.is_polarized:
         return skipped("intensity")
     variant = unpolarized_variant(mi.variant())
+    if variant not in mi.variants():
+        return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
+                    None, "skipped", f"this Mitsuba build has no {variant} variant to compare "
+                    f"with", {})]
     prov = provenance(bsdf)
     if prov is None:
         return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
