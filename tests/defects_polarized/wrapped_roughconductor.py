@@ -1,4 +1,5 @@
-"""Control: a Python BSDF that forwards every call to a loaded Mitsuba ``roughconductor`` (GGX, α = 0.3).
+"""Control: a Python BSDF that forwards every call to a loaded Mitsuba ``roughconductor``
+(GGX, α = 0.3).
 
 Whatever the built-in returns (Mueller matrices in polarized variants, in its own Stokes
 frames) the wrapper returns unchanged, so it must pass wherever the built-in does.
