@@ -396,8 +396,8 @@ TINY = 1e-30
 def _entry_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Per lane: max over wavelengths and entries of |a/a00 − b/b00|, the matrices' polarization
     parts (|M_ij/M00| ≤ 1 for a physical matrix).  M00 itself is the intensity topics'
-    (``eval_pdf``, ``weight``, ``reciprocity``, with their conditioning and box search): a defect of the
-    intensity fails there, not here too.  Both M00 = 0: 0; one of them 0, or a non-finite
+    (``eval_pdf``, ``weight``, ``reciprocity``, with their conditioning and box search): a
+    defect of the intensity fails there, not here too.  Both M00 = 0: 0; one of them 0, or a non-finite
     entry: NaN (not compared; counted in the rows' ``not_compared``)."""
     a00, b00 = np.abs(a[..., 0, 0]), np.abs(b[..., 0, 0])
     both = (a00 > TINY) & (b00 > TINY)
