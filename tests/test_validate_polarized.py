@@ -193,3 +193,16 @@ def test_retarder_jump_is_caught_and_known(polarized):
                            topics=["mueller_identities"])
     row = next(r for r in report.rows if "continuous" in r.name)
     assert row.status == "skipped"                  # no delta lobe
+
+
+def test_intensity_reloads_nested_values_and_skips_objects(polarized):
+    import mitsuba as mi
+    rgb = {"type": "rgb", "value": [0.2, 0.3, 0.4]}
+    report = validate_bsdf("diffuse", params={"reflectance": rgb}, quick=True,
+                           topics=["intensity"], variant=POLARIZED)
+    assert [r.status for r in report.rows] == ["pass", "pass"], report.table()
+    texture = mi.load_dict({"type": "checkerboard"})       # a Mitsuba object: no spec to rebuild
+    report = validate_bsdf({"type": "diffuse", "reflectance": texture}, quick=True,
+                           topics=["intensity"], variant=POLARIZED)
+    (row,) = report.rows
+    assert row.status == "skipped" and "does not load in llvm_ad_spectral" in row.reason

@@ -53,7 +53,8 @@ runs in a subprocess (a fresh interpreter: switching variants in this one would 
 Mitsuba's global state under the other topics): it sets the unpolarized variant, registers
 phonglab's plugins, reruns the ``--plugin`` files of this run there (a Python plugin is
 registered per variant), loads the same spec and writes its numbers back.  A BSDF given as a
-loaded object (no spec to reload) is ``skipped``.  Tolerance: REL_TOL relative, per entry.
+loaded object (no spec to reload), or whose spec does not load in the unpolarized variant (a
+value that was a Mitsuba object), is ``skipped`` with the reason.  Tolerance: REL_TOL relative, per entry.
 
 ``mueller_identities`` -- the deterministic identities of :mod:`.identities` entry by entry:
 ``eval_pdf``'s matrix = eval's, and each non-delta sample's weight matrix = eval/pdf at its ω_o;
@@ -107,6 +108,7 @@ reflection and transmission pairs (the matrix form of the ``reciprocity`` topic'
 
 from __future__ import annotations
 
+import ast
 import inspect
 import json
 import os
@@ -687,15 +689,38 @@ from phonglab import probe
 for f in args["plugins"]:
     runpy.run_path(f, run_name="__phonglab_plugin__")
 spec = args["spec"]
-if set(spec) == {"file"}:
-    bsdf = mi.load_string(open(spec["file"]).read())
-else:
-    bsdf = mi.load_dict(spec)
+try:
+    if set(spec) == {"file"}:
+        bsdf = mi.load_string(open(spec["file"]).read())
+    else:
+        bsdf = mi.load_dict(spec)
+except Exception as exc:
+    print(str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc), file=sys.stderr)
+    sys.exit(3)
 d = np.load(sys.argv[2])
 ev = probe.eval(bsdf, d["wi"], d["wo"])
 s = probe.sample(bsdf, d["swi"], d["u1"], d["u2"])
 np.savez(sys.argv[3], eval=ev, wo=s.wo, weight=s.weight, pdf=s.pdf)
 """
+
+
+class ReferenceUnavailable(RuntimeError):
+    """The plugin cannot be loaded again in the unpolarized variant (the row is skipped)."""
+
+
+def restored(spec: dict) -> dict:
+    """A report's spec (:func:`phonglab.settings.load_plugin` writes a nested value as its repr,
+    e.g. ``--set reflectance=0.2,0.3,0.4``'s ``{'type': 'rgb', ...}``) with such values parsed
+    back where they are Python literals; anything else is kept (and may not load)."""
+    out = {}
+    for k, v in spec.items():
+        if isinstance(v, str) and v[:1] in "{[":
+            try:
+                v = ast.literal_eval(v)
+            except (ValueError, SyntaxError):
+                pass
+        out[k] = v
+    return out
 
 
 def reference(spec, files, variant, arrays) -> dict:
@@ -711,6 +736,8 @@ def reference(spec, files, variant, arrays) -> dict:
                               capture_output=True, text=True, env=env, timeout=600)
         if proc.returncode != 0:
             tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+            if proc.returncode == 3:
+                raise ReferenceUnavailable(f"the spec does not load in {variant}: {tail[:300]}")
             raise RuntimeError(f"the {variant} reference failed: {tail[:300]}")
         with np.load(out) as d:
             return {k: d[k] for k in d.files}
@@ -734,7 +761,12 @@ def intensity(bsdf, opts) -> list[Row]:
     _, n_s = _sizes(opts)
     swi, _ = lanes.incident(opts.cells(), n_s)
     u1, u2 = lanes.sample_values(r, len(swi))
-    ref = reference(spec, files, variant, {"wi": wi, "wo": wo, "swi": swi, "u1": u1, "u2": u2})
+    try:
+        ref = reference(restored(spec), files, variant,
+                        {"wi": wi, "wo": wo, "swi": swi, "u1": u1, "u2": u2})
+    except ReferenceUnavailable as exc:
+        return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
+                    None, "skipped", str(exc), {"spec": spec, "plugins": files})]
     ev = mueller_eval(bsdf, wi, wo)[..., 0, 0]
     lam = _wavelengths()
 
