@@ -426,8 +426,15 @@ def _worst(ex, wi, wo, a, b, names) -> dict:
     if finite.any() and ex.size:
         k = int(np.nanargmax(np.where(finite, ex, -1.0)))
         d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
-        d[names[0]] = np.round(a[k, 0], 6).tolist()
-        d[names[1]] = np.round(b[k, 0], 6).tolist()
+        # the wavelength and entry (i, j) of M/M00 that differ most in that lane
+        with np.errstate(divide="ignore", invalid="ignore"):
+            na = a[k] / a[k][:, :1, :1]
+            nb = b[k] / b[k][:, :1, :1]
+        diff = np.nan_to_num(np.abs(na - nb), nan=-1.0)
+        c, i, j = np.unravel_index(int(np.argmax(diff)), diff.shape)
+        d.update(worst_entry=f"M{i}{j}", worst_channel=int(c),
+                 **{names[0]: np.round(a[k, c], 6).tolist(),
+                    names[1]: np.round(b[k, c], 6).tolist()})
     return d
 
 
