@@ -89,7 +89,8 @@ def test_markdown_renders_a_given_json():
     assert dict(zip(TOPICS, cells)) == {
         "finite": "pass", "eval_pdf": "", "weight": "", "pdf": "", "chi2": "KNOWN",
         "normalization": "", "energy": "**fail**", "reciprocity": "", "component": "",
-        "eval_null_transmission": "", "eval_diffuse_reflectance": "", "gradient": "skipped",
+        "eval_null_transmission": "", "eval_diffuse_reflectance": "", "mueller": "",
+        "intensity": "", "mueller_identities": "", "mueller_reciprocity": "", "gradient": "skipped",
         "cost": ""}
     assert "1 pass, 1 fail, 1 KNOWN, 1 skipped rows, 12.5 s" in md
     assert "src/bsdfs/roughplastic.cpp#L422" in md

@@ -169,6 +169,9 @@ class Loaded(NamedTuple):
     plugin: Any              #: the loaded object (an instance of the expected kind)
     label: str               #: its type name (or the XML file's name, or its class name)
     spec: dict | None        #: the description for a report's meta (None for a given object)
+    #: the ``--plugin`` files run before it was loaded (a topic that loads it again elsewhere,
+    #: in another variant or process, runs them there too)
+    files: tuple = ()
 
 
 def _describe(d: dict) -> dict:

@@ -181,11 +181,14 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
     own = kind.part("load")
     try:
         if own is not None:
-            return own(spec, params, hint)
-        return load_plugin(spec, params, kind=getattr(mi, kind.class_name), word=kind.word,
-                           hint=hint)
+            loaded = own(spec, params, hint)
+        else:
+            loaded = load_plugin(spec, params, kind=getattr(mi, kind.class_name),
+                                 word=kind.word, hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
+    files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
+    return loaded._replace(files=files) if files else loaded
 
 
 def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loaded:
@@ -345,6 +348,8 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     opts = kind.part("options")(quick, seed, topics)
     if sizes:
         opts = replace(opts, **sizes)
+    if hasattr(opts, "source"):                 # topics that load the plugin again
+        opts = replace(opts, source=target)
     m = kind.part("statistical_tests")(target.plugin, opts, topics) * family
     runners = kind.part("runners")(target.plugin, opts, topics, m)
     rows, seconds = [], {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import drjit as dr
 import mitsuba as mi
@@ -53,6 +54,10 @@ class Options:
     cost_lanes: int = 1 << 18
     cost_repeats: int = 5
     topics: tuple = field(default_factory=tuple)
+    #: the :class:`~phonglab.settings.Loaded` under validation (its spec and ``--plugin``
+    #: files), set by :func:`phonglab.validate.core.run`: the ``intensity`` topic loads the
+    #: BSDF again in the unpolarized variant
+    source: Any = None
 
     def cells(self, cos=None, phi=None) -> np.ndarray:
         """(M, 2) array of (θ_i, φ_i) cells; normal incidence once (its azimuth is moot)."""

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from ..conformance import Finding, ValidatorIssue
 from .signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe, Chi2Excess,
-                         ComponentOutOfRange, Grazing, GrazingIncidence, MaskedReflection,
-                         ParameterAt, SampleEdgeAtNormalIncidence, SamplePoint, Union)
+                         ComponentOutOfRange, Grazing, GrazingIncidence, IncidencePlaneY0,
+                         MaskedReflection, ParameterAt, SampleEdgeAtNormalIncidence, SamplePoint,
+                         Union)
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
 #: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).
@@ -436,6 +437,33 @@ FINDINGS: tuple[Finding, ...] = (
             "f(a, b) = f(b, a) to float32 precision",
             "tests/repro/pplastic_polarized_grazing.py",
             rows=(REFLECTION_ROW,), region=Grazing(0.01)),
+    Finding("pplastic-polarized-grazing-intensity", "intensity",
+            ("pplastic/default", "pplastic/rough-ggx"), "src/bsdfs/pplastic.cpp:377",
+            "the same cause as pplastic-polarized-grazing: at cos_theta_i = 1e-4 the internally "
+            "refracted direction (line 375) lies at the critical angle, where "
+            "specular_transmission(|cos|, 1/eta) (line 376) rounds to 0 in float32, so the "
+            "polarized diffuse term is 0 where the unpolarized branch's (1 - R(cos_theta_i)) "
+            "(lines 429-432) is not",
+            "M00 = 0 against the unpolarized 3.1e-5 (pplastic/default; rough-ggx: 2.5 % low) "
+            "at cos_theta_i = 1e-4; every lane at cos_theta_i >= 0.2 agrees to 2.4e-7",
+            "M00 of the polarized eval = the unpolarized eval to float32 precision",
+            "tests/repro/pplastic_polarized_grazing_intensity.py",
+            rows=("eval M00 = eval in llvm_ad_spectral",
+                  "sample: wo, pdf, weight M00 = llvm_ad_spectral's"), region=Grazing(0.01)),
+    Finding("retarder-jump-y0", "mueller_identities", ("retarder/quarter", "retarder/half"),
+            "src/bsdfs/retarder.cpp:129",
+            "sample() re-expresses the element's Mueller matrix from the fixed axis (1, 0, 0) to "
+            "stokes_basis(forward) with rotate_mueller_basis_collinear (lines 129-131) without "
+            "projecting that axis onto the plane normal to forward (polarizer.cpp:134-136 "
+            "does); rotate_stokes_basis takes the angle's sign from dot(forward, cross(x, b)), "
+            "which changes sign with forward.y, so the matrix jumps across wi.y = 0 "
+            "(mitsuba3#1963, open)",
+            "at wi = (0.5, +-1e-5, 0.8) (quarter wave, theta = 30 deg): M11 = 0.9963 against "
+            "0.4754, M13 = 0.068 against -0.8054",
+            "a Mueller matrix continuous in wi",
+            "tests/repro/retarder_jump_y0.py",
+            rows=("delta-lobe matrices continuous in wi (8-ulp move, common frames)",),
+            region=IncidencePlaneY0(1e-5)),
     Finding("shading-normal-reciprocity", "reciprocity",
             ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
              "bumpmap/roughconductor"),

@@ -21,6 +21,7 @@ from .energy import energy
 from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .normalization import normalization
+from .polarization import intensity, mueller, mueller_identities, mueller_reciprocity
 from .reciprocity import reciprocity
 from .sampling import chi2
 
@@ -56,6 +57,10 @@ def runners(bsdf, opts, topics, m: int) -> dict:
         "component": lambda: component(bsdf, opts),
         "eval_null_transmission": lambda: eval_null_transmission(bsdf, opts, m),
         "eval_diffuse_reflectance": lambda: eval_diffuse_reflectance(bsdf, opts),
+        "mueller": lambda: mueller(bsdf, opts),
+        "intensity": lambda: intensity(bsdf, opts),
+        "mueller_identities": lambda: mueller_identities(bsdf, opts),
+        "mueller_reciprocity": lambda: mueller_reciprocity(bsdf, opts),
         "gradient": lambda: gradient(bsdf, opts),
         "cost": lambda: cost(bsdf, opts),
     }

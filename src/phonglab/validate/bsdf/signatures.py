@@ -155,6 +155,22 @@ class Grazing(Region):
 
 
 @dataclass(frozen=True)
+class IncidencePlaneY0(Region):
+    """wi within ``y_max`` of the plane y = 0 (|wi.y| ≤ y_max): the azimuth where a frame built
+    from a fixed axis that is not projected flips its rotation's sign (mitsuba3#1963)."""
+
+    y_max: float
+
+    def covers(self, row):
+        got = _lanes(row, "wi")
+        return None if got is None else np.abs(got[0][:, 1]) <= self.y_max
+
+    @property
+    def text(self):
+        return f"incidence within |wi.y| ≤ {self.y_max:g} of the plane y = 0"
+
+
+@dataclass(frozen=True)
 class ParameterAt(Region):
     """A parameter row (``gradient``) measured with every entry of its parameter at one of
     ``values`` (``details["value_range"]``): a range end, where a lobe switches on or a term

@@ -12,6 +12,7 @@ from ..kind import topic_row
 #: The validator's BSDF topics, in the order the table lists them.
 TOPICS = ("finite", "eval_pdf", "weight", "pdf", "chi2", "normalization", "energy",
           "reciprocity", "component", "eval_null_transmission", "eval_diffuse_reflectance",
+          "mueller", "intensity", "mueller_identities", "mueller_reciprocity",
           "gradient", "cost")
 
 

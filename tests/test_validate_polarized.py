@@ -1,0 +1,208 @@
+"""The polarized topics (``mueller``, ``intensity``, ``mueller_identities``,
+``mueller_reciprocity``; :mod:`phonglab.validate.bsdf.polarization`).
+
+The planted defects are tests/defects_polarized/*.py: each fails its own topic and no other in
+``llvm_ad_spectral_polarized`` (quick, seed 0), and -- the reason the topics exist -- passes
+every topic in an unpolarized variant, where the polarized topics report one ``skipped`` row
+each.  The controls (a depolarizing Lambertian, Python wrappers of ``conductor`` and
+``roughconductor``) pass everything.  The criteria are checked on matrices whose answer is
+known, and the reciprocity form Q Mᵀ Q (with Mitsuba's Stokes frames) against alternatives
+that a reciprocal built-in does not satisfy.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import phonglab
+from phonglab.validate import TOPICS, validate_bsdf
+from phonglab.validate.bsdf import polarization as pol
+
+DEFECTS = Path(__file__).parent / "defects_polarized"
+POLARIZED = "llvm_ad_spectral_polarized"
+POLAR_TOPICS = list(pol.POLAR_TOPICS)
+
+#: defect file -> the one topic it must fail in a polarized variant
+PLANTED = {"over_polarizing": "mueller", "conjugating": "mueller",
+           "dim_intensity": "intensity", "nan_offdiagonal": "mueller"}
+#: control file -> its registered name
+CONTROLS = {"depolarizing_lambert": "pol_depolarizing_lambert",
+            "wrapped_conductor": "pol_wrapped_conductor",
+            "wrapped_roughconductor": "pol_wrapped_roughconductor"}
+
+
+@pytest.fixture
+def polarized():
+    return phonglab.register(POLARIZED)
+
+
+@pytest.mark.parametrize("name", sorted(PLANTED))
+def test_defect_fails_its_polarized_topic_only(polarized, name):
+    report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True,
+                           seed=0, variant=POLARIZED)
+    assert {r.topic for r in report.failing} == {PLANTED[name]}, report.table(report.failing)
+    assert {r.topic for r in report.rows} == set(TOPICS)
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLS))
+def test_controls_pass_every_topic(polarized, name):
+    report = validate_bsdf(CONTROLS[name], plugins=[DEFECTS / f"{name}.py"], quick=True, seed=0,
+                           variant=POLARIZED)
+    assert report.passed, report.table(report.failing)
+    ran = {r.topic for r in report.rows if r.status == "pass"}
+    assert {"mueller", "intensity", "mueller_identities"} <= ran
+    if name != "wrapped_conductor":                  # every lobe a delta: eval is 0, skipped
+        assert "mueller_reciprocity" in ran
+
+
+def test_defect_rows_name_the_lane_and_the_violated_quantity(polarized):
+    report = validate_bsdf("defect_over_polarizing", plugins=[DEFECTS / "over_polarizing.py"],
+                           quick=True, seed=0, variant=POLARIZED, topics=["mueller"])
+    row = next(r for r in report.failing if "Stokes cone" in r.name and r.name.startswith("eval"))
+    d = row.details
+    assert {"worst_wi", "worst_wo", "wavelength", "matrix", "stokes_in", "stokes_out"} <= set(d)
+    assert "s0' − |s'|" in d["violated"]
+    s_out = np.array(d["stokes_out"])
+    assert s_out[0] < np.linalg.norm(s_out[1:])          # the image is not a Stokes vector
+    assert row.measured == pytest.approx(1.53, abs=0.02)  # (1 − 1.5·… ) / max|M|: M10 = 1.5 M00
+
+
+def test_dim_intensity_is_0_8_of_the_unpolarized_value(polarized):
+    report = validate_bsdf("defect_dim_intensity", plugins=[DEFECTS / "dim_intensity.py"],
+                           quick=True, seed=0, variant=POLARIZED, topics=["intensity"])
+    row = next(r for r in report.rows if r.name.startswith("eval M00"))
+    assert row.status == "fail" and row.measured == pytest.approx(0.2, abs=1e-5)
+    assert row.details["reference_variant"] == "llvm_ad_spectral"
+    m00, ref = np.array(row.details["polarized_m00"]), np.array(row.details["unpolarized"])
+    assert m00 == pytest.approx(0.8 * ref, rel=1e-5)
+
+
+@pytest.mark.parametrize("name", sorted(PLANTED))
+def test_defects_pass_in_an_unpolarized_variant(name):
+    """Why the topics exist: intensity-only checks see nothing wrong."""
+    phonglab.register("llvm_ad_spectral")
+    report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], quick=True,
+                           seed=0, variant="llvm_ad_spectral",
+                           topics=["finite", "weight", "energy", "reciprocity"] + POLAR_TOPICS)
+    assert report.passed, report.table(report.failing)
+    for t in POLAR_TOPICS:
+        rows = [r for r in report.rows if r.topic == t]
+        assert len(rows) == 1 and rows[0].status == "skipped", t
+        assert "not a polarized variant" in rows[0].reason
+
+
+def test_loaded_object_skips_intensity(polarized):
+    import mitsuba as mi
+    report = validate_bsdf(mi.load_dict({"type": "diffuse"}), quick=True, topics=["intensity"])
+    (row,) = report.rows
+    assert row.status == "skipped" and "loaded object" in row.reason
+
+
+def test_scalar_polarized_variant():
+    phonglab.register("scalar_spectral_polarized")
+    report = validate_bsdf("roughconductor", quick=True, seed=0,
+                           variant="scalar_spectral_polarized", topics=POLAR_TOPICS)
+    assert report.passed, report.table(report.failing)
+    assert any(r.details.get("reference_variant") == "scalar_spectral" for r in report.rows)
+
+
+# ----------------------------------------------------------------------------- criteria
+def _random_jones(rng, n):
+    return rng.normal(size=(n, 2, 2)) + 1j * rng.normal(size=(n, 2, 2))
+
+
+def test_jones_matrices_are_realizable_and_on_the_cone_boundary():
+    rng = np.random.default_rng(1)
+    m = np.array([pol.jones_to_mueller(j) for j in _random_jones(rng, 40)])
+    margin, _ = pol.stokes_margin(m)
+    scale = np.abs(m).max(axis=(1, 2))
+    assert np.all(np.abs(margin) <= 1e-9 * scale)          # pure states stay pure
+    assert np.all(pol.cloude_min_eig(m) >= -1e-9 * scale)
+    mix = m[:20] + m[20:]                                   # an ensemble: depolarizing, inside
+    assert np.all(pol.stokes_margin(mix)[0] >= -1e-9 * np.abs(mix).max(axis=(1, 2)))
+    assert np.all(pol.cloude_min_eig(mix) >= -1e-9 * np.abs(mix).max(axis=(1, 2)))
+
+
+def test_criteria_on_known_matrices():
+    over = np.zeros((4, 4))
+    over[0, 0], over[1, 0] = 1.0, 1.5
+    assert pol.stokes_margin(over)[0] == pytest.approx(-0.5, abs=1e-9)
+    conj = np.diag([1.0, 1.0, 1.0, -1.0])                   # keeps the cone, no Jones mixture
+    assert pol.stokes_margin(conj)[0] == pytest.approx(0.0, abs=1e-9)
+    assert pol.cloude_min_eig(conj) == pytest.approx(-0.5, abs=1e-12)
+    assert pol.stokes_margin(-np.eye(4))[0] < 0             # M00 < 0
+    depol = np.diag([1.0, 0.0, 0.0, 0.0])
+    assert pol.stokes_margin(depol)[0] == pytest.approx(1.0)
+    assert pol.cloude_min_eig(depol) == pytest.approx(0.25)
+    amplify_v = np.diag([1.0, 0.0, 0.0, 1.2])
+    assert pol.stokes_margin(amplify_v)[0] == pytest.approx(-0.2, abs=1e-6)
+
+
+def test_jones_transpose_is_p_mt_p():
+    """The identity behind the reciprocity form: M(Jᵀ) = P M(J)ᵀ P, P = diag(1, 1, 1, −1)."""
+    p = np.diag([1.0, 1.0, 1.0, -1.0])
+    for j in _random_jones(np.random.default_rng(2), 10):
+        m = pol.jones_to_mueller(j)
+        assert np.allclose(pol.jones_to_mueller(j.T), p @ m.T @ p, atol=1e-12)
+
+
+def test_frames_match_mitsuba(polarized):
+    import drjit as dr
+    import mitsuba as mi
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(64, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    t = rng.normal(size=(64, 3))
+    t -= np.sum(t * d, axis=1, keepdims=True) * d
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    dv, tv = (mi.Vector3f(*[mi.Float(c) for c in a.T.astype(np.float32)]) for a in (d, t))
+    b_mi = mi.mueller.stokes_basis(dv)
+    b_np = pol.stokes_basis(d.astype(np.float32).astype(np.float64))
+    assert np.allclose(np.array([np.array(c) for c in b_mi]).T, b_np, atol=1e-5)
+    r_mi = mi.mueller.rotate_stokes_basis(dv, b_mi, tv)
+    dr.eval(r_mi)
+    r_np = pol.rotate_stokes_basis(d, b_np, t)
+    got = np.array([[np.broadcast_to(np.array(r_mi[i][j]), (64,)) for j in range(4)]
+                    for i in range(4)]).transpose(2, 0, 1)
+    assert np.allclose(got, r_np, atol=1e-4)
+
+
+@pytest.mark.parametrize("q", [np.eye(4), np.diag([1.0, 1.0, 1.0, -1.0]),
+                               np.diag([1.0, 1.0, -1.0, -1.0])])
+def test_reciprocity_form_is_the_one_a_reciprocal_builtin_meets(polarized, q, monkeypatch):
+    """roughconductor (Fresnel matrices per microfacet, physically reciprocal) passes with
+    Q = diag(1, 1, −1, 1) (``test_controls_pass_every_topic``) and fails with the others."""
+    monkeypatch.setattr(pol, "Q", q)
+    report = validate_bsdf("roughconductor", quick=True, seed=0, variant=POLARIZED,
+                           topics=["mueller_reciprocity"])
+    row = next(r for r in report.rows if "reflection" in r.name)
+    assert row.status == "fail" and row.measured > 10
+
+
+def test_retarder_jump_is_caught_and_known(polarized):
+    """mitsuba3#1963: present in 3.9.1; the continuity row sees it, only at wi.y = 0."""
+    report = validate_bsdf({"type": "retarder", "theta": 30.0, "delta": 90.0}, quick=True,
+                           seed=0, variant=POLARIZED, topics=["mueller_identities"])
+    row = next(r for r in report.rows if "continuous" in r.name)
+    assert row.status == "fail" and row.measured > 1.0
+    assert np.all(np.abs(row.failing_lanes["wi"][:, 1]) <= 1e-5)
+    report = validate_bsdf("diffuse", quick=True, seed=0, variant=POLARIZED,
+                           topics=["mueller_identities"])
+    row = next(r for r in report.rows if "continuous" in r.name)
+    assert row.status == "skipped"                  # no delta lobe
+
+
+def test_intensity_reloads_nested_values_and_skips_objects(polarized):
+    import mitsuba as mi
+    rgb = {"type": "rgb", "value": [0.2, 0.3, 0.4]}
+    report = validate_bsdf("diffuse", params={"reflectance": rgb}, quick=True,
+                           topics=["intensity"], variant=POLARIZED)
+    assert [r.status for r in report.rows] == ["pass", "pass"], report.table()
+    texture = mi.load_dict({"type": "checkerboard"})       # a Mitsuba object: no spec to rebuild
+    report = validate_bsdf({"type": "diffuse", "reflectance": texture}, quick=True,
+                           topics=["intensity"], variant=POLARIZED)
+    (row,) = report.rows
+    assert row.status == "skipped" and "does not load in llvm_ad_spectral" in row.reason
