@@ -18,7 +18,7 @@ from scipy import ndimage, signal
 
 from phonglab import cli, stats
 
-from phonglab.engine import adaptive, exr, metrics, references, render, scenes
+from phonglab.engine import adaptive, exr, metrics, references, render, scenes, spp_map
 from phonglab.bench import adaptive_sweeps
 from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
@@ -54,9 +54,9 @@ def test_spp_map_png_colours_each_pixel_by_its_count(tmp_path):
 
     spp = np.full((4, 8), 16)
     spp[1, 2], spp[3, 7] = 4, 1024
-    path = adaptive.write_spp_map_png(tmp_path / "m.spp.png", spp)
+    path = spp_map.write_spp_map_png(tmp_path / "m.spp.png", spp)
     png = np.asarray(Image.open(path).convert("RGB"))
-    scale = adaptive.SPP_PNG_MIN_SIDE // 4
+    scale = spp_map.SPP_PNG_MIN_SIDE // 4
     left = (png.shape[1] - 8 * scale) // 2
     lut = np.round(colormaps["viridis"]([0.0, 1.0])[:, :3] * 255)
 
@@ -232,9 +232,12 @@ def test_cli_unwritable_spp_map_refused_before_render(tmp_path, capsys):
 
 
 class _TinyConfig(bench_config.Config):
-    """The bench part at test size (16², 2 seeds, one target)."""
+    """The bench part at test size (16², 2 seeds, one target; the oracle rows on the same two
+    scenes at 16², not the bench's seven at 128² with 4096-spp references)."""
 
     adaptive_res = 16
+    adaptive_oracle_scenes = {"gray_direct": (0.08, {"res": 16}),
+                              "check_furnace_enclosure": (0.08, {"res": 16})}
     adaptive_scenes = ["gray_direct", "check_furnace_enclosure"]
     adaptive_spps = [4, 16]
     adaptive_targets = [0.08]

@@ -11,7 +11,7 @@ import pytest
 from phonglab.validate import conformance, markdown
 from phonglab.validate.bsdf import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row
-from phonglab.validate.bsdf import findings
+from phonglab.validate.bsdf import findings, validator_issues
 from phonglab.verdict import Report
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -124,7 +124,7 @@ def test_script_renders_from_json(tmp_path):
 
 def test_validator_issues_name_existing_cases():
     labels = {c.label for c in CASES}
-    for v in findings.VALIDATOR_ISSUES:
+    for v in validator_issues.VALIDATOR_ISSUES:
         assert set(v.labels) <= labels, v.key
         assert v.topic in TOPICS
 
@@ -150,22 +150,22 @@ def _one_row(label, topic, status):
 
 
 def test_open_validator_issue_shown_only_for_its_failing_rows(monkeypatch):
-    fixed = findings.VALIDATOR_ISSUES[0]
+    fixed = validator_issues.VALIDATOR_ISSUES[0]
     issue = conformance.ValidatorIssue("open-issue", fixed.topic, fixed.labels, "why")
-    monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (issue,))
+    monkeypatch.setattr(validator_issues, "VALIDATOR_ISSUES", (issue,))
     label = issue.labels[0]
     md = markdown.render_markdown(_one_row(label, issue.topic, "fail"))
     assert "### open-issue" in md and "**Unexplained fail**" not in md
     assert "because of the validator" not in markdown.render_markdown(
         _one_row(label, issue.topic, "pass"))
     skipped = conformance.ValidatorIssue("open-skip", "chi2", fixed.labels, "why", ("skipped",))
-    monkeypatch.setattr(findings, "VALIDATOR_ISSUES", (skipped,))
+    monkeypatch.setattr(validator_issues, "VALIDATOR_ISSUES", (skipped,))
     assert "### open-skip" in markdown.render_markdown(_one_row(label, "chi2", "skipped"))
 
 
 def test_fixed_validator_issue_is_history_and_hides_no_fail():
-    v = next(v for v in findings.VALIDATOR_ISSUES if v.fixed)
-    assert (v.labels[0], v.topic) not in findings.validator_issues()
+    v = next(v for v in validator_issues.VALIDATOR_ISSUES if v.fixed)
+    assert (v.labels[0], v.topic) not in validator_issues.validator_issues()
     md = markdown.render_markdown(_one_row(v.labels[0], v.topic, "pass"))
     assert f"### {v.key} (fixed)" in md and f"* fixed by: {v.fixed_by}" in md
     assert "* rows now: 1 pass\n" in md
@@ -178,7 +178,7 @@ def test_committed_conformance_json_has_no_unexplained_fail():
     Mitsuba findings' rows are KNOWN), so no fixed entry can hide a failing row."""
     import json
     data = json.loads((REPO_ROOT / "docs" / "conformance.json").read_text())
-    open_issues = findings.validator_issues()
+    open_issues = validator_issues.validator_issues()
     fails = [(rep["meta"]["case"], r["topic"]) for rep in data["reports"]
              for r in rep["results"] if r["status"] == "fail"]
     assert [f for f in fails if f not in open_issues] == []

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from phonglab.bench import report
-from phonglab.bench.report import RunData, cluster_section
+from phonglab.bench.cluster_report import cluster_section
+from phonglab.bench.report_data import RunData
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 

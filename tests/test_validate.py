@@ -332,7 +332,7 @@ def test_all_builtins_keeps_each_case_and_resumes(variant_llvm_rgb, tmp_path, ca
 @pytest.mark.parametrize("seed", [-1, 1.5, True])
 def test_a_bad_seed_is_bad_input_not_failing_topics(variant_llvm_rgb, seed):
     """validate_bsdf(seed=-1) reported seven failing topics (numpy refused the seed inside
-    each); the CLI refuses it at the option (tests/test_hardening.py)."""
+    each); the CLI refuses it at the option (tests/test_render_inputs.py)."""
     with pytest.raises(ValidateError, match="the seed must be a whole number >= 0"):
         validate_bsdf("diffuse", seed=seed, quick=True, topics=["finite"])
 

@@ -19,11 +19,11 @@ import pytest
 
 import phonglab
 from phonglab.validate import TOPICS, validate_bsdf
-from phonglab.validate.bsdf import polarization as pol
+from phonglab.validate.bsdf import mueller as pol, polarization
 
 DEFECTS = Path(__file__).parent / "defects_polarized"
 POLARIZED = "llvm_ad_spectral_polarized"
-POLAR_TOPICS = list(pol.POLAR_TOPICS)
+POLAR_TOPICS = list(polarization.POLAR_TOPICS)
 
 #: defect file -> the one topic it must fail in a polarized variant
 PLANTED = {"over_polarizing": "mueller", "conjugating": "mueller",

@@ -57,8 +57,8 @@ class PluginError(PhonglabError):
 
 #: Seeds phonglab takes: Mitsuba's 32-bit unsigned seed.  A render's pass k uses
 #: (seed·1_000_003 + k) mod 2³² (:func:`phonglab.engine.render.pass_seed`), a bijection of the seeds
-#: in this range for each k (1_000_003 is odd); seeds outside it used to alias silently
-#: (-1 and 2³² − 1 rendered the same image while the headers recorded different seeds).
+#: in this range for each k (1_000_003 is odd); seeds outside it would alias silently
+#: (-1 and 2³² − 1 render the same image), so they are refused.
 SEED_MAX = (1 << 32) - 1
 
 
@@ -72,7 +72,7 @@ def check_seed(seed) -> int:
 
 def check_max_seconds(seconds, option: str = "--max-seconds") -> float:
     """A time limit as a float > 0 (``inf``: none), else :class:`ParameterError`: a negative,
-    zero or NaN limit used to be taken and refuse every plan after its pilot."""
+    zero or NaN limit would refuse every plan, after its pilot."""
     if (isinstance(seconds, bool) or not isinstance(seconds, (int, float))
             or not seconds > 0):
         raise ParameterError(f"{option} must be a positive number of seconds ('inf' for no "

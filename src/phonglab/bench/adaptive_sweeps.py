@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from .. import planner
-from ..engine import adaptive, metrics, references, render, scenes
+from ..engine import adaptive, metrics, references, render, scenes, spp_map
 from ..planner import execute
 from ..runtime import quiet_mitsuba, set_variant
 from .analysis import pareto_front
@@ -268,7 +268,7 @@ def sppmap_figure(cfg: Config, out: Path, target: float) -> Path:
     with quiet_mitsuba():
         loaded = scenes.load_scene("gray_direct", VARIANT, res=max(cfg.adaptive_res, 64))
     r = adaptive.render_adaptive(loaded, target, seed=1)
-    return adaptive.write_spp_png(out / "adaptive_sppmap.png", r.spp, r.image)
+    return spp_map.write_spp_png(out / "adaptive_sppmap.png", r.spp, r.image)
 
 
 def sweep_adaptive(out: Path, cfg: Config, progress: bool = False) -> dict[str, Any]:

@@ -10,13 +10,9 @@ measured one), the planner's table when ``planner.json`` is there, and how to re
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import statistics
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -26,59 +22,13 @@ from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table
 from ..planner.benchmark import NEVER_LOSES, equal_error_speedup
 from .adaptive_sweeps import report_section as adaptive_report_section
-from .analysis import (efficiency_ratios, loglog_slope, mis_cell_table, mis_ratios, ratio_summary,
-                       stability_z_crit)
+from .analysis import loglog_slope, mis_cell_table, stability_z_crit
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
                      WHITTED_TARGET)
+from .cluster_report import cluster_section
 from .csvlog import number, open_log
-
-
-def fmt_met(ok: bool | None) -> str:
-    return "n/a" if ok is None else ("**met**" if ok else "**not met**")
-
-
-def fmt_g(x: float | None, digits: int = 3) -> str:
-    return "n/a" if x is None or not math.isfinite(x) else f"{x:.{digits}g}"
-
-
-@dataclass
-class RunData:
-    """Everything a report reads from a run folder, and the figures derived from it."""
-
-    out: Path
-    rel: str                                   #: the run folder relative to the report
-    run: dict[str, Any]
-    results: list[dict]
-    stab: list[dict]
-    ratios: list[dict]
-    jit: list[dict]
-    quick: dict[str, Any] | None
-    rs: dict = field(default_factory=dict)     #: ratio_summary
-    eff: dict = field(default_factory=dict)    #: efficiency_ratios
-    mis: dict = field(default_factory=dict)    #: mis_ratios
-    mis_opt: dict = field(default_factory=dict)  #: mis_ratios of mis_optimal
-
-    @classmethod
-    def read(cls, out: Path, md_path: Path, quick_run: Path | None = None) -> "RunData":
-        run = json.loads((out / "run.json").read_text()) if (out / "run.json").is_file() else {}
-        quick = json.loads(Path(quick_run).read_text()) if quick_run and Path(quick_run).is_file() else (
-            run if run.get("mode") == "quick" else None)
-        data = cls(out=out, rel=os.path.relpath(out, md_path.parent), run=run,
-                   results=open_log(out, "results").rows, stab=open_log(out, "stability").rows,
-                   ratios=open_log(out, "ratios").rows, jit=open_log(out, "jit").rows, quick=quick)
-        data.rs = ratio_summary(data.ratios)
-        data.eff = efficiency_ratios(data.results, open_log(out, "cost").rows)
-        data.mis = mis_ratios(data.stab)
-        data.mis_opt = mis_ratios(data.stab, "mis_optimal")
-        return data
-
-
-def part_record(d: RunData, name: str) -> Any:
-    """The parsed JSON file ``name`` in ``d.out`` (the record a bench part wrote), or None
-    when that part did not run."""
-    path = d.out / name
-    return json.loads(path.read_text()) if path.is_file() else None
+from .report_data import RunData, fmt_g, fmt_met, part_record
 
 
 def header_section(d: RunData) -> list[str]:
@@ -507,88 +457,6 @@ def validate_section(d: RunData) -> list[str]:
             med = statistics.median(v)
             cells += [f"{med:.1f} [{min(v):.1f}, {max(v):.1f}]", fmt_met(med <= limit)]
         L.append(f"| {r['bsdf']} | " + " | ".join(cells) + " |")
-    return L + [""]
-
-
-def _med(x: dict, digits: int = 3) -> str:
-    """A {median, spread} record as 'median [min, max]'."""
-    lo, hi = x["spread"]
-    return f"{fmt_g(x['median'], digits)} [{fmt_g(lo, digits)}, {fmt_g(hi, digits)}]"
-
-
-def _cluster_n_rows(name: str, rec: dict, n_values: list[int]) -> list[str]:
-    """Rows of the on-N table for one command: its batches, the part here, the total."""
-    on_n, L = rec["on_n"], []
-    for batch, row in on_n["batches"].items():
-        j = rec["jobs"][batch]
-        L.append(f"| {name}: {batch} | {j['count']} | {j['sum_s']:.3g} | {j['max_s']:.3g} | "
-                 + " | ".join(f"{row[str(n)]:.3g}" for n in n_values) + " |")
-    L.append(f"| {name}: here, not spread | – | – | – | "
-             + " | ".join(f"{on_n['here_s']:.3g}" for _ in n_values) + " |")
-    L.append(f"| **{name}: total** | | | | "
-             + " | ".join(f"**{on_n['total_s'][str(n)]:.3g}**" for n in n_values) + " |")
-    return L
-
-
-def cluster_section(d: RunData) -> list[str]:
-    """Serial against a local Dask cluster (``scripts/cluster_bench.py``'s ``cluster.json``)."""
-    r = part_record(d, "cluster.json")
-    if r is None:
-        return []
-    w, cores, ns = r["workers"], r["machine"].get("cores"), r["n_values"]
-    named = {"bench": "`phonglab bench --quick --fresh`",
-             "validate": "`phonglab validate --all-builtins --quick` (the conformance table)"}
-    names = [n for n in ("bench", "validate") if n in r]
-    L = ["\n## Serial against a local cluster, and the time on N machines\n",
-         f"`scripts/cluster_bench.py` (`make bench-cluster`; [docs/cluster.md](docs/cluster.md)): "
-         f"each command as a fresh process, serially and with `--workers {w}` (a Dask "
-         f"LocalCluster of {w} processes) alternately, wall time of the whole command (cluster "
-         f"start included), median [min, max] over the rounds that fit in {r['budget_s']:g} s, "
-         f"on {cores} cores, load average {r['load_before'][0]} before and "
-         f"{r['load_after'][0]} after. Speed-up = serial / {w} workers.\n",
-         f"| command | rounds | serial (s) | {w} workers (s) | speed-up |", "|---|---|---|---|---|"]
-    if cores and max(r["load_before"][0], r["load_after"][0]) > 0.5 * cores:
-        L.insert(2, f"> **Note:** measured while other processes shared the {cores} cores (load "
-                    f"average above {0.5 * cores:g}): absolute times are inflated and the speed-ups "
-                    f"noisy; rerun `make bench-cluster` on a quiet machine.\n")
-    for n in names:
-        c = r[n]
-        L.append(f"| {named[n]} | {c['rounds']} | {_med(c['serial_s'])} | {_med(c['workers_s'])} "
-                 f"| {_med(c['speedup'])} |")
-    if "validate" in r:
-        v = r["validate"]
-        L.append(f"\nThe validate JSON files of each pair are "
-                 f"{'identical' if v['identical'] else '**not** identical'} apart from their "
-                 f"timing fields ({', '.join(f'`{k}`' for k in v['excluded']['keys'])}; of the "
-                 f"{', '.join(f'`{t}`' for t in v['excluded']['topics_status_only'])} rows, "
-                 f"which are timings, only topic, name and status compared; durations in "
-                 f"text, such as `mi.chi2`'s \"(25.56 ms)\" in its messages, masked).\n")
-    if cores and cores <= w:
-        L.append(f"On {cores} cores a {w}-worker cluster has no cores to add: serial Dr.Jit "
-                 f"already spreads each kernel over {'both' if cores == 2 else f'all {cores}'} cores, so the cluster cannot beat "
-                 f"it beyond the moments a serial job leaves a core idle (Python, numpy, kernel "
-                 f"compilation), and it pays its start and its per-job cost. The gain comes from "
-                 f"more machines (below).\n")
-    o = r["overhead"]
-    L += [f"**Per-job overhead**: {o['jobs']} empty jobs per batch, {o['repeats']} batches, "
-          f"(wall time of a batch) / jobs.\n",
-          "| where | per job (ms) | start (s) |", "|---|---|---|",
-          f"| serial | {_med(o['serial_per_job_ms'])} | – |",
-          f"| LocalCluster({w}) | {_med(o['local_per_job_ms'])} | {o['local_start_s']:.3g} |",
-          f"\n**Expected time on N machines** (seconds, on paper) from the serial runs' job "
-          f"times (medians over rounds), one worker per machine like this one: per batch of C "
-          f"jobs whose times sum to S, the longest M, T_N ≈ max(M, S/N) + o·C/N with o = "
-          f"{o['local_per_job_ms']['median']:.3g} ms, plus the command's time outside jobs "
-          f"(start-up, the `jit` subprocess, charts; serial wall − ΣS), which does not spread.\n",
-          "| batch | jobs C | S (s) | longest M (s) | " + " | ".join(f"N = {n}" for n in ns) + " |",
-          "|---|---|---|---|" + "---|" * len(ns)]
-    for n in names:
-        L += _cluster_n_rows(n, r[n], ns)
-    for n in names:
-        lj = r[n]["on_n"]["longest_job"]
-        job = f"one of its `{lj['job']}` jobs" if lj["job"] == lj["batch"] else f"`{lj['job']}`"
-        L.append(f"\n{named[n]}: the longest job is {job} ({lj['seconds']:.3g} s); no N "
-                 f"makes the command faster than that plus its time outside jobs.")
     return L + [""]
 
 

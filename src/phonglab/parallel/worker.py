@@ -34,8 +34,8 @@ Results do not depend on the thread count (measured: the stability cells are bit
 with 1 and 2 Dr.Jit threads; the tests compare serial and distributed runs bit for bit).
 
 **Ctrl-C.**  The workers of an embedded LocalCluster ignore SIGINT (``ignore_sigint``): a
-terminal sends it to the whole process group, and each worker used to print its own
-KeyboardInterrupt traceback while the parent shut the cluster down.  A hand-started
+terminal sends it to the whole process group, where each worker would print its own
+KeyboardInterrupt traceback while the parent shuts the cluster down.  A hand-started
 ``dask worker`` keeps its own Ctrl-C.
 """
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ... import runtime
 from ..conformance import Catalogue, known_causes, known_of
-from . import findings
+from . import findings, validator_issues
 from .topics import TOPICS
 
 POLARIZED = "llvm_ad_spectral_polarized"
@@ -276,7 +276,7 @@ def catalogue() -> Catalogue:
     issues, each looked up at call time (a test patches them)."""
     return Catalogue("bsdf", "BSDFs", "BSDF", lambda: cases(), TOPICS, "validate_bsdf",
                      "phonglab.validate.bsdf.builtins.cases()", findings.FINDINGS,
-                     findings.VALIDATOR_ISSUES,
+                     validator_issues.VALIDATOR_ISSUES,
                      LEFT_OUT, "docs/conformance.json", "docs/conformance.md",
                      "make conformance", case_text="one BSDF at one parameter setting")
 

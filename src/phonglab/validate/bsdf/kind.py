@@ -21,7 +21,8 @@ from .energy import energy
 from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .normalization import normalization
-from .polarization import intensity, mueller, mueller_identities, mueller_reciprocity
+from .intensity import intensity
+from .polarization import mueller, mueller_identities, mueller_reciprocity
 from .reciprocity import reciprocity
 from .sampling import chi2
 

@@ -1,5 +1,5 @@
-r"""The polarized topics ``mueller``, ``intensity``, ``mueller_identities``,
-``mueller_reciprocity``.
+r"""The polarized topics ``mueller``, ``intensity`` (:mod:`.intensity`), ``mueller_identities``,
+``mueller_reciprocity``; the Mueller algebra they use is :mod:`.mueller`.
 
 In a ``*_polarized`` variant every BSDF query returns a 4×4 Mueller matrix per wavelength;
 the other topics see its intensity M00 only (:mod:`phonglab.probe`).  These topics read the
@@ -108,22 +108,14 @@ reflection and transmission pairs (the matrix form of the ``reciprocity`` topic'
 
 from __future__ import annotations
 
-import ast
-import json
-import os
-import subprocess
-import sys
-import tempfile
-from pathlib import Path
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-import phonglab
 from ... import probe
 from . import lanes
-from ..roundoff import ABS_FLOOR, REL_TOL, perturb
+from ..roundoff import REL_TOL, perturb
+from .mueller import cloude_min_eig, reversed_matrix, rotate_stokes_basis, stokes_basis, stokes_margin
 from .rows import ROUND_OFF, bounded_row, max_finite
 from .topics import Row
 
@@ -132,10 +124,6 @@ POLAR_TOPICS = ("mueller", "intensity", "mueller_identities", "mueller_reciproci
 #: Per-topic seed offsets (lanes.SEED_OFFSETS holds the unpolarized topics').
 SEED_OFFSETS = {"mueller": 31, "intensity": 32, "mueller_identities": 33,
                 "mueller_reciprocity": 34}
-#: Fibonacci directions of the Stokes criterion's first search ...
-GRID = 512
-#: ... and how many of the best of them its local search starts from.
-STARTS = 3
 #: Why a topic is skipped in a variant that is not polarized.
 NOT_POLARIZED = "not a polarized variant: {} returns intensities, not Mueller matrices"
 #: The reason text of the entry-wise comparisons.
@@ -219,106 +207,14 @@ def mueller_sample(bsdf, wi, u1, u2, ctx=None):
     return wo, w, p, t.astype(np.int64)
 
 
-def _sizes(opts) -> tuple[int, int]:
+def sizes(opts) -> tuple[int, int]:
     """(eval lanes per cell, sample lanes per cell)."""
     return max(8, opts.n_finite // 4), max(8, opts.n_identity // 4)
 
 
-# ----------------------------------------------------------------------------- criteria
-def fibonacci(k: int) -> np.ndarray:
-    """k nearly uniform unit vectors (a Fibonacci sphere)."""
-    i = np.arange(k) + 0.5
-    z = 1.0 - 2.0 * i / k
-    phi = np.pi * (1.0 + 5 ** 0.5) * i
-    s = np.sqrt(1.0 - z * z)
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
-
-
-def _g(m: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """s0' − |s'| of M (N, 4, 4) applied to the Stokes vectors s (N or 1, K, 4): (N, K)."""
-    out = np.matmul(m, np.swapaxes(s, -1, -2))                # (N, 4, K)
-    return out[:, 0] - np.sqrt(np.sum(out[:, 1:] ** 2, axis=1))
-
-
-def stokes_margin(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per matrix (…, 4, 4): (min over unit u of s0' − |s'| for s = (1, u), the minimizing u).
-
-    A matrix keeps the Stokes cone iff the margin is ≥ 0 (the module docstring).  A grid of
-    :data:`GRID` directions (spacing ≈ 0.1 rad), then 40 steps of a shrinking random local
-    search (6 candidates a step, the step from 0.15 down to 2e-6 rad) from each of the
-    :data:`STARTS` best grid points.  This is a numerical minimization, not a certified
-    global one: g is smooth (a linear function minus the norm of an affine one), so a violation
-    whose region on the sphere holds no grid point and lies outside the basins of the best
-    ones could be missed; the tests check it against matrices whose margin is known (Jones
-    matrices: 0 everywhere; over-polarizers, M00 < 0, amplified circular polarization).
-    The zero matrix (margin 0) is not searched, equal matrices once."""
-    shape = m.shape[:-2]
-    mm = m.reshape(-1, 4, 4)
-    val = np.zeros(len(mm))
-    best = np.zeros((len(mm), 3))
-    best[:, 2] = 1.0
-    live = np.flatnonzero(np.any(mm != 0, axis=(1, 2)))
-    if live.size:
-        # equal matrices are searched once (a delta lobe's matrix depends on wi alone, a
-        # constant IOR gives every wavelength the same one)
-        mv, inverse = np.unique(mm[live].reshape(-1, 16), axis=0, return_inverse=True)
-        mv = mv.reshape(-1, 4, 4)
-        inverse = inverse.reshape(-1)
-        grid = fibonacci(GRID)
-        s = np.concatenate([np.ones((GRID, 1)), grid], axis=1)[None]
-        g = _g(mv, s)                                          # (n, K)
-        n = len(mv)
-        # the local search starts from the STARTS best grid points of each matrix
-        k = np.argsort(g, axis=1)[:, :STARTS]                  # (n, S)
-        b = grid[k]                                            # (n, S, 3)
-        v = np.take_along_axis(g, k, axis=1)                   # (n, S)
-        step = 0.15
-        rng = np.random.default_rng(7)
-        for _ in range(40):
-            cand = b[:, :, None, :] + step * rng.normal(size=(n, STARTS, 6, 3))
-            cand /= np.linalg.norm(cand, axis=-1, keepdims=True)
-            sc = np.concatenate([np.ones((n, STARTS * 6, 1)), cand.reshape(n, -1, 3)], axis=-1)
-            gc = _g(mv, sc).reshape(n, STARTS, 6)
-            j = np.argmin(gc, axis=2)                          # (n, S)
-            gj = np.take_along_axis(gc, j[..., None], axis=2)[..., 0]
-            cj = np.take_along_axis(cand, j[..., None, None], axis=2)[:, :, 0]
-            better = gj < v
-            b = np.where(better[..., None], cj, b)
-            v = np.where(better, gj, v)
-            step *= 0.75
-        j = np.argmin(v, axis=1)
-        v, b = v[np.arange(n), j], b[np.arange(n), j]
-        val[live], best[live] = v[inverse], b[inverse]
-    return val.reshape(shape), best.reshape(shape + (3,))
-
-
-_PAULI = [np.eye(2), np.diag([1.0, -1.0]), np.array([[0.0, 1.0], [1.0, 0.0]]),
-          np.array([[0.0, -1j], [1j, 0.0]])]
-#: B[i, j] = σ_i ⊗ σ_j* / 4: H = Σ_ij M_ij B[i, j].
-_BASIS = np.array([[np.kron(a, b.conj()) / 4.0 for b in _PAULI] for a in _PAULI])
-
-
-def coherency(m: np.ndarray) -> np.ndarray:
-    """Cloude's coherency matrix of M (…, 4, 4): Hermitian (…, 4, 4), trace M00."""
-    return np.einsum("...ij,ijkl->...kl", m.astype(complex), _BASIS)
-
-
-def cloude_min_eig(m: np.ndarray) -> np.ndarray:
-    """The smallest eigenvalue of the coherency matrix (≥ 0: a deterministic mixture)."""
-    return np.linalg.eigvalsh(coherency(m))[..., 0]
-
-
-JONES_A = np.array([[1, 0, 0, 1], [1, 0, 0, -1], [0, 1, 1, 0], [0, 1j, -1j, 0]])
-
-
-def jones_to_mueller(j: np.ndarray) -> np.ndarray:
-    """The Mueller matrix of a Jones matrix (2, 2), S = A (E ⊗ E*)."""
-    return np.real(JONES_A @ np.kron(j, j.conj()) @ np.linalg.inv(JONES_A))
-
-
 # ----------------------------------------------------------------------------- mueller
-def _lanes_eval(opts, topic):
-    n_eval, _ = _sizes(opts)
+def eval_lanes(opts, topic):
+    n_eval, _ = sizes(opts)
     r = _rng(opts.seed, topic)
     wi, _ = lanes.incident(opts.cells(), n_eval)
     wo = np.concatenate([lanes.sphere(r, len(wi)), *lanes.special_wo(wi)[:4]])
@@ -375,10 +271,10 @@ def _realizable_rows(what, m, wi, wo, lam) -> list[Row]:
 def mueller(bsdf, opts) -> list[Row]:
     if not mi.is_polarized:
         return skipped("mueller")
-    wi, wo, r = _lanes_eval(opts, "mueller")
-    lam = _wavelengths()
+    wi, wo, r = eval_lanes(opts, "mueller")
+    lam = wavelengths()
     rows = _realizable_rows("eval", mueller_eval(bsdf, wi, wo), wi, wo, lam)
-    _, n_s = _sizes(opts)
+    _, n_s = sizes(opts)
     wis, _ = lanes.incident(opts.cells(), n_s)
     u1, u2 = lanes.sample_values(r, len(wis))
     swo, w, _, _ = mueller_sample(bsdf, wis, u1, u2)
@@ -386,7 +282,7 @@ def mueller(bsdf, opts) -> list[Row]:
     return rows
 
 
-def _wavelengths() -> np.ndarray:
+def wavelengths() -> np.ndarray:
     return probe.default_wavelengths() if mi.is_spectral else np.zeros(_channels())
 
 
@@ -442,7 +338,7 @@ def mueller_identities(bsdf, opts) -> list[Row]:
     if not mi.is_polarized:
         return skipped("mueller_identities")
     r = _rng(opts.seed, "mueller_identities")
-    n_eval, n_s = _sizes(opts)
+    n_eval, n_s = sizes(opts)
     wi, _ = lanes.incident(opts.cells(), n_eval)
     wo = lanes.sphere(r, len(wi))
     ev = mueller_eval(bsdf, wi, wo)
@@ -527,57 +423,8 @@ def _continuity(bsdf, wis, u1, u2, wo1, w1, t1, r) -> Row:
                        lanes=(d, {"wi": a, "wo": o1}))
 
 
-# ----------------------------------------------------------------------------- reciprocity
-def _sign(x):
-    return np.where(np.signbit(x), -1.0, 1.0)
-
-
-def stokes_basis(d: np.ndarray) -> np.ndarray:
-    """Mitsuba's ``mueller::stokes_basis``: ``coordinate_system(d).first`` (vector.h:118,
-    Duff et al. 2017), in numpy, (N, 3)."""
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    sign = _sign(z)
-    a = -1.0 / (sign + z)
-    b = x * y * a
-    return np.stack([x * x * a * _sign(z) + 1.0, b * _sign(z), -x * _sign(z)], axis=1)
-
-
-def rotator(theta: np.ndarray) -> np.ndarray:
-    """``mueller::rotator`` (mueller.h:164), (N, 4, 4)."""
-    s, c = np.sin(2 * theta), np.cos(2 * theta)
-    m = np.zeros(theta.shape + (4, 4))
-    m[..., 0, 0] = m[..., 3, 3] = 1.0
-    m[..., 1, 1] = m[..., 2, 2] = c
-    m[..., 1, 2], m[..., 2, 1] = s, -s
-    return m
-
-
-def rotate_stokes_basis(forward, current, target) -> np.ndarray:
-    """``mueller::rotate_stokes_basis`` (mueller.h:315), (N, 4, 4)."""
-    cu = current / np.linalg.norm(current, axis=1, keepdims=True)
-    ta = target / np.linalg.norm(target, axis=1, keepdims=True)
-    dot = np.clip(np.sum(cu * ta, axis=1), -1.0, 1.0)
-    # unit_angle: 2·asin(|a − b|/2) (accurate near 0 and π)
-    half = lambda v: 2 * np.arcsin(np.minimum(np.linalg.norm(v, axis=1) / 2, 1.0))  # noqa: E731
-    theta = np.where(dot < 0, np.pi - half(cu + ta), half(cu - ta))
-    flip = np.sum(forward * np.cross(current, target), axis=1) < 0
-    return rotator(np.where(flip, -theta, theta))
-
-
-Q = np.diag([1.0, 1.0, -1.0, 1.0])
-
-
-def reversed_matrix(m: np.ndarray, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
-    """The matrix reciprocity predicts for eval_R(wo, wi) from m = eval_R(wi, wo) (both
-    divided by their cosines), (N, C, 4, 4): R_out · Q mᵀ Q · R_inᵀ (module docstring)."""
-    r_in = rotate_stokes_basis(-wi, stokes_basis(wi), stokes_basis(-wi))
-    r_out = rotate_stokes_basis(wo, stokes_basis(-wo), stokes_basis(wo))
-    qmq = Q @ np.swapaxes(m, -1, -2) @ Q
-    return r_out[:, None] @ qmq @ np.swapaxes(r_in, -1, -2)[:, None]
-
-
 def _pairs(opts, r, upper: bool):
-    n_eval, _ = _sizes(opts)
+    n_eval, _ = sizes(opts)
     wi, _ = lanes.incident(opts.cells(), max(4, n_eval // 2))
     wo = lanes.sphere(r, len(wi))
     wo[:, 2] = np.abs(wo[:, 2]) if upper else -np.abs(wo[:, 2])
@@ -640,163 +487,3 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
     return rows
 
 
-# ----------------------------------------------------------------------------- intensity
-def unpolarized_variant(variant: str) -> str:
-    """``llvm_ad_spectral_polarized`` -> ``llvm_ad_spectral``."""
-    return variant.replace("_polarized", "")
-
-
-def provenance(bsdf, opts):
-    """(spec for mi.load_dict or {"file": xml}, plugin files) of the BSDF under validation,
-    or None when it was given as a loaded object.
-
-    :func:`phonglab.validate.core.run` hands the topics the prepared target
-    (``opts.source``, a :class:`phonglab.settings.Loaded`: its spec with the ``--set`` values
-    merged, and the ``--plugin`` files run before it loaded).  A Python plugin registered by
-    the caller's own code through ``core.load_plugins`` outside a run has no record of its file:
-    its class's functions name the file it came from.
-    """
-    source = getattr(opts, "source", None)
-    if source is None or source.plugin is not bsdf or source.spec is None:
-        return None
-    files = list(source.files)
-    cls = type(bsdf)
-    if not files and cls.__module__ == "__phonglab_plugin__":   # run by core.load_plugins
-        for v in vars(cls).values():
-            code = getattr(v, "__code__", None)
-            if code is not None and Path(code.co_filename).is_file():
-                files.append(str(Path(code.co_filename).resolve()))
-                break
-    return source.spec, files
-
-
-_CHILD = r"""
-import json, runpy, sys
-import numpy as np
-args = json.load(open(sys.argv[1]))
-import phonglab
-phonglab.register(args["variant"])
-import mitsuba as mi
-from phonglab import probe
-for f in args["plugins"]:
-    runpy.run_path(f, run_name="__phonglab_plugin__")
-spec = args["spec"]
-try:
-    if set(spec) == {"file"}:
-        bsdf = mi.load_string(open(spec["file"]).read())
-    else:
-        bsdf = mi.load_dict(spec)
-except Exception as exc:
-    print(str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc), file=sys.stderr)
-    sys.exit(3)
-d = np.load(sys.argv[2])
-ev = probe.eval(bsdf, d["wi"], d["wo"])
-s = probe.sample(bsdf, d["swi"], d["u1"], d["u2"])
-np.savez(sys.argv[3], eval=ev, wo=s.wo, weight=s.weight, pdf=s.pdf)
-"""
-
-
-class ReferenceUnavailable(RuntimeError):
-    """The plugin cannot be loaded again in the unpolarized variant (the row is skipped)."""
-
-
-def restored(spec: dict) -> dict:
-    """A report's spec (:func:`phonglab.settings.load_plugin` writes a nested value as its repr,
-    e.g. ``--set reflectance=0.2,0.3,0.4``'s ``{'type': 'rgb', ...}``) with such values parsed
-    back where they are Python literals; anything else is kept (and may not load)."""
-    out = {}
-    for k, v in spec.items():
-        if isinstance(v, str) and v[:1] in "{[":
-            try:
-                v = ast.literal_eval(v)
-            except (ValueError, SyntaxError):
-                pass
-        out[k] = v
-    return out
-
-
-def reference(spec, files, variant, arrays) -> dict:
-    """Run the unpolarized ``variant`` in a subprocess on ``arrays``; its eval and samples."""
-    with tempfile.TemporaryDirectory(prefix="phonglab-pol-") as tmp:
-        a, inp, out = (Path(tmp) / n for n in ("args.json", "in.npz", "out.npz"))
-        a.write_text(json.dumps({"variant": variant, "spec": spec, "plugins": files}))
-        np.savez(inp, **arrays)
-        env = dict(os.environ)
-        src = str(Path(phonglab.__path__[0]).resolve().parent)   # where phonglab came from
-        env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
-        proc = subprocess.run([sys.executable, "-c", _CHILD, str(a), str(inp), str(out)],
-                              capture_output=True, text=True, env=env, timeout=600)
-        if proc.returncode != 0:
-            tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            if proc.returncode == 3:
-                raise ReferenceUnavailable(f"the spec does not load in {variant}: {tail[:300]}")
-            raise RuntimeError(f"the {variant} reference failed: {tail[:300]}")
-        with np.load(out) as d:
-            return {k: d[k] for k in d.files}
-
-
-def intensity(bsdf, opts) -> list[Row]:
-    if not mi.is_polarized:
-        return skipped("intensity")
-    variant = unpolarized_variant(mi.variant())
-    if variant not in mi.variants():
-        return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
-                    None, "skipped", f"this Mitsuba build has no {variant} variant to compare "
-                    f"with", {})]
-    prov = provenance(bsdf, opts)
-    if prov is None:
-        return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
-                    None, "skipped", "the BSDF was given as a loaded object: there is no spec "
-                    f"to load it again in {variant}", {})]
-    spec, files = prov
-    wi, wo, r = _lanes_eval(opts, "intensity")
-    _, n_s = _sizes(opts)
-    swi, _ = lanes.incident(opts.cells(), n_s)
-    u1, u2 = lanes.sample_values(r, len(swi))
-    try:
-        ref = reference(restored(spec), files, variant,
-                        {"wi": wi, "wo": wo, "swi": swi, "u1": u1, "u2": u2})
-    except ReferenceUnavailable as exc:
-        return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
-                    None, "skipped", str(exc), {"spec": spec, "plugins": files})]
-    ev = mueller_eval(bsdf, wi, wo)[..., 0, 0]
-    lam = _wavelengths()
-
-    def rel_of(a, b):
-        d = np.abs(a - b) / np.maximum(np.maximum(np.abs(a), np.abs(b)), ABS_FLOOR)
-        return np.where(np.isfinite(a) & np.isfinite(b), d, np.nan)
-
-    rel = rel_of(ev, ref["eval"]).max(axis=1)
-    details = {"reference_variant": variant, "plugins": files,
-               **_worst_scalar(rel, wi, wo, ev, ref["eval"], lam)}
-    rows = [bounded_row("intensity", f"eval M00 = eval in {variant}", max_finite(rel), REL_TOL,
-                        f"max relative |M00 − unpolarized eval| per lane and wavelength over "
-                        f"random, mirror, straight-through and normal wo; {ROUND_OFF}",
-                        details, lanes=(rel, {"wi": wi, "wo": wo}))]
-    swo, w, spdf, _ = mueller_sample(bsdf, swi, u1, u2)
-    w00 = w[..., 0, 0]
-    same_wo = np.all(np.abs(swo - ref["wo"]) <= 1e-5, axis=1) | (
-        ~np.any(w00 != 0, axis=1) & ~np.any(ref["weight"] != 0, axis=1))
-    relw = np.maximum(rel_of(w00, ref["weight"]).max(axis=1),
-                      np.where(same_wo, rel_of(spdf, ref["pdf"]), 1.0))
-    relw = np.where(same_wo, relw, np.maximum(relw, 1.0))
-    details = {"reference_variant": variant, "different_wo": int((~same_wo).sum()),
-               **_worst_scalar(relw, swi, swo, w00, ref["weight"], lam)}
-    rows.append(bounded_row("intensity", f"sample: wo, pdf, weight M00 = {variant}'s",
-                            max_finite(relw), REL_TOL,
-                            f"per sample (identical sample values, edge values included): the "
-                            f"same wo (|Δ| ≤ 1e-5; a different wo counts 1), max relative "
-                            f"difference of pdf and weight M00; {ROUND_OFF}",
-                            details, lanes=(relw, {"wi": swi, "wo": swo})))
-    return rows
-
-
-def _worst_scalar(rel, wi, wo, a, b, lam) -> dict:
-    finite = np.isfinite(rel)
-    d = {"lanes": int(rel.size), "nonfinite_dropped": int((~finite).sum())}
-    if finite.any():
-        k = int(np.nanargmax(np.where(finite, rel, -1.0)))
-        d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist(),
-                 polarized_m00=np.asarray(a[k]).tolist(), unpolarized=np.asarray(b[k]).tolist(),
-                 wavelengths=[float(x) for x in lam])
-    return d

@@ -24,14 +24,12 @@ N ∫_bin pdf_direction dω:
 Pearson's χ² statistic over the bins, bins with expected count < 5 pooled into one (merged
 into the smallest remaining bin when the pool is itself < 5), p-value from the χ² distribution
 with (cells − 1) degrees of freedom; each reference point is one test at the Šidák level of the
-emitter's m statistical tests (:func:`~phonglab.stats.sidak`).  :func:`pearson` was written
-here while phonglab's own (:func:`phonglab.stats.pearson_chi2`, #26's chi2 slice) was on
-another branch; it has landed since.  Over 60 emitter tests (seven built-in cases, seeds 0-3)
-the two p-values differ by at most 0.058, from Mitsuba's running pooling there, and neither
-saw an impossible cell.  They differ in one rule: stats.pearson_chi2 rejects outright any
-sample in a bin whose integral is exactly 0, which the BSDF topic pairs with a re-integration
-of such slivers (sphere_bins); the lattice here has none yet, so the emitter topic keeps its
-pooling until the two are merged.  A reference point whose histogram is empty while
+emitter's m statistical tests (:func:`~phonglab.stats.sidak`).  :func:`pearson` pools as
+Mitsuba's ``mi.chi2`` does; :func:`phonglab.stats.pearson_chi2` (the BSDF and phase-function
+topics') instead rejects outright any sample in a bin whose integral is exactly 0, which those
+topics pair with a re-integration of such slivers (:mod:`phonglab.validate.sphere_bins`).  The
+emitter's (cos θ, φ) lattice has no such re-integration, so it keeps this pooling; over 60
+emitter tests (seven built-in cases, seeds 0-3) the two p-values differ by at most 0.058.  A reference point whose histogram is empty while
 ∫pdf > 0 fails; one where both are empty (the back of a one-sided emitter) is not tested.
 ``mi.chi2.EmitterAdapter`` (mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
 reference point is its own test and a sample counts only when its weight is not 0 (an emitter
