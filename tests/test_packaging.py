@@ -48,6 +48,15 @@ def test_every_subpackage_is_listed_in_pyproject():
     assert not missing, f"add {missing} to [tool.setuptools] packages in pyproject.toml"
 
 
+def test_every_package_pyproject_lists_exists():
+    """A package moved away but still listed breaks `pip install` (and so `make setup`) on a
+    fresh clone: "package directory 'src/phonglab/validate/builtins' does not exist"."""
+    dirs = {"phonglab.plugins": ROOT / "plugins"}
+    gone = sorted(p for p in SETUPTOOLS["packages"]
+                  if not dirs.get(p, ROOT / "src" / Path(*p.split("."))).is_dir())
+    assert not gone, f"remove {gone} from [tool.setuptools] packages in pyproject.toml"
+
+
 def _declared(path: Path) -> bool:
     """Whether pyproject's package-data ships ``path`` (a file under src/phonglab)."""
     rel = path.relative_to(ROOT / "src")
