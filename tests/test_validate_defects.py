@@ -80,7 +80,10 @@ def test_correct_bsdfs_pass_quick(variant_llvm_rgb, bsdf):
 
 
 def test_every_topic_but_cost_has_a_planted_defect():
-    assert set(PLANTED.values()) | {"cost"} == set(TOPICS)
+    """Here or, for the topics of polarized variants, in tests/defects_polarized."""
+    from test_validate_polarized import PLANTED as POLARIZED_PLANTED
+
+    assert set(PLANTED.values()) | set(POLARIZED_PLANTED.values()) | {"cost"} == set(TOPICS)
 
 
 @pytest.mark.slow

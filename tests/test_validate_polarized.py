@@ -27,7 +27,9 @@ POLAR_TOPICS = list(polarization.POLAR_TOPICS)
 
 #: defect file -> the one topic it must fail in a polarized variant
 PLANTED = {"over_polarizing": "mueller", "conjugating": "mueller",
-           "dim_intensity": "intensity", "nan_offdiagonal": "mueller"}
+           "dim_intensity": "intensity", "nan_offdiagonal": "mueller",
+           "depolarized_sample": "mueller_identities",
+           "nonreciprocal_matrix": "mueller_reciprocity"}
 #: control file -> its registered name
 CONTROLS = {"depolarizing_lambert": "pol_depolarizing_lambert",
             "wrapped_conductor": "pol_wrapped_conductor",
