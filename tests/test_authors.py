@@ -1,0 +1,41 @@
+"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check and fit, the
+types a Python plugin returns checked before Dr.Jit sees them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).parent
+AUTHORS = HERE / "authors"
+SRC = HERE.parent / "src"
+
+
+def cli(*args, timeout=300):
+    import os
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    return subprocess.run([sys.executable, "-m", "phonglab.cli", *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def test_timeout_turns_a_hanging_eval_into_a_failing_row():
+    """eval loops forever: the topics calling it fail by the timeout, the others pass."""
+    from phonglab.testing import assert_bsdf_valid
+
+    t0 = time.perf_counter()
+    with pytest.raises(AssertionError) as info:
+        assert_bsdf_valid("defect_hang_eval", plugins=[AUTHORS / "hang_eval.py"], sweep=False,
+                          quick=True, topics=["finite", "component"], timeout=1)
+    text = str(info.value)
+    assert "did not finish within 1 s" in text and "finite" in text
+    assert "component" not in text                      # sample/pdf only: it still passes
+    assert time.perf_counter() - t0 < 60
+
+
+def test_timeout_is_checked_before_work():
+    r = cli("validate", "diffuse", "--timeout", "0")
+    assert r.returncode == 2 and "--timeout must be" in r.stderr and "Traceback" not in r.stderr
