@@ -39,3 +39,31 @@ def test_timeout_turns_a_hanging_eval_into_a_failing_row():
 def test_timeout_is_checked_before_work():
     r = cli("validate", "diffuse", "--timeout", "0")
     assert r.returncode == 2 and "--timeout must be" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_check_takes_the_authors_lambert_by_plugin():
+    before = cli("check", "--lambert", "my_lambert", "--only", "sanity", "--no-progress")
+    assert before.returncode == 2 and "--plugin FILE.py" in before.stderr
+    r = cli("check", "--lambert", "my_lambert", "--plugin", AUTHORS / "my_lambert.py",
+            "--only", "sanity", "--no-progress")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "my_lambert: χ² sampling" in r.stdout
+
+
+def test_fit_takes_the_authors_bsdf_by_plugin():
+    r = cli("fit", "my_lambert", "--set", "reflectance=0.3", "--model", "lambert",
+            "--plugin", AUTHORS / "my_lambert.py")
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "fitted  k_d = 0.3" in r.stdout
+
+
+@pytest.mark.parametrize("command", [["fit", "x"], ["check", "--only", "sanity"]])
+def test_plugin_files_checked_before_work(command, tmp_path):
+    r = cli(*command, "--plugin", tmp_path / "missing.py")
+    assert r.returncode == 2 and "does not exist" in r.stderr and "Traceback" not in r.stderr
+    r = cli(*command, "--plugin", tmp_path)
+    assert r.returncode == 2 and "is a folder" in r.stderr and "Traceback" not in r.stderr
+    taken = tmp_path / "taken.py"
+    taken.write_text((AUTHORS / "my_lambert.py").read_text().replace('"my_lambert"', '"diffuse"'))
+    r = cli(*command, "--plugin", taken)
+    assert r.returncode == 2 and "a name Mitsuba already has" in r.stderr, r.stderr
