@@ -67,3 +67,30 @@ def test_plugin_files_checked_before_work(command, tmp_path):
     taken.write_text((AUTHORS / "my_lambert.py").read_text().replace('"my_lambert"', '"diffuse"'))
     r = cli(*command, "--plugin", taken)
     assert r.returncode == 2 and "a name Mitsuba already has" in r.stderr, r.stderr
+
+
+def test_integrator_returning_the_wrong_type_is_one_sentence_not_an_abort():
+    """Before: exit 134 inside Dr.Jit ("Referenced an unknown variable"), no report."""
+    r = cli("validate", "defect_wrong_return", "--plugin", AUTHORS / "wrong_return_integrator.py",
+            "--quick", "--no-sweep")
+    assert r.returncode == 2, (r.returncode, r.stderr[-1500:])
+    assert "sample() of the integrator 'defect_wrong_return' returned Color3f" in r.stderr
+    assert "(L: mi.Spectrum, valid: mi.Bool, aovs" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("method, old, new, said", [
+    ("eval_pdf", "return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)",
+     "return self.eval(ctx, si, wo, active)", "eval_pdf() of the BSDF 'bad_return' returned Color3f"),
+    ("sample", "return bs, dr.select(bs.pdf > 0, value, 0.0)", "return bs",
+     "sample() of the BSDF 'bad_return' returned BSDFSample3f"),
+    ("pdf", "return dr.select(self._ok(si, wo), mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)",
+     "return mi.Vector3f(1, 2, 3)", "pdf() of the BSDF 'bad_return' returned Vector3f"),
+])
+def test_bsdf_returning_the_wrong_type_names_the_method(method, old, new, said, tmp_path):
+    text = (AUTHORS / "my_lambert.py").read_text()
+    assert old in text
+    bad = tmp_path / "bad.py"
+    bad.write_text(text.replace(old, new).replace('"my_lambert"', '"bad_return"'))
+    r = cli("validate", "bad_return", "--plugin", bad, "--quick", "--no-sweep", "--only", "finite")
+    assert r.returncode == 2 and said in r.stderr, r.stderr[-1500:]
+    assert "Traceback" not in r.stderr

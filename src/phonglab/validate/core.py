@@ -191,6 +191,9 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
                                  word=kind.word, hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
+    returns = kind.part("returns")          # the Python methods' return types, on one lane
+    if returns is not None:
+        returns(loaded.plugin, loaded.label)
     files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
     return loaded._replace(files=files) if files else loaded
 
