@@ -94,3 +94,19 @@ def test_bsdf_returning_the_wrong_type_names_the_method(method, old, new, said, 
     r = cli("validate", "bad_return", "--plugin", bad, "--quick", "--no-sweep", "--only", "finite")
     assert r.returncode == 2 and said in r.stderr, r.stderr[-1500:]
     assert "Traceback" not in r.stderr
+
+
+def test_gpu_check_skips_cleanly_without_cuda():
+    """scripts/gpu_check.py: where cuda_ad_rgb does not work, a SKIPPED line and exit 0 (77
+    with --require-gpu); on a GPU machine this test is skipped (run the script itself)."""
+    script = HERE.parent / "scripts" / "gpu_check.py"
+    spec = __import__("importlib.util").util.spec_from_file_location("gpu_check", script)
+    mod = __import__("importlib.util").util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    if mod.variant_works("cuda_ad_rgb") is None:
+        pytest.skip("cuda_ad_rgb works here: run scripts/gpu_check.py")
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and r.stdout.startswith("SKIPPED: cuda_ad_rgb"), r.stdout + r.stderr
+    r = subprocess.run([sys.executable, str(script), "--require-gpu"], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 77
