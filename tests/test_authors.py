@@ -110,3 +110,15 @@ def test_gpu_check_skips_cleanly_without_cuda():
     r = subprocess.run([sys.executable, str(script), "--require-gpu"], capture_output=True,
                        text=True, timeout=300)
     assert r.returncode == 77
+
+
+def test_timeout_stops_an_integrator_looping_inside_a_render():
+    """sample() loops forever inside mi.render: Dr.Jit's custom op re-raises the timeout as a
+    RuntimeError, which must still read as the timeout."""
+    t0 = time.perf_counter()
+    r = cli("validate", "defect_hang_sample", "--plugin", AUTHORS / "hang_integrator.py",
+            "--quick", "--no-sweep", "--timeout", "1", "--only", "finite", "--only", "cost",
+            timeout=120)
+    assert r.returncode == 1, r.stderr[-1500:]
+    assert r.stdout.count("did not finish within 1 s") == 2, r.stdout[-2000:]
+    assert time.perf_counter() - t0 < 60

@@ -237,18 +237,23 @@ def topic_timeout(seconds: float | None):
 
 @contextlib.contextmanager
 def _alarm(seconds: float | None):
+    """For the block, SIGALRM after ``seconds`` raises :class:`TopicTimeout`; yields a dict
+    whose "fired" says whether it did (a C++ caller in between -- ``mi.render``'s custom op --
+    may re-raise it as a RuntimeError)."""
+    state = {"fired": False}
     if (not seconds or not hasattr(signal, "setitimer")
             or threading.current_thread() is not threading.main_thread()):
-        yield
+        yield state
         return
 
     def expired(signum, frame):
+        state["fired"] = True
         raise TopicTimeout()
 
     previous = signal.signal(signal.SIGALRM, expired)
     signal.setitimer(signal.ITIMER_REAL, seconds)
     try:
-        yield
+        yield state
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
@@ -259,18 +264,24 @@ def _guarded(topic: str, runner) -> list[Row]:
     that topic with the traceback in details, so the other topics still report; so is a topic
     that runs past :func:`topic_timeout`'s limit."""
     limit = _TIMEOUT
+    state = {"fired": False}
     try:
-        with _alarm(limit):
+        with _alarm(limit) as state:
             return runner()
-    except TopicTimeout:
+    except (TopicTimeout, Exception) as exc:
+        if not (isinstance(exc, TopicTimeout) or state["fired"]):
+            return _raised(topic, exc)
         return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
                     "fail", f"did not finish within {limit:g} s (stopped by the timeout; the "
                     f"plugin's Python code may loop forever)",
                     {"traceback": traceback.format_exc()[-3000:], "timeout_s": limit})]
-    except Exception as exc:
-        return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
-                    "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
-                    {"traceback": traceback.format_exc()[-3000:]})]
+
+
+def _raised(topic: str, exc: Exception) -> list[Row]:
+    """The failing row of a topic that raised ``exc`` (inside an ``except`` block)."""
+    return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
+                "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
+                {"traceback": traceback.format_exc()[-3000:]})]
 
 
 @dataclass(frozen=True)
