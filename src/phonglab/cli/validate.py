@@ -247,11 +247,13 @@ def run(args) -> int:
     if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
+    from ..validate.core import topic_timeout   # lazy: Mitsuba loads only for a run
+
     if args.all_builtins:
-        return _all_builtins(args)
+        with topic_timeout(args.timeout):
+            return _all_builtins(args)
     from ..validate import html   # lazy: matplotlib loads only for a run
 
-    from ..validate.core import topic_timeout
     with topic_timeout(args.timeout):
         report, label, text = validate_one(args, params)
     print(text)
