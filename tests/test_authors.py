@@ -83,7 +83,7 @@ def test_integrator_returning_the_wrong_type_is_one_sentence_not_an_abort():
      "return self.eval(ctx, si, wo, active)", "eval_pdf() of the BSDF 'bad_return' returned Color3f"),
     ("sample", "return bs, dr.select(bs.pdf > 0, value, 0.0)", "return bs",
      "sample() of the BSDF 'bad_return' returned BSDFSample3f"),
-    ("pdf", "return dr.select(self._ok(si, wo), mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)",
+    ("pdf", "return dr.select(self._ok(si, wo, ctx), mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)",
      "return mi.Vector3f(1, 2, 3)", "pdf() of the BSDF 'bad_return' returned Vector3f"),
 ])
 def test_bsdf_returning_the_wrong_type_names_the_method(method, old, new, said, tmp_path):

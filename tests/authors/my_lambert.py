@@ -16,15 +16,17 @@ class MyLambert(mi.BSDF):
     def traverse(self, callback):
         callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
 
-    def _ok(self, si, wo):
-        return (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+    def _ok(self, si, wo, ctx=None):
+        # a context that masks the diffuse lobe out (phonglab fit's per-lobe albedos) sees 0
+        on = True if ctx is None else ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, 0)
+        return on & (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
 
     def eval(self, ctx, si, wo, active=True):
         value = self.reflectance * dr.inv_pi * mi.Frame3f.cos_theta(wo)
-        return dr.select(self._ok(si, wo), mi.Spectrum(value), 0.0)
+        return dr.select(self._ok(si, wo, ctx), mi.Spectrum(value), 0.0)
 
     def pdf(self, ctx, si, wo, active=True):
-        return dr.select(self._ok(si, wo), mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+        return dr.select(self._ok(si, wo, ctx), mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
 
     def eval_pdf(self, ctx, si, wo, active=True):
         return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
