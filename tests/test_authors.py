@@ -122,3 +122,17 @@ def test_timeout_stops_an_integrator_looping_inside_a_render():
     assert r.returncode == 1, r.stderr[-1500:]
     assert r.stdout.count("did not finish within 1 s") == 2, r.stdout[-2000:]
     assert time.perf_counter() - t0 < 60
+
+
+def test_phase_function_returning_the_wrong_type_names_the_method(tmp_path):
+    """Before: every topic failed with "too many values to unpack (expected 2)"."""
+    text = (HERE / "defects_phase" / "hg_control.py").read_text()
+    assert "return mi.Spectrum(p), p" in text
+    bad = tmp_path / "badphase.py"
+    bad.write_text(text.replace("return mi.Spectrum(p), p", "return mi.Spectrum(p)")
+                   .replace('mi.register_phase("defect_hg_control"',
+                            'mi.register_phase("bad_phase_return"'))
+    assert "bad_phase_return" in bad.read_text()
+    r = cli("validate", "bad_phase_return", "--plugin", bad, "--quick", "--no-sweep")
+    assert r.returncode == 2, r.stdout[-1500:] + r.stderr[-1500:]
+    assert "eval_pdf() of the phase function 'bad_phase_return' returned Color3f" in r.stderr

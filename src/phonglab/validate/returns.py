@@ -23,7 +23,7 @@ import mitsuba as mi
 
 from .kind import ValidateError
 
-__all__ = ["check_bsdf", "check_integrator"]
+__all__ = ["check_bsdf", "check_integrator", "check_phase"]
 
 
 def _defines(plugin, name: str) -> bool:
@@ -131,3 +131,32 @@ def check_bsdf(plugin, name: str = "BSDF") -> None:
                    or len(out) != 2 or not _spectrum(out[0]) or not _float(out[1])):
             _refuse("BSDF", name, "eval_pdf", out, "a tuple (value: mi.Spectrum, pdf: "
                     "mi.Float), e.g. return value, pdf")
+
+
+def _tuple(out, n: int) -> bool:
+    return isinstance(out, (tuple, list)) and not isinstance(out, dr.ArrayBase) and len(out) == n
+
+
+def check_phase(plugin, name: str = "phase function") -> None:
+    """A Python phase function's ``sample`` returns ``(Vector3f wo, Spectrum weight, Float
+    pdf)`` and ``eval_pdf`` ``(Spectrum, Float)`` -- those its class defines."""
+    if not isinstance(plugin, mi.PhaseFunction) or mi.is_polarized:
+        return
+    ctx = mi.PhaseFunctionContext(None)
+    mei = dr.zeros(mi.MediumInteraction3f)
+    mei.wi = dr.normalize(mi.Vector3f(0.3, 0.2, 0.9))
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    mei.t = mi.Float(0.0)
+    active = mi.Bool(True)
+    if _defines(plugin, "sample"):
+        ok, out = _call(plugin.sample, ctx, mei, mi.Float(0.5), mi.Point2f(0.3, 0.6), active)
+        if ok and (not _tuple(out, 3) or not isinstance(out[0], mi.Vector3f)
+                   or not _spectrum(out[1]) or not _float(out[2])):
+            _refuse("phase function", name, "sample", out, "a tuple (wo: mi.Vector3f, weight: "
+                    "mi.Spectrum, pdf: mi.Float), e.g. return wo, weight, pdf")
+    if _defines(plugin, "eval_pdf"):
+        wo = dr.normalize(mi.Vector3f(-0.2, 0.1, 0.9))
+        ok, out = _call(plugin.eval_pdf, ctx, mei, wo, active)
+        if ok and (not _tuple(out, 2) or not _spectrum(out[0]) or not _float(out[1])):
+            _refuse("phase function", name, "eval_pdf", out, "a tuple (value: mi.Spectrum, "
+                    "pdf: mi.Float), e.g. return value, pdf")
