@@ -45,7 +45,7 @@ def test_check_takes_the_authors_lambert_by_plugin():
     before = cli("check", "--lambert", "my_lambert", "--only", "sanity", "--no-progress")
     assert before.returncode == 2 and "--plugin FILE.py" in before.stderr
     r = cli("check", "--lambert", "my_lambert", "--plugin", AUTHORS / "my_lambert.py",
-            "--only", "sanity", "--no-progress")
+            "--only", "sanity", "--no-progress", "--spp", "16")     # 65536 χ² samples: ~1 s
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert "my_lambert: χ² sampling" in r.stdout
 
@@ -57,7 +57,7 @@ def test_fit_takes_the_authors_bsdf_by_plugin():
     assert "fitted  k_d = 0.3" in r.stdout
 
 
-@pytest.mark.parametrize("command", [["fit", "x"], ["check", "--only", "sanity"]])
+@pytest.mark.parametrize("command", [["fit", "x"], ["check", "--only", "sanity", "--spp", "16"]])
 def test_plugin_files_checked_before_work(command, tmp_path):
     r = cli(*command, "--plugin", tmp_path / "missing.py")
     assert r.returncode == 2 and "does not exist" in r.stderr and "Traceback" not in r.stderr
