@@ -128,3 +128,169 @@ def test_compare_eps(tmp_path_factory, variant_llvm_rgb, eps):
     assert "Traceback" not in err
     ok = isinstance(eps, float) and math.isfinite(eps) and eps > 0
     assert rc == (0 if ok else 2), (eps, rc, err)
+
+
+# --- paths: folders, symlinks, unwritable folders, missing parents, not only numbers ---------
+
+#: The kinds of path a user may type where phonglab reads or writes a file.
+PATH_KINDS = ("fresh", "missing_parent", "parent_is_file", "folder", "symlink_to_folder",
+              "symlink_to_file", "dangling_symlink", "unwritable_folder", "readonly_file",
+              "spaces_unicode", "empty", "long_name", "dot", "trailing_slash")
+
+
+def make_path(base: Path, kind: str, suffix: str, content: bytes | None = None) -> str:
+    """A path of ``kind`` under ``base`` (created fresh per example); ``content``: what an
+    existing regular file there holds (an input), None for an output."""
+    import os
+    base.mkdir(parents=True, exist_ok=True)
+    name = f"f{suffix}"
+    target = base / "target"
+    if kind == "fresh":
+        p = base / name
+        if content is not None:
+            p.write_bytes(content)
+        return str(p)
+    if kind == "missing_parent":
+        return str(base / "no" / "such" / "dir" / name)
+    if kind == "parent_is_file":
+        (base / "plain").write_text("x")
+        return str(base / "plain" / name)
+    if kind == "folder":
+        (base / f"d{suffix}").mkdir(exist_ok=True)
+        return str(base / f"d{suffix}")
+    if kind == "symlink_to_folder":
+        target.mkdir(exist_ok=True)
+        (base / name).unlink(missing_ok=True)
+        (base / name).symlink_to(target, target_is_directory=True)
+        return str(base / name)
+    if kind == "symlink_to_file":
+        target.write_bytes(content if content is not None else b"old")
+        (base / name).unlink(missing_ok=True)
+        (base / name).symlink_to(target)
+        return str(base / name)
+    if kind == "dangling_symlink":
+        (base / name).unlink(missing_ok=True)
+        (base / name).symlink_to(base / "gone" / "nothing")
+        return str(base / name)
+    if kind == "unwritable_folder":
+        d = base / "locked"
+        d.mkdir(exist_ok=True)
+        if content is not None:
+            (d / name).write_bytes(content)
+        os.chmod(d, 0o555)                  # root writes anyway: the outcome is still 0/1/2
+        return str(d / name)
+    if kind == "readonly_file":
+        p = base / name
+        p.write_bytes(content if content is not None else b"old")
+        p.chmod(0o444)
+        return str(p)
+    if kind == "spaces_unicode":
+        d = base / "a folder ü ✓"
+        d.mkdir(exist_ok=True)
+        if content is not None:
+            (d / name).write_bytes(content)
+        return str(d / name)
+    if kind == "empty":
+        return ""
+    if kind == "long_name":
+        return str(base / ("x" * 300 + suffix))
+    if kind == "dot":
+        return "."
+    if kind == "trailing_slash":
+        return str(base / name) + "/"
+    raise AssertionError(kind)
+
+
+def unlock(base: Path) -> None:
+    import os
+    locked = base / "locked"
+    if locked.exists():
+        os.chmod(locked, 0o755)
+
+
+def check_any_outcome(rc: int, err: str) -> None:
+    """Exit 0, 1 or 2; never a traceback; on 2 one sentence (argparse's usage lines aside)."""
+    assert "Traceback" not in err, err
+    assert rc in (0, 1, 2), (rc, err)
+    if rc == 2:
+        lines = [ln.split("\r")[-1] for ln in err.splitlines()]      # a progress bar's \r
+        lines = [ln for ln in lines if ln.strip() and not ln.startswith(("usage:", " "))]
+        assert len(lines) == 1 and "error:" in lines[0], err
+
+
+PLUGIN = (Path(__file__).parent / "authors" / "my_lambert.py").read_bytes()
+
+#: (command, the slot the path goes in, suffix) -- each cheap when the path is good.
+OUTPUT_SLOTS = (("render", "-o", ".exr"), ("compare", "--diff", ".png"),
+                ("fit", "--json", ".json"), ("fit", "--report", ".txt"),
+                ("validate", "--json", ".json"), ("validate", "--report", ".html"),
+                ("check", "--json", ".json"), ("check", "--out-dir", ""))
+INPUT_SLOTS = (("render", "scene", ".xml"), ("compare", "A", ".exr"),
+               ("validate", "--plugin", ".py"), ("check", "--plugin", ".py"),
+               ("fit", "--plugin", ".py"))
+
+
+def _argv(command: str, slot: str, path: str, tiny: Path, image: Path) -> list[str]:
+    if command == "render":
+        return (["render", path, "-o", str(tiny.with_name("o.exr"))] if slot == "scene"
+                else ["render", str(tiny), "-o", path])
+    if command == "compare":
+        return (["compare", path, str(image)] if slot == "A"
+                else ["compare", str(image), str(image), "--diff", path])
+    if command == "fit":
+        return ["fit", "diffuse", "--model", "lambert", "--maxiter", "1", slot, path]
+    if command == "validate":
+        return ["validate", "diffuse", "--no-sweep", "--quick", "--only", "finite", slot, path]
+    # check: a --lambert nobody registers keeps a good path from running the whole table
+    return ["check", "--lambert", "nobody_registers_this", "--no-progress", slot, path]
+
+
+def _path_case(tmp_path_factory, tiny, slot, kind) -> None:
+    command, flag, suffix = slot
+    base = tmp_path_factory.mktemp("paths")
+    image = base / "image.exr"
+    exr.write(image, np.full((4, 4, 3), 0.5, np.float32))
+    content = {".xml": TINY.encode(), ".exr": image.read_bytes(), ".py": PLUGIN}.get(suffix) \
+        if (command, flag, suffix) in INPUT_SLOTS else None
+    path = make_path(base, kind, suffix, content)
+    try:
+        rc, err = run(_argv(command, flag, path, tiny, image))
+    finally:
+        unlock(base)
+    check_any_outcome(rc, err)
+
+
+@settings(FAST, max_examples=12)
+@given(slot=st.sampled_from(OUTPUT_SLOTS + INPUT_SLOTS), kind=st.sampled_from(PATH_KINDS))
+def test_paths(tmp_path_factory, tiny, variant_llvm_rgb, slot, kind):
+    _path_case(tmp_path_factory, tiny, slot, kind)
+
+
+@pytest.mark.slow
+@settings(LONG, max_examples=300)
+@given(slot=st.sampled_from(OUTPUT_SLOTS + INPUT_SLOTS), kind=st.sampled_from(PATH_KINDS))
+def test_paths_long(tmp_path_factory, tiny, variant_llvm_rgb, slot, kind):
+    _path_case(tmp_path_factory, tiny, slot, kind)
+
+
+@pytest.mark.parametrize("slot", OUTPUT_SLOTS + INPUT_SLOTS, ids=lambda s: f"{s[0]}{s[1]}")
+@pytest.mark.parametrize("kind", ["missing_parent", "folder", "dangling_symlink",
+                                  "parent_is_file"])
+def test_paths_every_slot(tmp_path_factory, tiny, variant_llvm_rgb, slot, kind):
+    """The kinds most likely to break, in every slot (not left to the search's draw)."""
+    _path_case(tmp_path_factory, tiny, slot, kind)
+
+
+def test_dangling_link_refused_before_the_render(tmp_path, tiny, variant_llvm_rgb):
+    """Found by test_paths: -o a link to a missing folder rendered, then failed to write."""
+    link = tmp_path / "out.exr"
+    link.symlink_to(tmp_path / "gone" / "out.exr")
+    rc, err = run(["render", str(tiny), "-o", str(link)])
+    assert rc == 2 and "symbolic link" in err and "rendering" not in err, err
+
+
+def test_name_too_long_is_one_sentence(tmp_path, tiny, variant_llvm_rgb):
+    """Found by test_paths: an OSError naming the path was a traceback."""
+    rc, err = run(["render", str(tiny), "-o", str(tmp_path / ("x" * 300 + ".exr"))])
+    check_any_outcome(rc, err)
+    assert rc == 2 and "File name too long" in err

@@ -23,7 +23,7 @@ from jupyter_client.kernelspec import KernelSpecManager  # noqa: E402  (nbclient
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 #: Every notebook in notebooks/.
 OWNED = ["01_radiometry.ipynb", "02_lambert_and_phong.ipynb", "03_refraction.ipynb",
-         "04_speed_vs_accuracy.ipynb", "05_fitting.ipynb"]
+         "04_speed_vs_accuracy.ipynb", "05_fitting.ipynb", "06_plugin_authors.ipynb"]
 #: The issue's limit for one notebook at its default sample counts.
 LIMIT_S = 120
 

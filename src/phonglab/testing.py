@@ -39,19 +39,23 @@ from .verdict import point_label, table
 __all__ = ["assert_valid", *(k.assert_helper for k in KINDS)]
 
 
-def assert_valid(spec, kind: str | None = None, sweep: bool = True, **options):
+def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None, **options):
     """Validate ``spec`` (of ``kind``, e.g. "bsdf"; None: detected) across its kind's parameter
     sweep (``sweep=False``: at the given point alone; a kind without a sweep is checked at the
     given point); raise AssertionError listing the failing rows, each with its point.
-    Returns the report."""
+    ``timeout``: seconds a topic may run before it is stopped and becomes a failing row ("did
+    not finish within N s"; :func:`phonglab.validate.core.topic_timeout`: Python code only, in
+    the main thread -- a compiled Dr.Jit kernel runs to its end).  Returns the report."""
     from . import validate as face
     from .validate import registry, validate
+    from .validate.core import topic_timeout
 
-    if kind is None:
-        report = validate(spec, sweep=sweep, **options)
-        kind = report.meta.get("kind") or next(k.name for k in KINDS if k.name in report.meta)
-    else:
-        report = getattr(face, registry.by_name(kind).function)(spec, sweep=sweep, **options)
+    with topic_timeout(timeout):
+        if kind is None:
+            report = validate(spec, sweep=sweep, **options)
+            kind = report.meta.get("kind") or next(k.name for k in KINDS if k.name in report.meta)
+        else:
+            report = getattr(face, registry.by_name(kind).function)(spec, sweep=sweep, **options)
     if not report.passed:
         by_point = {}
         for r in report.failing:
@@ -65,8 +69,8 @@ def assert_valid(spec, kind: str | None = None, sweep: bool = True, **options):
 
 
 def _helper(kind):
-    def assert_kind_valid(spec, sweep: bool = True, **options):
-        return assert_valid(spec, kind.name, sweep, **options)
+    def assert_kind_valid(spec, sweep: bool = True, timeout=None, **options):
+        return assert_valid(spec, kind.name, sweep, timeout, **options)
 
     assert_kind_valid.__name__ = assert_kind_valid.__qualname__ = kind.assert_helper
     assert_kind_valid.__doc__ = (f"Validate the {kind.word} ``spec`` (:func:`assert_valid`); "

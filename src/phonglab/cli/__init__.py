@@ -95,7 +95,10 @@ def _main(argv: list[str] | None) -> int:
             print("\nphonglab: interrupted; files already written are complete.",
                   file=sys.stderr)
             return 130
-        if debug or not isinstance(exc, user_errors()):
+        # An OSError naming its file (a name too long, a parent that is a file, a loop of
+        # symlinks, no permission) is about the path the user typed: one sentence too.
+        path_error = isinstance(exc, OSError) and getattr(exc, "filename", None) is not None
+        if debug or not (isinstance(exc, user_errors()) or path_error):
             raise
         print(f"phonglab: error: {exc}", file=sys.stderr)
         return 2

@@ -17,7 +17,7 @@ from .. import __version__, checks, register
 from ..errors import PhonglabError
 from ..engine.outputs import check_output_file, check_output_folder, write_json
 from ..verdict import Report, format_number
-from .options import add_seed
+from .options import add_plugin, add_seed, check_plugin_files, load_plugin_files
 
 #: Where difference images of a failing scene check go unless --out-dir says (made only then).
 DEFAULT_OUT_DIR = "out/checks"
@@ -31,7 +31,8 @@ def add_parser(sub) -> None:
                     "one row per comparison: measured, expected (and its source), standard "
                     "error, tolerance, verdict. Exits 1 if any row fails.",
         epilog="examples:\n  phonglab check\n  phonglab check --only snell --only sanity\n"
-               "  phonglab check --spp 256 --json out/checks.json",
+               "  phonglab check --spp 256 --json out/checks.json\n"
+               "  phonglab check --lambert mylambert --plugin mylambert.py --only sanity",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--only", action="append", metavar="NAME", choices=checks.CHECK_NAMES,
                    help=f"run only this check (repeatable): {', '.join(checks.CHECK_NAMES)}")
@@ -47,6 +48,7 @@ def add_parser(sub) -> None:
                    help="registered BSDF checked as the Lambertian (default lambert)")
     p.add_argument("--phong", default="phong", metavar="PLUGIN",
                    help="registered BSDF checked as the modified Phong (default phong)")
+    add_plugin(p)
     p.add_argument("--details", action="store_true",
                    help="print what each row compares, its source and details")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -64,10 +66,11 @@ def run(args) -> int:
         check_output_file(args.json, "JSON file (--json)")
     if args.out_dir is not None:
         check_output_folder(args.out_dir, "folder of difference images (--out-dir)")
+    check_plugin_files(args.plugin)
     cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir or DEFAULT_OUT_DIR,
                         lambert=args.lambert, phong=args.phong)
     names = args.only or list(checks.CHECK_NAMES)
-    _require_plugins(args.lambert, args.phong)
+    _require_plugins(args.lambert, args.phong, plugins=args.plugin)
     bar = None
     if not args.no_progress:
         bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
@@ -130,15 +133,20 @@ def _issue(row) -> str:
     return row.details.get("known_issue", row.reason)
 
 
-def _require_plugins(*names: str) -> None:
-    """A clear error when a plugin named by --lambert/--phong is not registered."""
+def _require_plugins(*names: str, plugins=()) -> None:
+    """A clear error when a plugin named by --lambert/--phong is not registered (after the
+    ``--plugin`` files ran once)."""
     register()
+    registered = load_plugin_files(plugins)
     for name in names:
         try:
             mi.load_dict({"type": name})
         except Exception as exc:
             if "not found" in str(exc) or "unknown" in str(exc).lower():
-                raise PhonglabError(f"no BSDF plugin named {name!r} is registered; register it "
-                                    f"(mi.register_bsdf) before running the checks, or drop "
-                                    f"the option.") from None
+                mine = [n for word, n in registered if word == "BSDF"]
+                raise PhonglabError(f"no BSDF plugin named {name!r} is registered; "
+                                    + (f"the plugin files registered {', '.join(map(repr, mine))}"
+                                       if mine else "give --plugin FILE.py, a file that calls "
+                                       f"mi.register_bsdf({name!r}, ...)")
+                                    + ", or drop the option") from None
             raise

@@ -6,6 +6,7 @@ import argparse
 
 from ..errors import PhonglabError
 from ..settings import parse_sets
+from .options import add_plugin, check_plugin_files, load_plugin_files
 
 
 def add_parser(sub) -> None:
@@ -18,7 +19,8 @@ def add_parser(sub) -> None:
                     "parameters, the residual (overall, per incidence angle, worst direction) "
                     "and the albedo of fit and target against θ_i. See docs/fitting.md.",
         epilog="examples:\n  phonglab fit roughconductor --set alpha=0.2\n"
-               "  phonglab fit roughplastic --set alpha=0.1 --set distribution=ggx --json out/fit.json",
+               "  phonglab fit roughplastic --set alpha=0.1 --set distribution=ggx --json out/fit.json\n"
+               "  phonglab fit mybsdf --plugin mybsdf.py",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("target", help="a registered BSDF plugin: roughconductor, roughplastic, "
                                   "principled, plastic, phong, ...")
@@ -26,6 +28,7 @@ def add_parser(sub) -> None:
                    help="a parameter of the target (repeatable): a number, true/false, 'r, g, b', "
                         "a string or nested (bsdf.type=...), e.g. --set alpha=0.2 "
                         "--set distribution=ggx (grammar: phonglab.settings)")
+    add_plugin(p)
     p.add_argument("--model", choices=["phong", "lambert"], default="phong",
                    help="the classic model to fit (default phong)")
     p.add_argument("--maxiter", type=int, default=200, help="L-BFGS-B iterations at most (default 200)")
@@ -42,6 +45,7 @@ def run(args) -> int:
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
     from ..engine.outputs import check_output_file, write_json, write_text
 
+    check_plugin_files(args.plugin)
     for path, what in ((args.json, "JSON file (--json)"), (args.report, "report (--report)")):
         if path:
             check_output_file(path, what)
@@ -55,6 +59,7 @@ def run(args) -> int:
         raise PhonglabError(f"fitting needs gradients and RGB or mono colour: use an *_ad_rgb or "
                             f"*_ad_mono variant such as llvm_ad_rgb, not {variant}")
     registration.register(variant)
+    load_plugin_files(args.plugin)
     result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
     text = format_result(result)
     # Files first: a closed stdout (`| head`) must not lose them.

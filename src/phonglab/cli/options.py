@@ -41,3 +41,35 @@ def add_scene_params(p: argparse.ArgumentParser, *flags: str) -> None:
                    action="append", default=[], metavar="NAME=VALUE",
                    help="a value for one of the scene's <default> parameters, e.g. -D res=256 "
                         "(repeatable)")
+
+
+def add_plugin(p: argparse.ArgumentParser, register: str = "mi.register_bsdf") -> None:
+    """``--plugin FILE.py`` (repeatable): a Python file run once after the variant is set, as
+    ``phonglab validate --plugin`` runs it (:func:`phonglab.validate.core.load_plugins`)."""
+    p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
+                   help=f"a Python file run once after the variant is set; it calls {register} "
+                        f"with a name of its own (repeatable)")
+
+
+def check_plugin_files(paths, register: str = "mi.register_bsdf") -> None:
+    """Each ``--plugin`` path is a file, before any work (one sentence otherwise)."""
+    from pathlib import Path
+
+    from ..validate.kind import ValidateError
+
+    for path in paths:
+        p = Path(path)
+        if not p.is_file():
+            raise ValidateError(f"plugin file {str(path)!r} "
+                                f"{'is a folder' if p.is_dir() else 'does not exist'}; give the "
+                                f"path of a Python file that calls {register}")
+
+
+def load_plugin_files(paths) -> list[tuple[str, str]]:
+    """Run the ``--plugin`` files once in the active variant (names Mitsuba or phonglab already
+    has refused): :func:`phonglab.validate.core.load_plugins`."""
+    if not paths:
+        return []
+    from ..validate.core import load_plugins
+
+    return load_plugins(paths)

@@ -90,6 +90,12 @@ def add_parser(sub) -> None:
                    help="validate every case of the built-in catalogue (phonglab.validate.registry.catalogue: each kind's table); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
                         "and a rerun with the same options resumes from it")
+    p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="stop a topic that runs longer than this and report it as one failing "
+                        "row ('did not finish within N s'); the other topics still run. Stops "
+                        "Python code (a plugin's eval that loops forever), not a compiled "
+                        "Dr.Jit kernel; per topic and parameter point, in this process "
+                        "(not in --workers processes)")
     add_arguments(p)         # --workers / --scheduler: where the --all-builtins cases run
     p.set_defaults(func=run)
 
@@ -115,6 +121,8 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
+    if args.timeout is not None and not 0 < args.timeout < float("inf"):
+        raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     if args.report and not args.report.endswith((".html", ".htm")):
         raise ValidateError(f"--report {args.report!r} must end in .html")
     for path, what in ((args.json, "JSON report"), (args.report, "HTML report")):
@@ -239,11 +247,15 @@ def run(args) -> int:
     if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
+    from ..validate.core import topic_timeout   # lazy: Mitsuba loads only for a run
+
     if args.all_builtins:
-        return _all_builtins(args)
+        with topic_timeout(args.timeout):
+            return _all_builtins(args)
     from ..validate import html   # lazy: matplotlib loads only for a run
 
-    report, label, text = validate_one(args, params)
+    with topic_timeout(args.timeout):
+        report, label, text = validate_one(args, params)
     print(text)
     if args.json:
         from ..engine.outputs import write_json   # lazy: numpy, OpenEXR and Pillow

@@ -48,8 +48,13 @@ def _through_links(path: Path) -> Path:
 
 
 def check_file(path: Path, what: str = "output") -> None:
-    """Raise :class:`PhonglabError` when ``path`` is a folder or a read-only file."""
-    path = _through_links(Path(path))
+    """Raise :class:`PhonglabError` when ``path`` is a folder, a read-only file, or a symbolic
+    link to a file in a folder that does not exist (a write through it fails, after the work)."""
+    link = Path(path)
+    path = _through_links(link)
+    if link.is_symlink() and not path.parent.is_dir():
+        raise PhonglabError(f"the {what} {link} is a symbolic link to {path}, whose folder "
+                            f"does not exist; remove the link or choose another name")
     if path.is_dir():
         raise PhonglabError(f"the {what} {path} is a folder; give a file name instead")
     if path.exists() and not path.stat().st_mode & stat.S_IWUSR:

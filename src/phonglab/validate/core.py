@@ -27,7 +27,10 @@ table topic -> runner).  What is the same for every kind lives here:
 
 from __future__ import annotations
 
+import contextlib
 import runpy
+import signal
+import threading
 import time
 import traceback
 from dataclasses import dataclass, replace
@@ -43,7 +46,8 @@ from ..verdict import Report, Row
 from .inputs import ValidateError, check_topics
 from .kind import Kind
 
-__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "prepare", "run", "validate"]
+__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "prepare", "run",
+           "topic_timeout", "validate"]
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
@@ -187,6 +191,9 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
                                  word=kind.word, hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
+    returns = kind.part("returns")          # the Python methods' return types, on one lane
+    if returns is not None:
+        returns(loaded.plugin, loaded.label)
     files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
     return loaded._replace(files=files) if files else loaded
 
@@ -197,15 +204,84 @@ def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loade
     return load(kind, spec, params, load_plugins(plugins, kind))
 
 
+class TopicTimeout(BaseException):
+    """Raised by SIGALRM inside a topic that ran past :func:`topic_timeout`'s limit.  A
+    BaseException, so a plugin's own ``except Exception`` does not swallow it."""
+
+
+#: The limit of one topic in seconds (None: none), set by :func:`topic_timeout`.
+_TIMEOUT: float | None = None
+
+
+@contextlib.contextmanager
+def topic_timeout(seconds: float | None):
+    """For the block, each topic :func:`run` runs is stopped after ``seconds`` and becomes one
+    failing row ("did not finish within N s"); the other topics still run.
+
+    How: SIGALRM (``signal.setitimer``), whose Python handler raises :class:`TopicTimeout` in
+    the main thread at its next bytecode -- so it stops Python code (a plugin's ``eval`` that
+    loops forever), not a compiled Dr.Jit kernel or a C++ call, which run to their end before
+    Python sees the signal (a kernel that never ends still hangs).  Only in the main thread and
+    on POSIX; elsewhere the limit is not applied.  SIGINT is routed separately
+    (:func:`phonglab.runtime.interrupts_routed`) and is not touched."""
+    global _TIMEOUT
+    if seconds is not None and (isinstance(seconds, bool) or not isinstance(seconds, (int, float))
+                                or not seconds > 0 or seconds == float("inf")):
+        raise ValidateError(f"the timeout must be a number of seconds > 0, got {seconds!r}")
+    old, _TIMEOUT = _TIMEOUT, seconds
+    try:
+        yield
+    finally:
+        _TIMEOUT = old
+
+
+@contextlib.contextmanager
+def _alarm(seconds: float | None):
+    """For the block, SIGALRM after ``seconds`` raises :class:`TopicTimeout`; yields a dict
+    whose "fired" says whether it did (a C++ caller in between -- ``mi.render``'s custom op --
+    may re-raise it as a RuntimeError)."""
+    state = {"fired": False}
+    if (not seconds or not hasattr(signal, "setitimer")
+            or threading.current_thread() is not threading.main_thread()):
+        yield state
+        return
+
+    def expired(signum, frame):
+        state["fired"] = True
+        raise TopicTimeout()
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield state
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def _guarded(topic: str, runner) -> list[Row]:
     """The topic's rows; an exception (from the plugin or the validator) is one failing row of
-    that topic with the traceback in details, so the other topics still report."""
+    that topic with the traceback in details, so the other topics still report; so is a topic
+    that runs past :func:`topic_timeout`'s limit."""
+    limit = _TIMEOUT
+    state = {"fired": False}
     try:
-        return runner()
-    except Exception as exc:
+        with _alarm(limit) as state:
+            return runner()
+    except (TopicTimeout, Exception) as exc:
+        if not (isinstance(exc, TopicTimeout) or state["fired"]):
+            return _raised(topic, exc)
         return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
-                    "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
-                    {"traceback": traceback.format_exc()[-3000:]})]
+                    "fail", f"did not finish within {limit:g} s (stopped by the timeout; the "
+                    f"plugin's Python code may loop forever)",
+                    {"traceback": traceback.format_exc()[-3000:], "timeout_s": limit})]
+
+
+def _raised(topic: str, exc: Exception) -> list[Row]:
+    """The failing row of a topic that raised ``exc`` (inside an ``except`` block)."""
+    return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
+                "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
+                {"traceback": traceback.format_exc()[-3000:]})]
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,9 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
                     of a Mitsuba built-in named by its type
 ``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
+``returns``         (plugin, label) -> None: the types its Python methods return, checked on
+                    one lane right after the default load (:mod:`.returns`); a mismatch is a
+                    :class:`ValidateError`
 ==================  ==========================================================================
 
 The kind's public validator, ``validate_<name>`` (``validate_bsdf``), is made by the package
@@ -46,7 +49,7 @@ class ValidateError(PhonglabError):
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
 PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "values",
-         "known_for", "catalogue")
+         "known_for", "catalogue", "returns")
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import mitsuba as mi
 
 from . import KIND, lanes, ranges
+from ..returns import check_bsdf as returns   # noqa: F401 (the kind's part "returns")
 from .config import options
 from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost

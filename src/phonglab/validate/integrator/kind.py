@@ -19,6 +19,7 @@ from . import agreement as agreement_
 from . import analytic
 from . import gradient as gradient_
 from . import setup as setup_
+from ..returns import check_integrator
 from .config import options
 from .cost import cost
 
@@ -56,6 +57,7 @@ def load(spec, params, hint) -> Loaded:
     """Load the integrator (:func:`phonglab.settings.load_plugin`) and build its
     :class:`~.setup.Target`."""
     loaded = load_plugin(spec, params, kind=mi.Integrator, word="integrator", hint=hint)
+    check_integrator(loaded.plugin, loaded.label)   # before any render: a wrong tuple aborts
     target = setup_.build(loaded, spec, params)
     meta = {**(loaded.spec or {}), "depth": target.depth_note}
     return Loaded(target, loaded.label, meta)

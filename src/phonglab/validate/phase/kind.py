@@ -17,6 +17,7 @@ from ...settings import Loaded
 from .. import core
 from ..conformance import known_of
 from . import KIND, lanes
+from ..returns import check_phase as returns   # noqa: F401 (the kind's part "returns")
 from .config import options
 from .cost import cost
 from .gradient import gradient
