@@ -52,6 +52,7 @@ EMITTER = KIND
 
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.
 parameters = ranges.parameters
+domain = ranges.domain
 values = ranges.values
 
 
