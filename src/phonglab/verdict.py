@@ -184,16 +184,21 @@ def table_by_point(rows: list[Row], digits: int = 4) -> str:
 def summary(row: Row, digits: int = 4) -> str:
     """A row's numbers in words for a one-line summary: ``measured 1.005, expected ≤ 1
     (tolerance 6.919e-05)``; a row whose ``measured`` is a ratio to its tolerance (its reason
-    says ``measured = ...``) says so."""
+    says ``measured = max ... rel_diff / ...``, tolerance 1) says so; a χ² row names its
+    p-value, its level and the first reason a cell was rejected for besides its p-value."""
     n = lambda x: format_number(x, digits)   # noqa: E731
     prefix = RELATION_PREFIX[row.details.get("relation", "==")] if row.details else ""
     if row.measured is None:
         return "not measured"
-    what = "measured"
-    if "measured = " in (row.reason or ""):
-        what = row.reason.split("measured = ", 1)[1].split(",")[0].split(";")[0].strip()
-        what = f"measured ({what})"
-    out = f"{what} {n(row.measured)}"
+    reason = row.reason or ""
+    if "p-value" in row.name:           # a χ² row: its smallest p-value against the level
+        problems = [p for c in (row.details or {}).get("cells", []) if isinstance(c, dict)
+                    and c.get("status") == "fail" for p in c.get("problems", [])]
+        return (f"min p-value {n(row.measured)}, level {n(row.expected)}"
+                + (f"; {problems[0]}" if problems else ""))
+    if "measured = " in reason and "rel_diff" in reason and row.tolerance == 1:
+        return f"max relative error / its tolerance = {n(row.measured)}, must be ≤ 1"
+    out = f"measured {n(row.measured)}"
     if row.expected is not None:
         out += f", expected {prefix}{n(row.expected)}"
     if row.tolerance is not None:

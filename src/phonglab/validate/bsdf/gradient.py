@@ -129,7 +129,9 @@ def _one(bsdf, params, key, opts, dirs, discontinuous: bool) -> Row:
     except Exception as exc:   # a plugin refusing x ± hv (its validation) is a skip, not a fail
         _set(params, key, x0)
         return Row("gradient", key, None, None, None, None, "skipped",
-                   f"the BSDF refused the update x ± {h:g}·v: {_first(exc)}", {})
+                   f"the validator's own finite-difference step x ± {h:g}·v left the values "
+                   f"the BSDF accepts (it raised: {_first(exc)}): a limit of the check's "
+                   f"step, not a defect of the BSDF", {})
     s_abs = np.abs(_lanes(bsdf, wi, wo, c))
     noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))          # per-lane round-off bound
     jumps = np.abs(d1 - d2) > 0.01 * np.maximum(np.abs(d2), np.abs(g)) + 4.0 * noise

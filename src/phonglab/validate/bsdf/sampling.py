@@ -130,7 +130,8 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     problems = [m for m, bad in (
         ("the histogram is empty while the pdf integrates to > 0", not kept.any()),
         ("a bin has a negative expected count (pdf < 0)", bool((expected < 0).any())),
-        (f"the pdf integrates to {pdf_sum:.4f} > 1.1", pdf_sum > 1.1),
+        (f"the pdf integrates to {pdf_sum:.4f} over the sphere, expected ≤ 1 (refused above "
+         f"1.1)", pdf_sum > 1.1),
         (f"{test.impossible} samples lie in bins of expected count 0", test.impossible > 0),
         ("fewer than 2 bins to compare (dof < 1)", test.dof < 1)) if bad]
     ok = not problems and test.p_value >= level
@@ -142,6 +143,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     cell = {"wi": wi.tolist(), "p_value": test.p_value, "statistic": test.statistic,
             "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum, "scale": scale,
             "status": "pass" if ok else "fail", "messages": "\n".join(messages),
+            "problems": problems,
             "nonfinite_wo_dropped": int((~np.all(np.isfinite(s.wo), axis=1)).sum()),
             "integration": integration}
     if black:
@@ -168,6 +170,17 @@ def _worst_bin(grid: sphere_bins.Grid, hist: np.ndarray, expected: np.ndarray,
     return {**grid.ranges(flat), "observed": h, "expected": e, "residual": r}
 
 
+def why_rejected(cell: dict, level: float) -> str:
+    """A rejected cell's reason in the quantities' own units: what the χ² test could not
+    accept before its p-value (a pdf integrating to more than 1, samples where the pdf is 0),
+    else its p-value below the level."""
+    out = list(cell.get("problems", []))
+    out.append(f"p = {cell['p_value']:.3g}, below the level {level:.3g}"
+               if cell["p_value"] < level else f"p = {cell['p_value']:.3g} ≥ the level, "
+               f"rejected for the above")
+    return "; ".join(out)
+
+
 def chi2(bsdf, opts, m_tests: int) -> list[Row]:
     if lanes.delta_only(bsdf):
         return [delta_directions(bsdf, opts)]
@@ -181,7 +194,8 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
     tested = [r for r in records if r["status"] not in ("empty", "nonfinite")]
     failed = [r for r in tested if r["status"] == "fail"]
     p_min = min((r["p_value"] for r in tested), default=1.0)
-    where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f}" for r in failed)
+    where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f} ({why_rejected(r, level)})"
+                      for r in failed)
     grid = sphere_bins.Grid(opts.chi2_res)
     reason = (f"Pearson χ² of sample() vs pdf() (stats.pearson_chi2, {opts.chi2_samples} "
               f"samples, {grid.rows} cos θ_o x {grid.cols} φ_o bins, pdf integrated per bin "
