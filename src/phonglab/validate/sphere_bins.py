@@ -157,6 +157,96 @@ RECHECK_BINS = 16
 SLIVER = 1e-9
 
 
+#: A bin whose samples' median angle from their mean direction is below this many node
+#: spacings of the finest rule holds a lobe core the tensor rule cannot see (:func:`_peaks`).
+PEAK_SPREAD = 1.0
+#: Graded panels toward a peak: edges at distance h·2^-j (j = 0 .. PEAK_LEVELS) on each side,
+#: h the bin's side, so a core 2^-PEAK_LEVELS of a bin wide is resolved.
+PEAK_LEVELS = 40
+PEAK_NODES = 8
+
+
+def _angle(d: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Angle between each direction of ``d`` and ``c``, accurate for tiny angles."""
+    return 2.0 * np.arcsin(np.clip(np.linalg.norm(d - c, axis=1) / 2.0, 0.0, 1.0))
+
+
+def _graded(lo: float, hi: float, x0: float) -> np.ndarray:
+    """Panel edges of [lo, hi]: its ends and x0 ± (hi − lo)·2^-j, j = 0..PEAK_LEVELS, inside."""
+    d = (hi - lo) * 2.0 ** -np.arange(PEAK_LEVELS + 1, dtype=np.float64)
+    e = np.concatenate([[lo, hi, x0], x0 - d, x0 + d])
+    return np.unique(e[(e >= lo) & (e <= hi)])
+
+
+def _panel_rule(edges: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    t, w = np.polynomial.legendre.leggauss(k)
+    a, b = edges[:-1, None], edges[1:, None]
+    return ((a + b) / 2 + (b - a) / 2 * t).ravel(), ((b - a) / 2 * w).ravel()
+
+
+def peak_integral(grid: Grid, pdf_fn, b: int, x0: float, y0: float, k: int) -> float:
+    """∫pdf over bin ``b`` by a tensor Gauss-Legendre rule in (φ, −cos θ) whose panels are
+    graded toward the point (x0, y0) on each axis and cut at the bin's edges (so the bin's
+    indicator is integrated exactly): a peak far narrower than the bin is resolved."""
+    row, col = divmod(int(b), grid.cols)
+    hx, hy = 2.0 * math.pi / grid.cols, 2.0 / grid.rows
+    xlo, ylo = -math.pi + col * hx, -1.0 + row * hy
+    # the peak's φ nearest the bin (the seam at φ = ±π)
+    x0 = min((x0 + m * 2.0 * math.pi for m in (-1, 0, 1)),
+             key=lambda v: abs(min(max(v, xlo), xlo + hx) - v))
+    x, wx = _panel_rule(_graded(xlo, xlo + hx, min(max(x0, xlo), xlo + hx)), k)
+    y, wy = _panel_rule(_graded(ylo, ylo + hy, min(max(y0, ylo), ylo + hy)), k)
+    xx, yy = (a.ravel() for a in np.meshgrid(x, y, indexing="ij"))
+    cos = -yy
+    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
+    wo = np.stack([sin * np.cos(xx), sin * np.sin(xx), cos], axis=1)
+    p = np.asarray(pdf_fn(wo), np.float64)
+    return float((np.where(np.isfinite(p), p, 0.0) * np.outer(wx, wy).ravel()).sum())
+
+
+def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndarray,
+           index: np.ndarray, bins: np.ndarray, k_max: int, info: dict) -> np.ndarray:
+    """``e`` with a lobe narrower than the finest node spacing integrated: for each rechecked
+    bin whose count still contradicts it (> RECHECK_Z σ) and whose samples' median angle from
+    their mean direction is below PEAK_SPREAD node spacings, that bin and its 8 neighbours are
+    integrated again by :func:`peak_integral`, graded toward the samples' mean direction.  The
+    samples only place the grading; the value is the pdf's alone, so a sampler that disagrees
+    with its pdf still fails.  A rough dielectric between nearly equal IORs has such a lobe:
+    its transmission lobe's core is α·|1 − η|/η wide (2.8·10⁻⁶ rad at α = 0.01,
+    η = 1/1.000277), which no tensor rule over 50 × 101 bins finds.  ``info`` gains ``peaks``
+    (centre, the bins integrated, their integral and its |I_k − I_{k/2}|)."""
+    spacing = min(2.0 * math.pi / grid.cols, 2.0 / grid.rows) / (2 * k_max)
+    peaks, done = [], set()
+    for b in bins:
+        z = abs(o[b] - e[b]) / math.sqrt(max(e[b], 1.0))
+        if z <= RECHECK_Z or o[b] < 2 or int(b) in done:
+            continue
+        c = wo[index == b].mean(axis=0)
+        if not np.linalg.norm(c) > 0:
+            continue
+        c /= np.linalg.norm(c)
+        if float(np.median(_angle(wo[index == b], c))) > PEAK_SPREAD * spacing:
+            continue
+        near = wo[_angle(wo, c) < 4.0 * spacing]           # the lobe across bin edges
+        c = near.mean(axis=0) / np.linalg.norm(near.mean(axis=0))
+        x0, y0 = math.atan2(c[1], c[0]), -c[2]
+        row, col = divmod(int(b), grid.cols)
+        around = sorted({((row + i) % grid.rows) * grid.cols + (col + j) % grid.cols
+                         for i in (-1, 0, 1) for j in (-1, 0, 1)
+                         if 0 <= row + i < grid.rows} - done)
+        fine = np.array([peak_integral(grid, pdf_fn, a, x0, y0, PEAK_NODES) for a in around])
+        coarse = np.array([peak_integral(grid, pdf_fn, a, x0, y0, PEAK_NODES // 2)
+                           for a in around])
+        e[around] = fine * n
+        done.update(around)
+        peaks.append({"bin": int(b), "centre": c.tolist(), "bins": around,
+                      "integral": float(fine.sum()),
+                      "error": float(np.abs(fine - coarse).sum())})
+        info["pdf_evaluations"] += len(around) * 5 * (2 * PEAK_LEVELS + 4) ** 2 * PEAK_NODES ** 2 // 4
+    info["peaks"] = peaks
+    return e
+
+
 def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_max: int,
             info: dict) -> np.ndarray:
     """``expected`` with the bins whose count of the directions ``wo`` contradicts it
@@ -188,6 +278,8 @@ def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_
         info["recheck_error_max"] = float(np.max(np.abs(fine - coarse)) * n)
         info["pdf_evaluations"] += len(bins) * ((k_max) ** 2 + (2 * k_max) ** 2)
         info["nonfinite_pdf_dropped"] += bad1 + bad2
+    if len(bins) and k_max >= 2:
+        e = _peaks(grid, pdf_fn, n, e, o, wo, index, bins, k_max, info)
     empty = (e == 0) & (o > 0)
     if empty.any():
         inside = empty[index]
