@@ -157,12 +157,9 @@ RECHECK_BINS = 16
 SLIVER = 1e-9
 
 
-#: A bin whose samples' median angle from their mean direction is below this many node
-#: spacings of the finest rule holds a lobe core the tensor rule cannot see (:func:`_peaks`).
-PEAK_SPREAD = 1.0
 #: Graded panels toward a peak: edges at distance h·2^-j (j = 0 .. PEAK_LEVELS) on each side,
 #: h the bin's side, so a core 2^-PEAK_LEVELS of a bin wide is resolved.
-PEAK_LEVELS = 40
+PEAK_LEVELS = 30
 PEAK_NODES = 8
 
 
@@ -207,28 +204,26 @@ def peak_integral(grid: Grid, pdf_fn, b: int, x0: float, y0: float, k: int) -> f
 def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndarray,
            index: np.ndarray, bins: np.ndarray, k_max: int, info: dict) -> np.ndarray:
     """``e`` with a lobe narrower than the finest node spacing integrated: for each rechecked
-    bin whose count still contradicts it (> RECHECK_Z σ) and whose samples' median angle from
-    their mean direction is below PEAK_SPREAD node spacings, that bin and its 8 neighbours are
-    integrated again by :func:`peak_integral`, graded toward the samples' mean direction.  The
-    samples only place the grading; the value is the pdf's alone, so a sampler that disagrees
-    with its pdf still fails.  A rough dielectric between nearly equal IORs has such a lobe:
+    bin whose count still contradicts it (> RECHECK_Z σ: a node missed the peak, or hit it and
+    weighted it by a whole node's area) and where the pdf is > 0 at one of its samples, that bin and its 8 neighbours are integrated again by
+    :func:`peak_integral`, graded toward the bin's sample of largest pdf.  The samples only
+    place the grading; the value is the pdf's alone (a finer rule of the same integral), so a
+    sampler that disagrees with its pdf still fails.  A rough dielectric between nearly equal IORs has such a lobe:
     its transmission lobe's core is α·|1 − η|/η wide (2.8·10⁻⁶ rad at α = 0.01,
     η = 1/1.000277), which no tensor rule over 50 × 101 bins finds.  ``info`` gains ``peaks``
     (centre, the bins integrated, their integral and its |I_k − I_{k/2}|)."""
-    spacing = min(2.0 * math.pi / grid.cols, 2.0 / grid.rows) / (2 * k_max)
     peaks, done = [], set()
     for b in bins:
         z = abs(o[b] - e[b]) / math.sqrt(max(e[b], 1.0))
         if z <= RECHECK_Z or o[b] < 2 or int(b) in done:
             continue
-        c = wo[index == b].mean(axis=0)
-        if not np.linalg.norm(c) > 0:
+        # grade toward the lobe's peak: the bin's sample of largest pdf (a skewed lobe's mean
+        # may lie many core widths from its peak)
+        inside = wo[index == b]
+        p = np.asarray(pdf_fn(inside), np.float64)
+        if not (np.isfinite(p) & (p > 0)).any():
             continue
-        c /= np.linalg.norm(c)
-        if float(np.median(_angle(wo[index == b], c))) > PEAK_SPREAD * spacing:
-            continue
-        near = wo[_angle(wo, c) < 4.0 * spacing]           # the lobe across bin edges
-        c = near.mean(axis=0) / np.linalg.norm(near.mean(axis=0))
+        c = inside[int(np.nanargmax(np.where(np.isfinite(p), p, -1.0)))]
         x0, y0 = math.atan2(c[1], c[0]), -c[2]
         row, col = divmod(int(b), grid.cols)
         around = sorted({((row + i) % grid.rows) * grid.cols + (col + j) % grid.cols
