@@ -234,3 +234,10 @@ def test_a_set_value_outside_its_documented_range_is_bad_input(variant_llvm_rgb,
 def test_a_set_value_outside_a_declared_range_is_bad_input(variant_llvm_rgb, capsys):
     assert main(["validate", "phong", "--set", "exponent=2e4", "--no-sweep"]) == 2
     assert "declared by the plugin class's PARAMETER_RANGES" in capsys.readouterr().err
+
+
+def test_an_emitters_sweep_extent_is_no_limit_on_set(variant_llvm_rgb):
+    """The emitted quantity's [0, 10] is where the sweep goes, not a documented limit: a
+    20 W/sr point light is validated, not refused."""
+    assert main(["validate", "point", "--set", "intensity=20", "--no-sweep", "--only",
+                 "finite"]) == 0

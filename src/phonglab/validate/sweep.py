@@ -173,7 +173,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
 
 SOURCES = {"declared": "declared by the plugin class's PARAMETER_RANGES",
            "mitsuba": "that phonglab validates it over (from Mitsuba 3.9.1's plugin reference: "
-                      "phonglab.validate.bsdf.ranges.BUILTIN and its emitter twin)"}
+                      "phonglab.validate.bsdf.ranges.BUILTIN)"}
 
 
 def check_set(kind: Kind, target, spec, params) -> None:
