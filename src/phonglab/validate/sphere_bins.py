@@ -202,7 +202,7 @@ def peak_integral(grid: Grid, pdf_fn, b: int, x0: float, y0: float, k: int) -> f
 
 
 def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndarray,
-           index: np.ndarray, bins: np.ndarray, k_max: int, info: dict) -> np.ndarray:
+           index: np.ndarray, bins: np.ndarray, info: dict) -> np.ndarray:
     """``e`` with a lobe narrower than the finest node spacing integrated: for each rechecked
     bin whose count still contradicts it (> RECHECK_Z σ: a node missed the peak, or hit it and
     weighted it by a whole node's area) and where the pdf is > 0 at one of its samples, that bin and its 8 neighbours are integrated again by
@@ -237,7 +237,6 @@ def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndar
         peaks.append({"bin": int(b), "centre": c.tolist(), "bins": around,
                       "integral": float(fine.sum()),
                       "error": float(np.abs(fine - coarse).sum())})
-        info["pdf_evaluations"] += len(around) * 5 * (2 * PEAK_LEVELS + 4) ** 2 * PEAK_NODES ** 2 // 4
     info["peaks"] = peaks
     return e
 
@@ -255,8 +254,10 @@ def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_
     E = 0 whose samples have pdf > 0 at their own directions meets the support in a sliver
     thinner than the nodes (a shadowed region's edge): it gets E = :data:`SLIVER`, so the test
     pools it instead of calling its samples impossible; samples where pdf = 0 stay impossible.
-    ``info`` (the cell's ``integration`` record) gains ``rechecked``, their error estimate
-    and ``slivers``.
+    A bin that still contradicts its count after that is integrated with its neighbours by
+    panels graded toward its sample of largest pdf (:func:`_peaks`: a lobe far narrower than
+    any node).  ``info`` (the cell's ``integration`` record) gains ``rechecked``, their error
+    estimate, ``peaks`` and ``slivers``.
     """
     e = expected.ravel().copy()
     index = grid.index(wo)
@@ -274,7 +275,7 @@ def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_
         info["pdf_evaluations"] += len(bins) * ((k_max) ** 2 + (2 * k_max) ** 2)
         info["nonfinite_pdf_dropped"] += bad1 + bad2
     if len(bins) and k_max >= 2:
-        e = _peaks(grid, pdf_fn, n, e, o, wo, index, bins, k_max, info)
+        e = _peaks(grid, pdf_fn, n, e, o, wo, index, bins, info)
     empty = (e == 0) & (o > 0)
     if empty.any():
         inside = empty[index]
