@@ -413,3 +413,22 @@ def test_a_builtins_findings_follow_its_microfacet_distribution():
     assert "beckmann-pdf-normalization" in keys({})
     assert "beckmann-pdf-normalization" in keys({"distribution": "beckmann"})
     assert "beckmann-pdf-normalization" not in keys({"distribution": "ggx"})
+
+
+def test_a_gradient_skip_of_the_checks_own_making_does_not_blame_the_plugin(variant_llvm_rgb):
+    """#36 item 6: conductor's eval is 0 (a delta lobe), so the eval-based gradient has no
+    dependence to follow; that skip said "the BSDF refused the update".  It now says it is
+    the check's limit -- and AD that lost a dependence eval has still fails."""
+    report = validate_bsdf("conductor", topics=["gradient"])
+    rows = [r for r in report.rows if r.status == "skipped"]
+    assert rows and all("refused" not in r.reason for r in rows)
+    assert any("a limit of the check, not a defect of the BSDF" in r.reason for r in rows)
+
+
+def test_ad_that_loses_a_dependence_eval_has_fails(variant_llvm_rgb, tmp_path):
+    plugin = tmp_path / "detached.py"
+    plugin.write_text((DEFECTS / "sweep" / "plain_lambert.py").read_text().replace(
+        "value = self.GAIN * self.kd *", "value = self.GAIN * dr.detach(self.kd) *"))
+    report = validate_bsdf("author_lambert", plugins=[plugin], topics=["gradient"])
+    (row,) = [r for r in report.rows if r.name == "kd"]
+    assert row.status == "fail" and "AD lost a dependence eval has" in row.reason

@@ -128,7 +128,7 @@ def test_the_table_groups_by_point_and_shows_the_worst():
             Row("finite", "a", 5.0, 0.0, None, 0.0, "fail", "bad", {}, point={"k": 0.0})]
     text = table_by_point(rows)
     assert "given" in text and "all pass" in text
-    assert "fail finite: a (5 against 0)" in text and "at k=0:" in text
+    assert "fail finite: a (measured 5, expected 0 (tolerance 0))" in text and "at k=0:" in text
 
 
 def test_assert_bsdf_valid_sweeps_and_names_the_point(variant_llvm_rgb):
@@ -164,3 +164,80 @@ def test_a_dark_surface_emitter_is_still_chi2_tested(variant_llvm_rgb):
     (row,) = report.rows
     assert row.status == "pass", row.reason
     assert all(p.get("dark") or p["status"] == "empty" for p in row.details["points"])
+
+
+def test_an_energy_excess_outside_the_domain_is_advice_not_a_fail(variant_llvm_rgb, tmp_path,
+                                                                  capsys):
+    """#36 item 2: a correct author-style Lambert whose plain-float kd is accepted up to 10⁴
+    (probed, no PARAMETER_RANGES) passes, the albedo 10⁴ at kd = 10⁴ being advice shown in the
+    text, the JSON and the HTML report."""
+    out, page = tmp_path / "r.json", tmp_path / "r.html"
+    rc = main(["validate", "author_lambert", "--plugin", str(SWEEP_DEFECTS / "plain_lambert.py"),
+               "--quick", "--only", "energy", "--json", str(out), "--report", str(page)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    assert "accepts kd = 10000, where the directional albedo is 1e+04" in text
+    assert "declare PARAMETER_RANGES or refuse it" in text
+    d = json.loads(out.read_text())
+    (row,) = [r for r in d["results"] if r["status"] == "advice"]
+    assert row["topic"] == "energy" and row["point"] == {"kd": 10000.0}
+    (advice,) = d["meta"]["sweep"]["advice"]
+    assert advice["parameter"] == "kd" and advice["starts_at"] == 10000.0
+    assert advice["measured"] == pytest.approx(1e4, rel=1e-3)
+    html = page.read_text()
+    assert "advice" in html and "accepts kd = 10000" in html
+
+
+def test_an_energy_defect_inside_the_domain_still_fails(variant_llvm_rgb):
+    """The planted gain (albedo 1.5 kd) fails at the given point kd = 0.8 (albedo 1.2): the
+    domain rule never turns a fail at the given point into advice."""
+    report = validate_bsdf("author_lambert_gain", plugins=[SWEEP_DEFECTS / "plain_lambert.py"],
+                           quick=True, topics=["energy"], sweep=True)
+    failing = [r for r in report.failing if r.topic == "energy"]
+    assert [r.point for r in failing] == [{}], report.table()
+    assert failing[0].measured == pytest.approx(1.2, rel=1e-3)
+    assert any(r.status == "advice" for r in report.rows)    # kd = 10⁴ is still advice
+
+
+def test_a_declared_domain_keeps_the_bound_a_fail():
+    """A bound row at a point of declared/documented parameters stays a fail; a probed one
+    becomes advice; an identity row never does."""
+    from phonglab.validate.sweep import advise
+
+    swept = [_P("kd", 0.5, Range(0.0, 1.0))]
+    probed = _P("ks", 0.5, Range(0.0, 1e4))
+    probed.source = "probed"
+    rows = [Row("energy", "directional albedo ≤ 1", 1.3, 1.0, None, 0.01, "fail", "r",
+                {"relation": "<="}, point={"kd": 1.0}),
+            Row("energy", "directional albedo ≤ 1", 50.0, 1.0, None, 0.01, "fail", "r",
+                {"relation": "<="}, point={"ks": 100.0}),
+            Row("weight", "weight = eval/pdf", 9.0, 0.0, None, 1.0, "fail", "r", {},
+                point={"ks": 100.0})]
+    advice = advise(rows, swept + [probed], ("energy",))
+    assert [r.status for r in rows] == ["fail", "advice", "fail"]
+    assert advice[0]["text"].startswith("accepts ks = 100, where the directional albedo is 50")
+
+
+@pytest.mark.parametrize("value", ["-1", "1e30"])
+def test_a_set_value_outside_its_documented_range_is_bad_input(variant_llvm_rgb, capsys, value):
+    """#36 item 2: --set alpha=-1 or 1e30 ran 23 s and failed; now exit 2 in one sentence
+    naming the range and where it comes from, before any topic runs."""
+    import time
+    t0 = time.perf_counter()
+    assert main(["validate", "roughplastic", "--set", f"alpha={value}"]) == 2
+    assert time.perf_counter() - t0 < 5.0
+    err = capsys.readouterr().err
+    assert "outside the range [0.01, 1] of roughplastic's alpha" in err
+    assert "Mitsuba 3.9.1's plugin reference" in err and "Traceback" not in err
+
+
+def test_a_set_value_outside_a_declared_range_is_bad_input(variant_llvm_rgb, capsys):
+    assert main(["validate", "phong", "--set", "exponent=2e4", "--no-sweep"]) == 2
+    assert "declared by the plugin class's PARAMETER_RANGES" in capsys.readouterr().err
+
+
+def test_an_emitters_sweep_extent_is_no_limit_on_set(variant_llvm_rgb):
+    """The emitted quantity's [0, 10] is where the sweep goes, not a documented limit: a
+    20 W/sr point light is validated, not refused."""
+    assert main(["validate", "point", "--set", "intensity=20", "--no-sweep", "--only",
+                 "finite"]) == 0

@@ -14,7 +14,11 @@ problem (JSON-able data).  Its ``status`` is one of :data:`STATUSES`:
 * ``fail``    it is not;
 * ``KNOWN``   it is not, and the harness names a documented cause (``reason`` or
   ``details["known_issue"]``); the tolerance is the same as for ``fail``;
-* ``skipped`` the check does not apply (``reason`` says why).
+* ``skipped`` the check does not apply (``reason`` says why);
+* ``advice``  a physical bound (a BSDF's albedo ≤ 1, an emitter's power) exceeded at a
+  parameter point outside the plugin's declared or documented domain (a value only probed at
+  load time: a plain-float ``kd`` accepted up to 10⁴): not a fail, the plugin should declare
+  its range or refuse the value (``reason`` says where the excess starts).
 
 One key of ``details`` has a meaning here: ``relation`` (``"=="``, ``"<="``, ``">="``), how
 ``measured`` is held against ``expected`` ± ``tolerance`` (``<=``: measured ≤ expected +
@@ -41,7 +45,7 @@ from pathlib import Path
 
 
 #: The possible values of :attr:`Row.status`.
-STATUSES = ("pass", "fail", "KNOWN", "skipped")
+STATUSES = ("pass", "fail", "KNOWN", "skipped", "advice")
 
 #: How ``details["relation"]`` shows on the expected value of a table row.
 RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
@@ -162,15 +166,14 @@ def table_by_point(rows: list[Row], digits: int = 4) -> str:
     for r in rows:
         points.setdefault(point_label(r.point), []).append(r)
     width = max((len(k) for k in points), default=5)
-    lines = [f"{'point'.ljust(width)}  pass fail KNOWN skipped  worst row"]
+    lines = [f"{'point'.ljust(width)}  pass fail KNOWN skipped advice  worst row"]
     for label, group in points.items():
         count = {s: sum(r.status == s for r in group) for s in STATUSES}
         worst = _worst(group)
         lines.append(f"{label.ljust(width)}  {count['pass']:4d} {count['fail']:4d} "
-                     f"{count['KNOWN']:5d} {count['skipped']:7d}  "
+                     f"{count['KNOWN']:5d} {count['skipped']:7d} {count['advice']:6d}  "
                      + (f"{worst.status} {worst.topic}: {worst.name} "
-                        f"({format_number(worst.measured, digits)} against "
-                        f"{format_number(worst.tolerance, digits)})" if worst else "all pass"))
+                        f"({summary(worst, digits)})" if worst else "all pass"))
     for label, group in points.items():
         failing = [r for r in group if r.status == "fail"]
         if failing:
@@ -178,10 +181,35 @@ def table_by_point(rows: list[Row], digits: int = 4) -> str:
     return "\n".join(lines)
 
 
+def summary(row: Row, digits: int = 4) -> str:
+    """A row's numbers in words for a one-line summary: ``measured 1.005, expected ≤ 1
+    (tolerance 6.919e-05)``; a row whose ``measured`` is a ratio to its tolerance (its reason
+    says ``measured = max ... rel_diff / ...``, tolerance 1) says so; a χ² row names its
+    p-value, its level and the first reason a cell was rejected for besides its p-value."""
+    n = lambda x: format_number(x, digits)   # noqa: E731
+    prefix = RELATION_PREFIX[row.details.get("relation", "==")] if row.details else ""
+    if row.measured is None:
+        return "not measured"
+    reason = row.reason or ""
+    if "p-value" in row.name:           # a χ² row: its smallest p-value against the level
+        problems = [p for c in (row.details or {}).get("cells", []) if isinstance(c, dict)
+                    and c.get("status") == "fail" for p in c.get("problems", [])]
+        return (f"min p-value {n(row.measured)}, level {n(row.expected)}"
+                + (f"; {problems[0]}" if problems else ""))
+    if "measured = " in reason and "rel_diff" in reason and row.tolerance == 1:
+        return f"max relative error / its tolerance = {n(row.measured)}, must be ≤ 1"
+    out = f"measured {n(row.measured)}"
+    if row.expected is not None:
+        out += f", expected {prefix}{n(row.expected)}"
+    if row.tolerance is not None:
+        out += f" (tolerance {n(row.tolerance)})"
+    return out
+
+
 def _worst(rows: list[Row]) -> Row | None:
-    """The first row of the worst status among ``rows`` (fail, then KNOWN), None if all
-    pass or are skipped."""
-    for status in ("fail", "KNOWN"):
+    """The first row of the worst status among ``rows`` (fail, then KNOWN, then advice), None
+    if all pass or are skipped."""
+    for status in ("fail", "KNOWN", "advice"):
         found = [r for r in rows if r.status == status]
         if found:
             return found[0]

@@ -150,6 +150,10 @@ def sweep_text(report: Report) -> str:
         lines += ["", f"the ranges of {', '.join(probed)} were probed (the values the plugin "
                       f"accepts at load time); declare them on the plugin class as "
                       f"PARAMETER_RANGES = {{name: (lo, hi)}} if they are narrower"]
+    if sw.get("advice"):
+        lines += ["", "advice (a physical bound exceeded outside the declared or documented "
+                      "domain: not a fail):"]
+        lines += [f"  {a['topic']}: {a['text']}" for a in sw["advice"]]
     refused = [r for r in sw["runs"] if r["status"] == "refused"]
     if refused:
         lines += ["", "outside the plugin's range (refused at load time, not run):"]
@@ -226,6 +230,7 @@ def validate_one(args, params: dict):
     topics = kind.check_topics(args.only)
     known = builtin_known(args, kind, params)
     target = core.load(kind, args.bsdf, params, registered)
+    sweep.check_set(kind, target, args.bsdf, params)   # a --set value outside its range: exit 2
     if args.no_sweep:
         report = core.run(kind, target, topics=topics, seed=args.seed, quick=args.quick,
                           known=known)

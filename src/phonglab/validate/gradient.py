@@ -124,8 +124,10 @@ def _refused(key, h, exc) -> Row:
                    "sample_direction's weight does not depend on this parameter (Dr.Jit: the "
                    "output does not depend on it; e.g. a spot's texture when none is given)", {})
     return Row("gradient", key, None, None, None, None, "skipped",
-               f"the emitter refused the update x ± {h:g}·v: "
-               f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}", {})
+               f"the validator's own finite-difference step x ± {h:g}·v left the values the "
+               f"emitter accepts (it raised: "
+               f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}): a limit of the "
+               f"check's step, not a defect of the emitter", {})
 
 
 def _jumps(g, d1, d2, forward, backward, noise) -> np.ndarray:

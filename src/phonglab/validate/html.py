@@ -21,9 +21,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..engine.outputs import write_text  # noqa: E402
-from ..verdict import Report, cells, evidence, header  # noqa: E402
+from ..verdict import Report, cells, evidence, header, point_label  # noqa: E402
 
-COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6"}
+COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6",
+           "advice": "#dce8f8"}
 STYLE = ("body{font-family:sans-serif;margin:1.5em;max-width:1100px}"
          "table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #bbb;"
          "padding:3px 6px;vertical-align:top}td.reason{font-size:11px;color:#333}"
@@ -42,9 +43,12 @@ def _img(uri: str, alt: str) -> str:
 
 
 def _table(report: Report) -> str:
-    rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in header() + ("reason",)) + "</tr>"]
+    swept = any(r.point is not None for r in report.rows)
+    rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in ("point",) * swept + header()
+                             + ("reason",)) + "</tr>"]
     for r in report.rows:
         rows.append(f'<tr style="background:{COLOURS.get(r.status, "#fff")}">'
+                    + (f"<td>{html.escape(point_label(r.point))}</td>" if swept else "")
                     + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells(r))
                     + f'<td class="reason">{html.escape(r.reason)}'
                     + (f"<br><b>{html.escape(evidence(r))}</b>" if r.status == "fail"
@@ -120,15 +124,22 @@ def render(report: Report) -> str:
              f"<h1>{html.escape(title)}</h1><p><b>{verdict}</b>; seed {m.get('seed')}, "
              f"{'quick' if m.get('quick') else 'default'} sizes, {m.get('seconds')} s</p>",
              _table(report)]
+    advice = (m.get("sweep") or {}).get("advice") or []
+    if advice:
+        parts += ["<h2>Advice</h2><p>A physical bound exceeded at a probed parameter value, "
+                  "outside any declared or documented range (not a fail):</p><ul>"
+                  + "".join(f"<li>{html.escape(a['topic'])}: {html.escape(a['text'])}</li>"
+                            for a in advice) + "</ul>"]
     for r in report.rows:
+        at = (f" at {html.escape(point_label(r.point))}" if r.point is not None else "")
         if r.topic == "energy" and "albedo" in r.details:
-            parts += ["<h2>Directional albedo</h2>", _albedo(r.details)]
+            parts += [f"<h2>Directional albedo{at}</h2>", _albedo(r.details)]
             if "lobes" in r.details:
-                parts += ["<h2>Lobe slices</h2>", _lobes(r.details["lobes"])]
+                parts += [f"<h2>Lobe slices{at}</h2>", _lobes(r.details["lobes"])]
         if r.topic == "chi2" and r.status in ("fail", "KNOWN"):
             cells = _chi2_cells(r.details)
             if cells:
-                parts += ["<h2>Failing χ² cells</h2>", cells]
+                parts += [f"<h2>Failing χ² cells{at} ({r.status})</h2>", cells]
     parts.append("</body></html>")
     return "\n".join(parts)
 

@@ -16,6 +16,8 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``parameters``      (target, spec, pinned) -> the parameters a sweep varies (each with
                     ``name``, ``value``, ``range``, ``source``); absent: the kind is checked
                     at its given point only
+``domain``          (target, spec) -> ({name: Range}, source): the declared or documented
+                    ranges a ``--set`` value must lie in (absent: none is checked)
 ``values``          target -> {parameter: value} a documented cause's ``at`` is held against
 ``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
                     of a Mitsuba built-in named by its type
@@ -48,7 +50,7 @@ class ValidateError(PhonglabError):
 
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
-PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "values",
+PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "domain", "values",
          "known_for", "catalogue", "returns")
 
 
@@ -63,6 +65,10 @@ class Kind:
     topics: tuple[str, ...]    #: every topic, in table order
     #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
     informational: tuple[str, ...] = ()
+    #: topics that hold a physical bound (a BSDF's albedo ≤ 1, an emitter's power) rather than
+    #: an identity: a sweep judges them only inside the declared or documented domain, and an
+    #: excess at a probed point outside it is advice (:func:`phonglab.validate.sweep.advise`)
+    bounds: tuple[str, ...] = ()
     object_type: str = ""      #: its ``mi.ObjectType`` member ("BSDF", "PhaseFunction")
     tag: str = ""              #: its XML element ("bsdf", "phase")
     impl: str = ""             #: the module holding its parts (module docstring)

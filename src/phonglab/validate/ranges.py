@@ -118,20 +118,26 @@ def traversed(plugin) -> dict[str, float]:
     return out
 
 
+def domain(plugin, spec, *, builtin: dict) -> tuple[dict[str, Range], str]:
+    """The declared (``PARAMETER_RANGES``) or documented (``builtin``) ranges of ``plugin``
+    loaded from ``spec``, and where they come from (``declared``, ``mitsuba``); ({}, "probed")
+    when it has neither."""
+    type_name = spec if isinstance(spec, str) else spec["type"]
+    declared = getattr(type(plugin), "PARAMETER_RANGES", None)
+    if declared:
+        return {k: Range.of(v) for k, v in declared.items()}, "declared"
+    if type_name in builtin:
+        return dict(builtin[type_name]), "mitsuba"
+    return {}, "probed"
+
+
 def parameters(plugin, spec, pinned=(), *, builtin: dict, cls, word: str,
                probe: bool = True) -> list[Parameter]:
     """The parameters a sweep of ``plugin`` (of Mitsuba class ``cls``, loaded from ``spec``: a
     type name or dict) varies, with their ranges (module docstring); ``builtin``: the kind's
     table of Mitsuba's built-ins; ``pinned`` names are left out."""
-    type_name = spec if isinstance(spec, str) else spec["type"]
-    declared = getattr(type(plugin), "PARAMETER_RANGES", None)
     values = traversed(plugin)
-    if declared:
-        table, source = {k: Range.of(v) for k, v in declared.items()}, "declared"
-    elif type_name in builtin:
-        table, source = builtin[type_name], "mitsuba"
-    else:
-        table, source = {}, "probed"
+    table, source = domain(plugin, spec, builtin=builtin)
     out = []
     for name, rng in table.items():
         if name in pinned:

@@ -19,6 +19,17 @@ Statistics.  With P points run, each statistical test runs at the Šidák level 
 (``family`` = P in :func:`phonglab.validate.core.run`), so the plugin as a whole still fails
 by chance with probability α = :data:`phonglab.stats.ALPHA`.
 
+Identities everywhere, physical bounds in the domain.  The consistency topics (finite,
+weight, pdf, chi2, normalization, reciprocity, component, gradient, the polarized ones) are
+judged at every point the plugin accepts.  A kind's physical bounds (``Kind.bounds``: a BSDF's
+``energy``, albedo ≤ 1; an emitter's ``power``) are judged only inside the declared
+(``PARAMETER_RANGES``) or documented (Mitsuba's ``BUILTIN`` tables) domain: at the given
+point and at points that vary only parameters with such a range.  A point that sets a probed
+parameter (a plain float the plugin accepts up to 10⁴) is outside it: a bound that fails there
+becomes an ``advice`` row (not a fail) saying which value is accepted and what it measures
+("accepts kd = 10000, where directional albedo is 9499"), and the meta's ``sweep.advice``
+lists, per parameter, where the excess starts (:func:`advise`).
+
 Informational topics (``cost``: a timing that never fails) run at the given point only.
 
 Rows.  Every row carries its point (``Row.point``: the parameters that differ from the given
@@ -94,6 +105,7 @@ def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0
     topics = check_topics(topics, kind.topics)
     t0 = time.perf_counter()
     base = core.prepare(kind, spec, variant=variant, params=params, plugins=plugins)
+    check_set(kind, base, spec, params)
     return run(kind, base, spec, params=params, topics=topics, seed=seed, quick=quick,
                known=known, plugins=plugins, family=family, sizes=sizes, runner=runner,
                progress=progress, t0=t0)
@@ -146,6 +158,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
         records.append({"point": pt.params, "status": "run",
                         "failing": sorted({r.topic for r in rep.failing}),
                         "seconds": rep.meta.get("seconds")})
+    advice = advise(rows, swept, kind.bounds)
     meta = dict(reports[0].meta)
     # every point ran at the family level: its statistical_tests is already P·m (P points)
     meta.update(seconds=round(time.perf_counter() - t0, 3),
@@ -153,9 +166,85 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                "parameters": [{"name": p.name, "given": p.value, "lo": p.range.lo,
                                "hi": p.range.hi, "edges": list(p.range.edges),
                                "source": p.source} for p in swept],
-               "pinned": sorted(pinned), "runs": records + refused})
+               "pinned": sorted(pinned), "runs": records + refused, "advice": advice})
     meta.pop("topic_seconds", None)
     return Report(meta, rows)
+
+
+SOURCES = {"declared": "declared by the plugin class's PARAMETER_RANGES",
+           "mitsuba": "that phonglab validates it over (from Mitsuba 3.9.1's plugin reference: "
+                      "phonglab.validate.bsdf.ranges.BUILTIN)"}
+
+
+def check_set(kind: Kind, target, spec, params) -> None:
+    """Raise :class:`ValidateError` (one sentence, before any work) when a value of
+    ``params`` (``--set``) lies outside its parameter's declared or documented range."""
+    domain = kind.part("domain")
+    if domain is None or not params:
+        return
+    table, source = domain(target.plugin, spec)
+    for name, value in params.items():
+        rng = table.get(name)
+        values = value if isinstance(value, (list, tuple)) else [value]
+        if rng is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                  for v in values):
+            continue
+        bad = [v for v in values if not rng.lo <= v <= rng.hi]
+        if bad:
+            raise ValidateError(
+                f"{name}={bad[0]:g} is outside the range [{rng.lo:g}, {rng.hi:g}] of "
+                f"{spec if isinstance(spec, str) else spec['type']}'s {name} "
+                f"{SOURCES[source]}; give a value in it")
+
+
+def outside(point: dict, swept) -> list[str]:
+    """The parameters of ``point`` whose range was only probed (no declared or documented
+    domain): the point is outside the domain when there is any."""
+    probed = {p.name for p in swept if p.source == "probed"}
+    return [name for name in point if name in probed]
+
+
+def advise(rows: list[Row], swept, bounds) -> list[dict]:
+    """Turn each failing row of a physical-bound topic (``bounds``) at a point outside the
+    domain (:func:`outside`) into an ``advice`` row, in place; the advice per parameter and
+    topic: the accepted value nearest the given one where the bound is exceeded (where it
+    starts), the farthest, and what the row measured at each."""
+    given = {p.name: p.value for p in swept}
+    found: dict[tuple, list] = {}
+    for r in rows:
+        names = outside(r.point or {}, swept) if r.topic in bounds else []
+        if r.status != "fail" or not names:
+            continue
+        values = ", ".join(f"{n} = {r.point[n]:g}" for n in names)
+        r.status = "advice"
+        r.reason = (f"not a fail: the plugin accepts {values} (a value probed at load time, "
+                    f"outside any declared or documented range), where {_quantity(r)} is "
+                    f"{_num(r.measured)} (bound {_num(r.expected)}): declare PARAMETER_RANGES "
+                    f"on the plugin class or refuse the value at load time. " + r.reason)
+        for n in names:
+            found.setdefault((n, r.topic, r.name), []).append((r.point[n], r.measured))
+    out = []
+    for (name, topic, row_name), hits in found.items():
+        g = given.get(name) or 0.0
+        hits.sort(key=lambda h: abs(h[0] - g))
+        (v0, m0), (v1, m1) = hits[0], hits[-1]
+        text = (f"accepts {name} = {v0:g}, where {_quantity(row_name)} is {_num(m0)}"
+                + (f" (up to {name} = {v1:g}: {_num(m1)})" if v1 != v0 else "")
+                + ": declare PARAMETER_RANGES or refuse it")
+        out.append({"parameter": name, "topic": topic, "starts_at": v0, "measured": m0,
+                    "worst_at": v1, "worst_measured": m1, "text": text})
+    return out
+
+
+def _quantity(row) -> str:
+    """What a bound row measures, without its bound: "directional albedo ≤ 1" -> "the
+    directional albedo"."""
+    name = row if isinstance(row, str) else row.name
+    return "the " + name.split(" ≤")[0].split(" =")[0].split(" >")[0]
+
+
+def _num(x) -> str:
+    return "-" if x is None else f"{x:.4g}"
 
 
 def base_variant() -> str:

@@ -17,5 +17,5 @@ from .topics import TOPICS
 
 #: The BSDF kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
 KIND = Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
-            topics=TOPICS, informational=("cost",), object_type="BSDF", tag="bsdf",
+            topics=TOPICS, informational=("cost",), bounds=("energy",), object_type="BSDF", tag="bsdf",
             impl=__name__ + ".kind", conformance="docs/conformance.md")

@@ -106,7 +106,7 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
               f"quadrature error, z = {z:.3f} (Šidák over {m_tests} tests); "
               + ("ABOVE 1 at θ_i = " + ", ".join(f"{math.degrees(t):.1f}°" for t in thetas[over])
                  if over.any() else loss_note))
-    details = {"theta_deg": np.degrees(thetas).tolist(), "albedo": a.tolist(),
+    details = {"relation": "<=", "theta_deg": np.degrees(thetas).tolist(), "albedo": a.tolist(),
                "band": band.tolist(), "stderr": np.asarray(se).tolist(),
                "quadrature_error": np.asarray(qerr).tolist(), "nonfinite_nodes": nonfinite,
                "lobes": lobe_slices(bsdf)}

@@ -106,6 +106,39 @@ def _first(exc) -> str:
     return (str(exc).splitlines() or [type(exc).__name__])[0][:160]
 
 
+def _refused(key, h, exc) -> Row:
+    return Row("gradient", key, None, None, None, None, "skipped",
+               f"the validator's own finite-difference step x ± {h:g}·v left the values the "
+               f"BSDF accepts (it raised: {_first(exc)}): a limit of the check's step, not a "
+               f"defect of the BSDF", {})
+
+
+def _independent(bsdf, params, key, x0, v, h, dirs, one_sided: bool) -> Row:
+    """Dr.Jit found no dependence of eval on ``key`` (forward_to raised).  This topic
+    differentiates eval, which is 0 for a delta lobe (conductor, thindielectric, polarizer):
+    when the differences of eval are 0 too there is nothing to compare (skipped, the check's
+    limit, not the BSDF's); when they are not, AD lost a dependence eval has: a fail."""
+    wi, wo, c = dirs
+    try:
+        d2 = _fd(bsdf, params, key, x0, v, h / 2, wi, wo, c, one_sided)
+    except Exception as exc:
+        _set(params, key, x0)
+        return _refused(key, h, exc)
+    noise = float((ROUND_OFF * np.abs(_lanes(bsdf, wi, wo, c)) / (h / 2)).sum())
+    fd = float(np.nansum(d2))
+    details = {"fd_h2": fd, "h": h / 2, "one_sided": one_sided, "lanes": int(len(d2))}
+    if abs(fd) <= noise:
+        return Row("gradient", key, None, None, None, None, "skipped",
+                   "eval, which this topic differentiates, does not depend on this parameter "
+                   "at the probed directions (Dr.Jit finds no dependence and the finite "
+                   "differences are 0 too; a delta lobe's eval is 0): nothing to compare, a "
+                   "limit of the check, not a defect of the BSDF", details)
+    return Row("gradient", key, 0.0, fd, None, noise, "fail",
+               f"forward-mode AD finds no dependence of eval on this parameter (drjit."
+               f"forward_to raised) while its finite difference with step {h / 2:g}·v is "
+               f"{fd:.6g}: AD lost a dependence eval has", details)
+
+
 def _one(bsdf, params, key, opts, dirs, discontinuous: bool) -> Row:
     try:
         x0 = params[key]
@@ -124,12 +157,17 @@ def _one(bsdf, params, key, opts, dirs, discontinuous: bool) -> Row:
     wi, wo, c = dirs
     try:
         g = _ad(bsdf, params, key, v, wi, wo, c)
+    except Exception as exc:
+        if "does not depend on the input" not in str(exc):
+            _set(params, key, x0)
+            return _refused(key, h, exc)
+        return _independent(bsdf, params, key, x0, v, h, dirs, one_sided)
+    try:
         d1 = _fd(bsdf, params, key, x0, v, h, wi, wo, c, one_sided, restore=False)
         d2 = _fd(bsdf, params, key, x0, v, h / 2, wi, wo, c, one_sided)
     except Exception as exc:   # a plugin refusing x ± hv (its validation) is a skip, not a fail
         _set(params, key, x0)
-        return Row("gradient", key, None, None, None, None, "skipped",
-                   f"the BSDF refused the update x ± {h:g}·v: {_first(exc)}", {})
+        return _refused(key, h, exc)
     s_abs = np.abs(_lanes(bsdf, wi, wo, c))
     noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))          # per-lane round-off bound
     jumps = np.abs(d1 - d2) > 0.01 * np.maximum(np.abs(d2), np.abs(g)) + 4.0 * noise

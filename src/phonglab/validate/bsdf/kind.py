@@ -70,6 +70,7 @@ def runners(bsdf, opts, topics, m: int) -> dict:
 
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.
 parameters = ranges.parameters
+domain = ranges.domain
 values = ranges.traversed
 
 #: The BSDF kind (declared by the package, whose parts this module holds).

@@ -38,9 +38,9 @@ from __future__ import annotations
 
 import mitsuba as mi
 
-from ..ranges import Range, parameters as _parameters, traversed
+from ..ranges import Range, domain as _domain, parameters as _parameters, traversed
 
-__all__ = ["BUILTIN", "Range", "parameters", "traversed"]
+__all__ = ["BUILTIN", "Range", "domain", "parameters", "traversed"]
 
 #: Mitsuba 3.9.1's built-ins: load-time parameter -> its documented range (module docstring).
 _REFLECTANCE = Range(0.0, 1.0)
@@ -86,3 +86,8 @@ def parameters(plugin, spec, pinned=(), probe: bool = True) -> list:
     """The BSDF's swept parameters (:func:`phonglab.validate.ranges.parameters`)."""
     return _parameters(plugin, spec, pinned, builtin=BUILTIN, cls=mi.BSDF, word="BSDF",
                        probe=probe)
+
+
+def domain(plugin, spec) -> tuple[dict, str]:
+    """The BSDF's declared or documented ranges (:func:`phonglab.validate.ranges.domain`)."""
+    return _domain(plugin, spec, builtin=BUILTIN)

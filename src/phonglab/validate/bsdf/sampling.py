@@ -22,7 +22,10 @@ What counts as a sample (:func:`_kept`): weight ≠ 0 (a rejected sample has wei
 delta lobe's (``pdf`` has no density for it: a mixture such as ``plastic`` is histogrammed on
 its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a finite
 direction.  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
-expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1.  A failing cell
+expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a
+cell whose samples and pdf both lie within one bin and agree there (``narrow``: a lobe
+narrower than a bin, whose shape this grid cannot test, e.g. roughdielectric's transmission
+at η ≈ 1, α·|1 − η|/η wide): it is not tested, and the reason says so.  A failing cell
 keeps its histogram, its expected counts and its residual map (obs − scale·exp)/√(scale·exp) (NaN where the
 bin was pooled or empty), and names its worst bin (θ_o/φ_o range, observed, expected,
 residual), which the row's evidence line repeats for the cell of smallest p.
@@ -130,10 +133,16 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     problems = [m for m, bad in (
         ("the histogram is empty while the pdf integrates to > 0", not kept.any()),
         ("a bin has a negative expected count (pdf < 0)", bool((expected < 0).any())),
-        (f"the pdf integrates to {pdf_sum:.4f} > 1.1", pdf_sum > 1.1),
+        (f"the pdf integrates to {pdf_sum:.4f} over the sphere, expected ≤ 1 (refused above "
+         f"1.1)", pdf_sum > 1.1),
         (f"{test.impossible} samples lie in bins of expected count 0", test.impossible > 0),
         ("fewer than 2 bins to compare (dof < 1)", test.dof < 1)) if bad]
     ok = not problems and test.p_value >= level
+    if problems == ["fewer than 2 bins to compare (dof < 1)"] and kept.any():
+        # one bin holds every sample and the pdf's mass: nothing to compare at this grid
+        # (their totals are the normalization topic's); impossible samples would be a problem
+        return {"wi": wi.tolist(), "status": "narrow", "hist_sum": hist_sum,
+                "pdf_sum": pdf_sum, "integration": integration}
     messages = [f"Pooled {test.pooled_in} low-valued cells into {test.pooled_out} cells",
                 f"Histogram sum = {hist_sum:.6f}, PDF sum = {pdf_sum:.6f}",
                 f"Chi^2 statistic = {test.statistic:.6g} (d.o.f = {test.dof})"] + problems
@@ -142,6 +151,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     cell = {"wi": wi.tolist(), "p_value": test.p_value, "statistic": test.statistic,
             "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum, "scale": scale,
             "status": "pass" if ok else "fail", "messages": "\n".join(messages),
+            "problems": problems,
             "nonfinite_wo_dropped": int((~np.all(np.isfinite(s.wo), axis=1)).sum()),
             "integration": integration}
     if black:
@@ -168,6 +178,17 @@ def _worst_bin(grid: sphere_bins.Grid, hist: np.ndarray, expected: np.ndarray,
     return {**grid.ranges(flat), "observed": h, "expected": e, "residual": r}
 
 
+def why_rejected(cell: dict, level: float) -> str:
+    """A rejected cell's reason in the quantities' own units: what the χ² test could not
+    accept before its p-value (a pdf integrating to more than 1, samples where the pdf is 0),
+    else its p-value below the level."""
+    out = list(cell.get("problems", []))
+    out.append(f"p = {cell['p_value']:.3g}, below the level {level:.3g}"
+               if cell["p_value"] < level else f"p = {cell['p_value']:.3g} ≥ the level, "
+               f"rejected for the above")
+    return "; ".join(out)
+
+
 def chi2(bsdf, opts, m_tests: int) -> list[Row]:
     if lanes.delta_only(bsdf):
         return [delta_directions(bsdf, opts)]
@@ -178,10 +199,12 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
         rec = chi2_cell(bsdf, probe.direction(theta, phi), opts, level, r)
         rec.update(theta_deg=math.degrees(theta), phi=phi)
         records.append(rec)
-    tested = [r for r in records if r["status"] not in ("empty", "nonfinite")]
+    tested = [r for r in records if r["status"] not in ("empty", "nonfinite", "narrow")]
+    narrow = sum(r["status"] == "narrow" for r in records)
     failed = [r for r in tested if r["status"] == "fail"]
     p_min = min((r["p_value"] for r in tested), default=1.0)
-    where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f}" for r in failed)
+    where = ", ".join(f"θ_i={r['theta_deg']:.1f}° φ={r['phi']:.2f} ({why_rejected(r, level)})"
+                      for r in failed)
     grid = sphere_bins.Grid(opts.chi2_res)
     reason = (f"Pearson χ² of sample() vs pdf() (stats.pearson_chi2, {opts.chi2_samples} "
               f"samples, {grid.rows} cos θ_o x {grid.cols} φ_o bins, pdf integrated per bin "
@@ -192,9 +215,16 @@ def chi2(bsdf, opts, m_tests: int) -> list[Row]:
     if untestable and tested:
         reason += (f"; {untestable} cells not tested: the pdf is not finite wherever it is "
                    f"not 0 there (the finite topic's)")
+    if narrow and tested:
+        reason += (f"; {narrow} cells not tested: every sample and the pdf's whole mass lie in "
+                   f"one bin there (a lobe narrower than a bin: no shape to compare)")
     if not tested:
         nonfinite = sum(r["integration"]["nonfinite_pdf_dropped"] for r in records)
-        if any(r["status"] == "nonfinite" for r in records):
+        if narrow:
+            why = (f"at {narrow} incidence cells every sample and the pdf's whole mass lie in "
+                   f"one bin (a lobe narrower than a bin: no shape to compare); the others "
+                   f"sampled nothing")
+        elif any(r["status"] == "nonfinite" for r in records):
             why = (f"the pdf is not finite wherever it is not 0 at every tested incidence "
                    f"({nonfinite} quadrature nodes; the finite topic's failure), so there is no "
                    f"density to test the samples against")

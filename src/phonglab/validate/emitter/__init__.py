@@ -16,6 +16,6 @@ from .topics import TOPICS
 
 #: The emitter kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
 KIND = Kind(name="emitter", word="emitter", class_name="Emitter", register="mi.register_emitter",
-            topics=TOPICS, informational=("cost",), object_type="Emitter", tag="emitter",
+            topics=TOPICS, informational=("cost",), bounds=("power",), object_type="Emitter", tag="emitter",
             impl=__name__ + ".kind", conformance="docs/conformance-emitters.md",
             load_options=("shape",))

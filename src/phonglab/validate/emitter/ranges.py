@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import mitsuba as mi
 
-from ..ranges import Range, parameters as _parameters, traversed
+from ..ranges import Range, domain as _domain, parameters as _parameters, traversed
 
 _EMITTED = Range(0.0, 10.0)
 #: Mitsuba 3.9.1's built-in emitters: load-time parameter -> its documented range.
@@ -37,3 +37,8 @@ def parameters(target, spec, pinned=()) -> list:
 def values(target) -> dict[str, float]:
     """The emitter's traversed parameter values (a documented cause's ``at``)."""
     return traversed(target.emitter)
+
+
+def domain(target, spec) -> tuple[dict, str]:
+    """The emitter's declared or documented ranges (:func:`phonglab.validate.ranges.domain`)."""
+    return _domain(target.emitter, spec, builtin=BUILTIN)
