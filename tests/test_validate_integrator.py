@@ -22,11 +22,15 @@ PLANTED = {
     "throughput_clamp": {"bias"},
     "nan_grazing": {"finite"},
     "direct_double_count": {"bias", "agreement"},
+    # no FIXED_DEPTH: the depth is measured (2 for the control; none for the double count,
+    # whose depth-dependent scenes and agreement are then skipped)
+    "direct_undeclared": set(),
+    "direct_double_count_undeclared": {"bias"},
 }
 
 
 #: the default tier runs these two (~6 s); the slow tier every defect
-FAST = {"path_control", "nan_grazing"}
+FAST = {"path_control", "nan_grazing", "direct_undeclared", "direct_double_count_undeclared"}
 
 
 @pytest.mark.parametrize("name", [n if n in FAST else pytest.param(n, marks=pytest.mark.slow)
@@ -57,6 +61,24 @@ def test_depth_detection(variant_llvm_rgb):
     assert t["ptracer"].splatting and t["direct_projective"].ad
     aov = prepare({"type": "aov", "aovs": "nn:sh_normal"}).plugin
     assert aov.aov
+
+
+def test_undeclared_depth_is_measured(variant_llvm_rgb):
+    from phonglab.validate import validate_integrator
+
+    report = validate_integrator("defect_direct_undeclared",
+                                 plugins=[DEFECTS / "direct_undeclared.py"], quick=True,
+                                 topics=["bias"])
+    depth = [r for r in report.rows if r.name.startswith("depth measured")]
+    assert [r.details["measured_depth"] for r in depth] == [2, 2], report.table()
+    judged = {r.name for r in report.rows if r.status == "pass"}
+    assert {"enclosure ρ=0.5 D=2", "enclosure ρ=0.8 D=2"} <= judged, report.table()
+    bad = validate_integrator("defect_direct_double_count_undeclared",
+                              plugins=[DEFECTS / "direct_double_count_undeclared.py"],
+                              quick=True, topics=["bias"])
+    assert {r.name for r in bad.failing} == {"depth measured: enclosure ρ=0.5",
+                                             "depth measured: enclosure ρ=0.8"}, bad.table()
+    assert all("matches no integer depth" in r.reason for r in bad.failing)
 
 
 def test_aov_is_checked_for_finite_only(variant_llvm_rgb):

@@ -13,7 +13,7 @@ validated by ``bias`` itself (docs/validate.md).
 
 Depth: 5 for an integrator that takes max_depth, its own for one held to a fixed depth
 (``direct``: ``path`` at max_depth 2 computes the same expectation, emission plus direct
-illumination with MIS); an integrator of unknown depth or an AOV integrator is skipped.
+illumination with MIS); an integrator whose measured depth matched no integer depth or an AOV integrator is skipped.
 """
 
 from __future__ import annotations
@@ -38,8 +38,8 @@ def depth_of(target: Target) -> tuple[int | None, str]:
         return None, "an AOV integrator returns channels that are not radiance"
     if target.depth == "settable":
         return DEPTH, ""
-    if target.depth == "fixed":
-        return target.fixed_depth, ""
+    if target.own_depth is not None:
+        return target.own_depth, ""
     return None, target.depth_note
 
 

@@ -52,8 +52,8 @@ def applies(target: Target) -> str:
 
 
 def _setup(target: Target, res: int):
-    if target.depth == "settable" or (target.depth == "fixed" and target.fixed_depth >= 2):
-        depth = DEPTH if target.depth == "settable" else target.fixed_depth
+    if target.depth == "settable" or (target.own_depth or 0) >= 2:
+        depth = DEPTH if target.depth == "settable" else target.own_depth
         integ = target.make(depth) if target.depth == "settable" else target.integrator
         deriv = sum(k * RHO ** (k - 1) for k in range(1, depth)) * scenes.LE
         return (scenes.enclosure(res, RHO), "enclosure.bsdf.reflectance.value", integ,
