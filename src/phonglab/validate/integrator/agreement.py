@@ -26,6 +26,7 @@ from ...engine.render import render_scene
 from . import scenes
 from .config import seed
 from .setup import Target
+from ...verdict import NOT_APPLICABLE
 from .topics import Row
 
 #: The max_depth of the agreement scene for an integrator that takes one.
@@ -60,7 +61,8 @@ def agreement(target: Target, opts, m: int) -> list[Row]:
     depth, why = depth_of(target)
     name = f"block means against path (max_depth {depth})" if depth else "block means against path"
     if depth is None:
-        return [Row("agreement", name, None, None, None, None, "skipped", why)]
+        return [Row("agreement", name, None, None, None, None, "skipped", why,
+                    {NOT_APPLICABLE: True} if target.aov else {})]
     integ = target.make(depth) if target.depth == "settable" else target.integrator
     ref = mi.load_dict({"type": "path", "max_depth": int(depth)})
     scene = mi.load_dict(scenes.box(opts.agreement_res))

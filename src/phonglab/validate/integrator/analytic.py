@@ -39,6 +39,7 @@ from ...engine.render import render_scene
 from . import scenes
 from .config import seed
 from .setup import Target
+from ...verdict import NOT_APPLICABLE
 from .topics import Row
 
 #: float32 accumulation budget of an image mean, relative.
@@ -53,6 +54,18 @@ def applies(target: Target, scene: scenes.Analytic):
         return None, ("a light-tracing (adjoint) integrator cannot connect a pinhole camera "
                       "through a delta BSDF: no path of this estimator reaches the camera")
     return target.at_depth(scene.depth)
+
+
+def inapplicable(target: Target, scene=None) -> dict:
+    """The skip details of a scene that genuinely does not apply (an AOV integrator; glass for
+    a light tracer: :func:`phonglab.validate.core.not_covered`), else {}: a scene skipped for
+    the integrator's depth (one depth of its own judges the scenes of the others) is marked
+    so too, but only when its depth is known -- an unmatched measurement covers nothing."""
+    if target.aov or (scene is not None and scene.specular and target.splatting):
+        return {NOT_APPLICABLE: True}
+    if scene is not None and target.depth != "settable" and target.own_depth is not None:
+        return {NOT_APPLICABLE: True}
+    return {}
 
 
 def bias_scenes(target: Target, opts) -> list:
@@ -230,7 +243,7 @@ def bias(target: Target, opts, m: int) -> list[Row]:
     for k, (scene, integ, why) in enumerate(bias_scenes(target, opts)):
         if integ is None:
             rows.append(Row("bias", scene.name, None, scene.expected, None, None, "skipped",
-                            why, {"source": scene.source}))
+                            why, {"source": scene.source, **inapplicable(target, scene)}))
             continue
         res = render_scene(mi.load_dict(scene.build(opts.res)), opts.bias_spp * opts.bias_passes,
                            seed=seed(opts.seed, "bias", k), passes=opts.bias_passes,
@@ -267,7 +280,8 @@ def convergence(target: Target, opts, m: int) -> list[Row]:
     integ, why = convergence_applies(target, opts)
     names = ("convergence: RMSE slope over all spp", "convergence: slope of the last two spp")
     if integ is None:
-        return [Row("convergence", n, None, -0.5, None, None, "skipped", why) for n in names]
+        return [Row("convergence", n, None, -0.5, None, None, "skipped", why,
+                    inapplicable(target)) for n in names]
     res_ = opts.convergence_res
     scene = mi.load_dict(scenes.plane(res_))
     ref = scenes.plane_pixels(res_)

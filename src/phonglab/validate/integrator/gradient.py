@@ -26,6 +26,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import stats
 from ..roundoff import EPS32
 from . import scenes
@@ -70,7 +71,7 @@ def gradient(target: Target, opts, m: int) -> list[Row]:
     why = applies(target)
     if why:
         return [Row("gradient", "d mean / d reflectance: AD against FD", None, None, None,
-                    None, "skipped", why)]
+                    None, "skipped", why, {NOT_APPLICABLE: True})]
     scene_dict, key, integ, label, analytic = _setup(target, opts.res)
     scene = mi.load_dict(scene_dict)
     params = mi.traverse(scene)
