@@ -261,7 +261,8 @@ def front_side_row(bsdf, opts) -> Row | None:
     """A BSDF declaring FrontSide and not BackSide: eval, pdf and sample's weight are exactly 0
     for ω_i below the surface (the incidence cells mirrored, random ω_o on the sphere); None
     for any other.  Exact (a zero is a zero in float32); a non-finite value is the finite
-    topic's and is left out, and a row with no finite lane left fails (it judged nothing)."""
+    topic's and is left out, and a row with no finite eval, pdf or weight at all fails (it
+    judged nothing)."""
     flags = int(bsdf.flags())
     if not flags & int(mi.BSDFFlags.FrontSide) or flags & int(mi.BSDFFlags.BackSide):
         return None
@@ -285,15 +286,18 @@ def front_side_row(bsdf, opts) -> Row | None:
         k = int(np.flatnonzero(per_lane)[0])
         details.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist(),
                        eval=float(ev[k, 0]), pdf=float(pd[k]))
-    if min(judged.values()) == 0:
+    if max(judged.values()) == 0:
         return Row("component", name, None, 0.0, None, 0.0, "fail",
-                   f"no finite {', '.join(k for k, v in judged.items() if not v)} value below "
-                   f"the surface to judge (the finite topic's): nothing checked", details)
+                   "no finite eval, pdf or sample weight below the surface to judge (the "
+                   "finite topic's): nothing checked", details)
+    unjudged = [k for k, v in judged.items() if not v]
     return bounded_row("component", name, float(per_lane.sum()), 0.0,
                        f"count of lanes with ω_i below the surface (cos θ_i < 0) where eval, "
                        f"pdf or sample's weight is not 0 ({counts['eval']}, {counts['pdf']}, "
                        f"{counts['sample']}), over {len(wi)} lanes: flags() {flags:#x} declare "
                        f"FrontSide lobes only, so an integrator (and MIS) must see nothing there"
+                       + (f"; no finite {' or '.join(unjudged)} value there (the finite "
+                          f"topic's), judged on the others" if unjudged else "")
                        + ("" if not per_lane.any() else
                           "; a cos θ_i > 0 test missing from "
                           + " and ".join(k for k, v in counts.items() if v)),
