@@ -120,3 +120,35 @@ def test_builtins_pass_default(variant_llvm_rgb, name):
 
     report = validate_integrator(name)
     assert report.passed, report.table(report.failing)
+
+
+def test_not_covered_exits_3_unless_allowed():
+    """A topic that applies and judged nothing (agreement of an integrator whose measured depth
+    matches no integer depth) is "not covered": exit 3, 0 with --allow-uncovered."""
+    env = {"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}
+    base = [sys.executable, "-m", "phonglab.cli", "validate",
+            "defect_direct_double_count_undeclared", "--plugin",
+            str(DEFECTS / "direct_double_count_undeclared.py"), "--quick", "--only", "agreement"]
+    proc = subprocess.run(base, capture_output=True, text=True, env=env)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "NOT COVERED: agreement" in proc.stdout and "FIXED_DEPTH = 2" in proc.stdout
+    proc = subprocess.run(base + ["--allow-uncovered"], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_not_covered_rule():
+    """Informational topics and skips marked not_applicable never count; any other topic whose
+    rows are all skipped (or which has none) does."""
+    from phonglab.validate.core import not_covered
+    from phonglab.validate.integrator import KIND
+    from phonglab.validate.integrator.topics import Row
+    from phonglab.verdict import NOT_APPLICABLE
+
+    def row(topic, status, na=False):
+        return Row(topic, "x", None, None, None, None, status, "why",
+                   {NOT_APPLICABLE: True} if na else {})
+
+    rows = [row("finite", "pass"), row("bias", "skipped"), row("bias", "fail"),
+            row("convergence", "skipped"), row("gradient", "skipped", na=True),
+            row("cost", "skipped")]
+    assert not_covered(KIND, KIND.topics, rows) == ["convergence", "agreement"]

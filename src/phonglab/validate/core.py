@@ -384,6 +384,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         # numpy's generators refuse it inside every topic: seven failing rows, not bad input
         raise ValidateError(f"the seed must be a whole number >= 0, got {seed!r}")
+    t_all = time.perf_counter()             # counting m may render (an integrator's depth)
     opts = kind.part("options")(quick, seed, topics)
     if sizes:
         opts = replace(opts, **sizes)
@@ -392,7 +393,6 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     m = kind.part("statistical_tests")(target.plugin, opts, topics) * family
     runners = kind.part("runners")(target.plugin, opts, topics, m)
     rows, seconds = [], {}
-    t_all = time.perf_counter()
     for topic in topics:
         t0 = time.perf_counter()
         rows += _guarded(topic, runners[topic])

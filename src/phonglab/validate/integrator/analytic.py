@@ -38,6 +38,7 @@ from ... import stats
 from ...engine.render import render_scene
 from . import scenes
 from .config import seed
+from . import setup as setup_
 from .setup import Target
 from ...verdict import NOT_APPLICABLE
 from .topics import Row
@@ -163,7 +164,7 @@ def settle_depth(target: Target, m: int) -> None:
         target.fixed_depth = None
         target.depth_note = ("its depth, measured by the enclosure at ρ = "
                              f"{' and '.join(map(str, MEASURE_RHOS))}, matches no integer depth "
-                             "(see the bias topic's depth rows)")
+                             f"(see the bias topic's depth rows). {setup_.DECLARE}")
 
 
 def depth_rows(target: Target) -> list[Row]:
