@@ -79,7 +79,7 @@ class Target:
         """(integrator, "") for a scene needing path depth ``depth`` (None: any depth >= 2),
         or (None, why it does not apply)."""
         if depth is None:
-            if self.depth == "fixed" and self.fixed_depth < 2:
+            if self.own_depth is not None and self.own_depth < 2:
                 return None, f"the scene needs depth >= 2; {self.depth_note}"
             return self.make(4), ""
         if self.depth == "settable":
