@@ -152,3 +152,15 @@ def test_not_covered_rule():
             row("convergence", "skipped"), row("gradient", "skipped", na=True),
             row("cost", "skipped")]
     assert not_covered(KIND, KIND.topics, rows) == ["convergence", "agreement"]
+
+
+def test_assert_helper_refuses_an_uncovered_run(variant_llvm_rgb):
+    from phonglab.testing import assert_integrator_valid
+
+    args = dict(plugins=[DEFECTS / "direct_double_count_undeclared.py"], quick=True,
+                topics=["agreement"])
+    with pytest.raises(AssertionError, match="not covered: agreement"):
+        assert_integrator_valid("defect_direct_double_count_undeclared", **args)
+    report = assert_integrator_valid("defect_direct_double_count_undeclared",
+                                     allow_uncovered=True, **args)
+    assert report.not_covered == ["agreement"]
