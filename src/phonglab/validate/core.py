@@ -337,8 +337,9 @@ def not_covered(kind: Kind, topics, rows: list[Row]) -> list[str]:
       (:data:`phonglab.verdict.NOT_APPLICABLE`): the skip follows from what the plugin or
       the variant *is*, never from something it failed to declare or do.  The skips marked
       so: a polarized topic in a non-polarized variant; ``gradient`` in a variant without
-      automatic differentiation, of a plugin that exposes no differentiable parameter, or of
-      an integrator that is not an AD integrator; a topic with nothing to compare because
+      automatic differentiation, of a plugin that exposes no differentiable parameter (or a
+      parameter flagged non-differentiable), of a delta-only BSDF (its eval, which the topic
+      differentiates, is 0), or of an integrator that is not an AD integrator; a topic with nothing to compare because
       every lobe of the BSDF is a delta (``chi2``, ``normalization``, ``weight``, ``pdf``, the
       Mueller topics) or it is black; a diffuse-reflectance contract of a BSDF with no
       Lambertian diffuse component; the radiance topics of an AOV integrator; scenes seen

@@ -166,6 +166,10 @@ def gradient(bsdf, opts) -> list[Row]:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
                     {NOT_APPLICABLE: True})]
+    if lanes.delta_only(bsdf):
+        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
+                    "every lobe is a delta: eval is 0 everywhere, so no parameter has a "
+                    "derivative of eval to compare", {NOT_APPLICABLE: True})]
     params = mi.traverse(bsdf)
     keys = list(params.keys())
     if not keys:

@@ -163,7 +163,7 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         if drawn.any():
             why = ("every non-delta sample has weight 0 and eval is 0 wherever sample() points: "
                    "a black BSDF, nothing to compare")
-        elif n_delta:
+        elif n_delta or lanes.delta_only(bsdf):
             why = (f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
                    f"nothing to compare for a purely delta BSDF")
         else:
@@ -171,7 +171,7 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
                    "finite and > 0 (a non-finite pdf is the finite topic's)")
         # a black or purely delta BSDF has nothing to compare (not applicable); a BSDF that
         # returned no usable sample at all is not covered (core.not_covered)
-        na = {NOT_APPLICABLE: True} if (drawn.any() or n_delta) else {}
+        na = {NOT_APPLICABLE: True} if (drawn.any() or n_delta or lanes.delta_only(bsdf)) else {}
         return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta, **na})
                 for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))
                 if t in topics]
