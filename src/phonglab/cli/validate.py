@@ -167,8 +167,10 @@ def _all_builtins(args) -> int:
     def progress(d):
         bad = sorted({r["topic"] for r in d["results"] if r["status"] == "fail"})
         known = sorted({r["topic"] for r in d["results"] if r["status"] == "KNOWN"})
+        uncovered = d["meta"].get("not_covered") or []
         print(f"{d['meta']['case']:<45} {'FAIL ' + ','.join(bad) if bad else 'pass'}"
               + (f"  (KNOWN: {','.join(known)})" if known else "")
+              + (f"  (not covered: {','.join(uncovered)})" if uncovered else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
     # the catalogue's cases are its named points (scripts/conformance.py --sweep sweeps them)
