@@ -14,6 +14,8 @@ import mitsuba as mi
 
 
 class LitFromBelow(mi.BSDF):
+    PARAMETER_RANGES = {"reflectance": (0.0, 1.0)}      # an albedo: the sweep stays physical
+
     def __init__(self, props):
         mi.BSDF.__init__(self, props)
         self.reflectance = mi.Float(props.get("reflectance", 0.5))
