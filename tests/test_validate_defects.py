@@ -35,6 +35,7 @@ PLANTED = {
     "null_transmission_wrong": "eval_null_transmission",
     "diffuse_reflectance_no_pi": "eval_diffuse_reflectance",
     "undeclared_lobe": "component",
+    "lit_from_below": "component",
 }
 
 #: defect file -> topics that may fail besides its own at DEFAULT sizes, and why.  A pdf scaled

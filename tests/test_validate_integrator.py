@@ -22,11 +22,15 @@ PLANTED = {
     "throughput_clamp": {"bias"},
     "nan_grazing": {"finite"},
     "direct_double_count": {"bias", "agreement"},
+    # no FIXED_DEPTH: the depth is measured (2 for the control; none for the double count,
+    # whose depth-dependent scenes and agreement are then skipped)
+    "direct_undeclared": set(),
+    "direct_double_count_undeclared": {"bias"},
 }
 
 
 #: the default tier runs these two (~6 s); the slow tier every defect
-FAST = {"path_control", "nan_grazing"}
+FAST = {"path_control", "nan_grazing", "direct_undeclared", "direct_double_count_undeclared"}
 
 
 @pytest.mark.parametrize("name", [n if n in FAST else pytest.param(n, marks=pytest.mark.slow)
@@ -57,6 +61,24 @@ def test_depth_detection(variant_llvm_rgb):
     assert t["ptracer"].splatting and t["direct_projective"].ad
     aov = prepare({"type": "aov", "aovs": "nn:sh_normal"}).plugin
     assert aov.aov
+
+
+def test_undeclared_depth_is_measured(variant_llvm_rgb):
+    from phonglab.validate import validate_integrator
+
+    report = validate_integrator("defect_direct_undeclared",
+                                 plugins=[DEFECTS / "direct_undeclared.py"], quick=True,
+                                 topics=["bias"])
+    depth = [r for r in report.rows if r.name.startswith("depth measured")]
+    assert [r.details["measured_depth"] for r in depth] == [2, 2], report.table()
+    judged = {r.name for r in report.rows if r.status == "pass"}
+    assert {"enclosure ρ=0.5 D=2", "enclosure ρ=0.8 D=2"} <= judged, report.table()
+    bad = validate_integrator("defect_direct_double_count_undeclared",
+                              plugins=[DEFECTS / "direct_double_count_undeclared.py"],
+                              quick=True, topics=["bias"])
+    assert {r.name for r in bad.failing} == {"depth measured: enclosure ρ=0.5",
+                                             "depth measured: enclosure ρ=0.8"}, bad.table()
+    assert all("matches no integer depth" in r.reason for r in bad.failing)
 
 
 def test_aov_is_checked_for_finite_only(variant_llvm_rgb):
@@ -98,3 +120,47 @@ def test_builtins_pass_default(variant_llvm_rgb, name):
 
     report = validate_integrator(name)
     assert report.passed, report.table(report.failing)
+
+
+def test_not_covered_exits_3_unless_allowed():
+    """A topic that applies and judged nothing (agreement of an integrator whose measured depth
+    matches no integer depth) is "not covered": exit 3, 0 with --allow-uncovered."""
+    env = {"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}
+    base = [sys.executable, "-m", "phonglab.cli", "validate",
+            "defect_direct_double_count_undeclared", "--plugin",
+            str(DEFECTS / "direct_double_count_undeclared.py"), "--quick", "--only", "agreement"]
+    proc = subprocess.run(base, capture_output=True, text=True, env=env)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "NOT COVERED: agreement" in proc.stdout and "FIXED_DEPTH = 2" in proc.stdout
+    proc = subprocess.run(base + ["--allow-uncovered"], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_not_covered_rule():
+    """Informational topics and skips marked not_applicable never count; any other topic whose
+    rows are all skipped (or which has none) does."""
+    from phonglab.validate.core import not_covered
+    from phonglab.validate.integrator import KIND
+    from phonglab.validate.integrator.topics import Row
+    from phonglab.verdict import NOT_APPLICABLE
+
+    def row(topic, status, na=False):
+        return Row(topic, "x", None, None, None, None, status, "why",
+                   {NOT_APPLICABLE: True} if na else {})
+
+    rows = [row("finite", "pass"), row("bias", "skipped"), row("bias", "fail"),
+            row("convergence", "skipped"), row("gradient", "skipped", na=True),
+            row("cost", "skipped")]
+    assert not_covered(KIND, KIND.topics, rows) == ["convergence", "agreement"]
+
+
+def test_assert_helper_refuses_an_uncovered_run(variant_llvm_rgb):
+    from phonglab.testing import assert_integrator_valid
+
+    args = dict(plugins=[DEFECTS / "direct_double_count_undeclared.py"], quick=True,
+                topics=["agreement"])
+    with pytest.raises(AssertionError, match="not covered: agreement"):
+        assert_integrator_valid("defect_direct_double_count_undeclared", **args)
+    report = assert_integrator_valid("defect_direct_double_count_undeclared",
+                                     allow_uncovered=True, **args)
+    assert report.not_covered == ["agreement"]

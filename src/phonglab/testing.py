@@ -39,10 +39,13 @@ from .verdict import point_label, table
 __all__ = ["assert_valid", *(k.assert_helper for k in KINDS)]
 
 
-def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None, **options):
+def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None,
+                 allow_uncovered: bool = False, **options):
     """Validate ``spec`` (of ``kind``, e.g. "bsdf"; None: detected) across its kind's parameter
     sweep (``sweep=False``: at the given point alone; a kind without a sweep is checked at the
-    given point); raise AssertionError listing the failing rows, each with its point.
+    given point); raise AssertionError listing the failing rows, each with its point, or --
+    unless ``allow_uncovered`` -- naming the applicable topics that judged nothing (every row
+    skipped: :func:`phonglab.validate.core.not_covered`) with their skip reasons.
     ``timeout``: seconds a topic may run before it is stopped and becomes a failing row ("did
     not finish within N s"; :func:`phonglab.validate.core.topic_timeout`: Python code only, in
     the main thread -- a compiled Dr.Jit kernel runs to its end).  Returns the report."""
@@ -65,12 +68,18 @@ def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None
         raise AssertionError(f"{report.meta.get(kind, spec)} failed "
                              f"{len(report.failing)} check(s) in {report.meta.get('variant')}:\n"
                              + text)
+    if report.not_covered and not allow_uncovered:
+        skipped = [r for r in report.rows if r.topic in report.not_covered]
+        raise AssertionError(f"{report.meta.get(kind, spec)}: not covered: "
+                             f"{', '.join(report.not_covered)} judged nothing (every row "
+                             f"skipped; allow_uncovered=True accepts it):\n" + table(skipped))
     return report
 
 
 def _helper(kind):
-    def assert_kind_valid(spec, sweep: bool = True, timeout=None, **options):
-        return assert_valid(spec, kind.name, sweep, timeout, **options)
+    def assert_kind_valid(spec, sweep: bool = True, timeout=None, allow_uncovered: bool = False,
+                          **options):
+        return assert_valid(spec, kind.name, sweep, timeout, allow_uncovered, **options)
 
     assert_kind_valid.__name__ = assert_kind_valid.__qualname__ = kind.assert_helper
     assert_kind_valid.__doc__ = (f"Validate the {kind.word} ``spec`` (:func:`assert_valid`); "

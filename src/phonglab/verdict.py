@@ -20,7 +20,10 @@ problem (JSON-able data).  Its ``status`` is one of :data:`STATUSES`:
   load time: a plain-float ``kd`` accepted up to 10⁴): not a fail, the plugin should declare
   its range or refuse the value (``reason`` says where the excess starts).
 
-One key of ``details`` has a meaning here: ``relation`` (``"=="``, ``"<="``, ``">="``), how
+Two keys of ``details`` have a meaning here: ``not_applicable`` (:data:`NOT_APPLICABLE`), on a
+skipped row, says the check does not apply to what the plugin or the variant is (a polarized
+topic in an RGB variant), as opposed to a check that could not judge what it should have
+(:func:`phonglab.validate.core.not_covered`); and ``relation`` (``"=="``, ``"<="``, ``">="``), how
 ``measured`` is held against ``expected`` ± ``tolerance`` (``<=``: measured ≤ expected +
 tolerance); the table shows a one-sided row's expected value as ``≤ x`` or ``≥ x``.  A row
 without it states its comparison in ``reason``.
@@ -46,6 +49,9 @@ from pathlib import Path
 
 #: The possible values of :attr:`Row.status`.
 STATUSES = ("pass", "fail", "KNOWN", "skipped", "advice")
+
+#: The ``details`` key of a skipped row whose check genuinely does not apply (module docstring).
+NOT_APPLICABLE = "not_applicable"
 
 #: How ``details["relation"]`` shows on the expected value of a table row.
 RELATION_PREFIX = {"==": "", "<=": "≤ ", ">=": "≥ "}
@@ -269,6 +275,12 @@ class Report:
     @property
     def failing(self) -> list[Row]:
         return [r for r in self.rows if r.status == "fail"]
+
+    @property
+    def not_covered(self) -> list[str]:
+        """The applicable topics that judged nothing (``meta["not_covered"]``, set by the
+        validator: :func:`phonglab.validate.core.not_covered`); [] when it did not say."""
+        return list(self.meta.get("not_covered") or [])
 
     def to_dict(self) -> dict:
         return {"meta": jsonable(self.meta), "results": [r.to_dict() for r in self.rows]}

@@ -8,9 +8,11 @@ the plugin is (:func:`phonglab.validate.registry.detect`), the plugin is loaded 
 checked across its kind's parameter sweep (:mod:`phonglab.validate.sweep`; ``--no-sweep``: at
 the given point).
 
-Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed), 1 when a
-row fails, 2 on bad input (unknown plugin type, bad --set, missing file, unknown topic): one
-sentence, checked before any expensive work.
+Exit status: 0 when every row passes (KNOWN rows, with a documented cause, allowed) and every
+topic that applies judged something, 1 when a row fails, 2 on bad input (unknown plugin type,
+bad --set, missing file, unknown topic): one sentence, checked before any expensive work; 3
+when nothing fails but an applicable topic judged nothing (every row of it skipped: "not
+covered", :func:`phonglab.validate.core.not_covered`), unless ``--allow-uncovered``.
 """
 
 from __future__ import annotations
@@ -55,7 +57,9 @@ def add_parser(sub) -> None:
                     "registered by --plugin, or an XML file holding one) on every topic of "
                     "its kind, detected from the plugin, and print one row per check: "
                     f"{_kinds_text()}. --set shape.type=sphere attaches an area emitter to a "
-                    "shape. Exits 0 when all pass, 1 when a row fails, 2 on bad input.",
+                    "shape. Exits 0 when all pass, 1 when a row fails, 2 on bad input, 3 when nothing "
+                    "fails but a topic that applies judged nothing (not covered; "
+                    "--allow-uncovered accepts it).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bsdf", nargs="?", metavar="PLUGIN",
                    help="plugin type name (a BSDF: diffuse, roughplastic, lambert, ...; an "
@@ -86,6 +90,13 @@ def add_parser(sub) -> None:
                    help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
                         "as fails; by default a Mitsuba built-in named by its type carries them, "
                         "each only inside its own signature, as KNOWN rows")
+    p.add_argument("--allow-uncovered", action="store_true",
+                   help="exit 0 even when a topic that applies to the plugin judged nothing "
+                        "(every row of it skipped, e.g. an integrator whose depth could not be "
+                        "measured); by default such a run is 'not covered' and exits 3. Topics "
+                        "that genuinely do not apply (cost; polarized topics in an RGB "
+                        "variant; gradient without AD; a delta-only BSDF's densities) never "
+                        "count")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.registry.catalogue: each kind's table); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
@@ -168,8 +179,10 @@ def _all_builtins(args) -> int:
     def progress(d):
         bad = sorted({r["topic"] for r in d["results"] if r["status"] == "fail"})
         known = sorted({r["topic"] for r in d["results"] if r["status"] == "KNOWN"})
+        uncovered = d["meta"].get("not_covered") or []
         print(f"{d['meta']['case']:<45} {'FAIL ' + ','.join(bad) if bad else 'pass'}"
               + (f"  (KNOWN: {','.join(known)})" if known else "")
+              + (f"  (not covered: {','.join(uncovered)})" if uncovered else "")
               + f"  {d['meta']['wall_seconds']:.1f}s", flush=True)
 
     # the catalogue's cases are its named points (scripts/conformance.py --sweep sweeps them)
@@ -268,7 +281,18 @@ def run(args) -> int:
     if args.report:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)
-    failing = report.failing
-    print(f"\n{label}: {'PASSED' if not failing else f'FAILED ({len(failing)} rows)'} "
-          f"in {report.meta['seconds']:.1f} s")
-    return 1 if failing else 0
+    failing, uncovered = report.failing, report.not_covered
+    if failing:
+        verdict = f"FAILED ({len(failing)} rows)"
+    elif uncovered:
+        verdict = (f"NOT COVERED: {', '.join(uncovered)} judged nothing (every row skipped; "
+                   f"see their reasons)" + ("; accepted by --allow-uncovered"
+                                            if args.allow_uncovered else ""))
+    else:
+        verdict = "PASSED"
+    if failing and uncovered:
+        verdict += f"; not covered: {', '.join(uncovered)}"
+    print(f"\n{label}: {verdict} in {report.meta['seconds']:.1f} s")
+    if failing:
+        return 1
+    return 3 if uncovered and not args.allow_uncovered else 0

@@ -22,6 +22,8 @@ table topic -> runner).  What is the same for every kind lives here:
   :func:`mark_known`); a lane outside every signature keeps the row a fail, so a finding
   never hides a new failure of its topic.  Rows come in table order; the meta
   records the plugin, variant, seed, sizes, m, α and the timings;
+* :func:`not_covered`: the applicable topics of a run that judged nothing (the report's
+  ``meta["not_covered"]``; the command line does not call such a run a pass);
 * :func:`validate`: the topics checked, then both.
 """
 
@@ -42,11 +44,11 @@ import numpy as np
 
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
-from ..verdict import Report, Row
+from ..verdict import NOT_APPLICABLE, Report, Row
 from .inputs import ValidateError, check_topics
 from .kind import Kind
 
-__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "prepare", "run",
+__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
            "topic_timeout", "validate"]
 
 
@@ -398,6 +400,43 @@ def _lane_value(values, i):
     return np.asarray(v).tolist()
 
 
+def not_covered(kind: Kind, topics, rows: list[Row]) -> list[str]:
+    """The topics of ``topics`` that applied to the plugin and judged nothing.
+
+    A topic *judged* something when one of its rows is ``pass``, ``fail`` or ``KNOWN``.  A topic
+    that judged nothing is *not covered* -- the run says nothing of it, so it cannot be called
+    a pass -- unless it genuinely does not apply, which is exactly when
+
+    * it is informational (:attr:`Kind.informational`: ``cost`` measures and never fails), or
+    * every one of its rows is skipped with ``details["not_applicable"]`` set
+      (:data:`phonglab.verdict.NOT_APPLICABLE`): the skip follows from what the plugin or
+      the variant *is*, never from something it failed to declare or do.  The skips marked
+      so: a polarized topic in a non-polarized variant; ``gradient`` in a variant without
+      automatic differentiation, of a plugin that exposes no differentiable parameter (or a
+      parameter flagged non-differentiable), of a delta-only BSDF (its eval, which the topic
+      differentiates, is 0), or of an integrator that is not an AD integrator; a topic with nothing to compare because
+      every lobe of the BSDF is a delta (``chi2``, ``normalization``, ``weight``, ``pdf``, the
+      Mueller topics) or it is black; a diffuse-reflectance contract of a BSDF with no
+      Lambertian diffuse component; the radiance topics of an AOV integrator; scenes seen
+      through glass for a light-tracing integrator.
+
+    Everything else that skips a whole topic counts as not covered: an integrator whose depth
+    matched no integer depth, a BSDF that sampled nothing, an emitter no reference point
+    sees, a topic that produced no row at all.
+    """
+    out = []
+    for t in topics:
+        if t in kind.informational:
+            continue
+        mine = [r for r in rows if r.topic == t]
+        if any(r.status != "skipped" for r in mine):
+            continue
+        if mine and all(r.details.get(NOT_APPLICABLE) for r in mine):
+            continue
+        out.append(t)
+    return out
+
+
 def parameter_values(kind: Kind, target: Loaded) -> dict:
     """The plugin's parameter values a cause's ``at`` is held against: its traversed values
     (:attr:`Kind.values`) and the numbers it was loaded with (which a plugin may not expose)."""
@@ -421,6 +460,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         # numpy's generators refuse it inside every topic: seven failing rows, not bad input
         raise ValidateError(f"the seed must be a whole number >= 0, got {seed!r}")
+    t_all = time.perf_counter()             # counting m may render (an integrator's depth)
     opts = kind.part("options")(quick, seed, topics)
     if sizes:
         opts = replace(opts, **sizes)
@@ -429,7 +469,6 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     m = kind.part("statistical_tests")(target.plugin, opts, topics) * family
     runners = kind.part("runners")(target.plugin, opts, topics, m)
     rows, seconds = [], {}
-    t_all = time.perf_counter()
     for topic in topics:
         t0 = time.perf_counter()
         rows += _guarded(topic, runners[topic])
@@ -439,6 +478,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     meta = {kind.name: target.label, "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
+            "not_covered": not_covered(kind, topics, rows),
             "known": {t: [k.describe() for k in known_entries(v)]
                       for t, v in (known or {}).items()}}
     if family != 1:

@@ -168,6 +168,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                                "source": p.source} for p in swept],
                "pinned": sorted(pinned), "runs": records + refused, "advice": advice})
     meta.pop("topic_seconds", None)
+    meta["not_covered"] = core.not_covered(kind, topics, rows)
     return Report(meta, rows)
 
 

@@ -60,6 +60,7 @@ import math
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe, stats
 from . import lanes, lobes
 from ..roundoff import ABS_FLOOR, REL_TOL
@@ -170,7 +171,7 @@ def eval_diffuse_reflectance(bsdf, opts) -> list[Row]:
         return [Row(topic, name, None, None, None, None, "skipped",
                     "no component declares DiffuseReflection: the value is Mitsuba's "
                     "approximation π·eval(wi, n) (bsdf.cpp:38-43), no exact diffuse "
-                    "reflectance to hold it to", {})]
+                    "reflectance to hold it to", {NOT_APPLICABLE: True})]
     cells = opts.cells()
     cells = cells[np.cos(cells[:, 0]) > 1e-6]          # lit incidences: a reflectance is defined
     wi = lanes.exact(probe.direction(cells[:, 0], cells[:, 1]))
@@ -192,7 +193,7 @@ def eval_diffuse_reflectance(bsdf, opts) -> list[Row]:
                     f"(eval/cos θ_o varies with ω_o): Mitsuba documents the value as an "
                     f"approximation there (bsdf.h:566-575, aov.cpp:83-84); eval_diffuse_"
                     f"reflectance / diffuse albedo = {ratio.min():.3g} to {ratio.max():.3g}",
-                    details)]
+                    {**details, NOT_APPLICABLE: True})]
     default = math.pi * probe.eval(bsdf, wi, np.array([0.0, 0.0, 1.0]))
     approx = np.all(np.abs(value - default) <= REL_TOL * np.maximum(np.abs(value), np.abs(default))
                     + ABS_FLOOR, axis=1) & lambert & (dev > 1.0)

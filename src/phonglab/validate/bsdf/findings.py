@@ -329,6 +329,38 @@ FINDINGS: tuple[Finding, ...] = (
             "DiffuseReflection)",
             "component 1",
             "tests/repro/blendbsdf_component_ids.py", rows=(ONE_TYPE_ROW,)),
+    Finding("twosided-component-ids", "component", ("twosided/diffuse|roughconductor",),
+            "src/bsdfs/twosided.cpp:143",
+            "with two different BSDFs, sample() returns bsdf_1's sample for the back_side "
+            "lanes as is (`m_brdf[1]->sample(ctx, si, ...)`), so it keeps bsdf_1's own "
+            "component index instead of adding bsdf_0->component_count() (the numbering of the "
+            "constructor's two loops; a context restricted to a front component also wraps to "
+            "(uint32_t) -1 on the back side); only ω_i below the surface shows it (line number "
+            "of the source read, commit 027977c)",
+            "GlossyReflection samples of bsdf_1 (ω_i below) report component 0 (flags(0) = "
+            "DiffuseReflection | FrontSide)",
+            "component 1",
+            "tests/repro/twosided_component_ids.py",
+            rows=(AGREE_ROW, RESTRICTED_ROW), region=ComponentOfAnotherLobe()),
+    Finding("twosided-component-ids-mixed", "component", ("twosided/diffuse|roughconductor",),
+            "src/bsdfs/twosided.cpp:143",
+            "the same numbering: bsdf_1's samples report component 0, so component 0 shows both "
+            "nested BSDFs' sampled types (a component is one lobe)",
+            "GlossyReflection samples of bsdf_1 report component 0",
+            "component 1",
+            "tests/repro/twosided_component_ids.py", rows=(ONE_TYPE_ROW,)),
+    Finding("twosided-component-wrap", "component", ("twosided/diffuse|roughconductor",),
+            "src/bsdfs/twosided.cpp:139",
+            "with two different BSDFs, a context restricted to component k has "
+            "bsdf_0->component_count() subtracted on the back side (`ctx.component -= ...`) "
+            "without a check that k is a back component: k = 0 wraps to (uint32_t) -1, which "
+            "means every component, so for ω_i below the surface component 0 evaluates the "
+            "whole back BSDF and Σ_k eval_k is twice eval (eval, pdf and eval_pdf subtract "
+            "the same way; line number of the source read, commit 027977c)",
+            "Σ_k eval_k = 2 eval for ω_i below the surface",
+            "Σ_k eval_k = eval",
+            "tests/repro/twosided_component_ids.py",
+            rows=(SUM_ROW,), region=BelowHorizon()),
     Finding("pplastic-component-ids", "component", ("pplastic/default", "pplastic/rough-ggx"),
             "src/bsdfs/pplastic.cpp:210",
             "one component (Glossy|Diffuse) is declared but sample() reports components 0 and 1 "

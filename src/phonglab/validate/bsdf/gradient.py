@@ -35,6 +35,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
 from ..roundoff import EPS32
@@ -202,19 +203,24 @@ def gradient(bsdf, opts) -> list[Row]:
     if not dr.is_diff_v(mi.Float):
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {})]
+                    {NOT_APPLICABLE: True})]
+    if lanes.delta_only(bsdf):
+        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
+                    "every lobe is a delta: eval is 0 everywhere, so no parameter has a "
+                    "derivative of eval to compare", {NOT_APPLICABLE: True})]
     params = mi.traverse(bsdf)
     keys = list(params.keys())
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    "mi.traverse exposes no parameter", {})]
+                    "mi.traverse exposes no parameter", {NOT_APPLICABLE: True})]
     dirs = _directions(opts)
     rows = []
     for key in keys:
         flags = params.properties[key][3]
         if flags & int(mi.ParamFlags.NonDifferentiable):
             rows.append(Row("gradient", key, None, None, None, None, "skipped",
-                            "flagged non-differentiable by the plugin (ParamFlags)", {}))
+                            "flagged non-differentiable by the plugin (ParamFlags)",
+                            {NOT_APPLICABLE: True}))
         else:
             rows.append(_one(bsdf, params, key, opts, dirs,
                              bool(flags & int(mi.ParamFlags.Discontinuous))))

@@ -24,6 +24,13 @@ round-off (:data:`phonglab.validate.roundoff.REL_TOL`), not statistics:
   non-delta samples (an atom, which a continuous density draws with probability 0: a delta
   lobe labelled diffuse or glossy; χ² and normalization see it too where they look).
 
+Both hemispheres are inputs: ``eval_pdf``, ``weight``, ``pdf`` and ``component`` draw ω_i
+over the whole sphere (the incidence cells and their mirror images below the surface,
+:func:`whole_sphere`).  And the side flags are a contract (``component``): a BSDF whose
+``flags()`` declare FrontSide and not BackSide must return eval = 0, pdf = 0 and no sample
+(weight 0) for every ω_i below the surface (:func:`front_side_row`); a two-sided BSDF
+(``twosided``, or any with BackSide) legitimately has lobes there and is not held to it.
+
 Non-finite values are the ``finite`` topic's alone: the other topics drop those lanes (and
 count them in ``details``), so that one defect fails one topic.
 """
@@ -33,6 +40,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
 from ..roundoff import DRAWS, REL_TOL, perturb, refine, rel_diff, sensitivity
@@ -87,10 +95,22 @@ def finite(bsdf, opts) -> list[Row]:
     return rows
 
 
+def whole_sphere(wi: np.ndarray) -> np.ndarray:
+    """``wi`` followed by its mirror images below the surface (z → −z; the cos θ_i = 0 lanes,
+    on the horizon, once)."""
+    below = wi[wi[:, 2] > 0] * np.array([1.0, 1.0, -1.0])
+    return np.concatenate([wi, below])
+
+
 def eval_pdf(bsdf, opts) -> list[Row]:
     r = lanes.rng(opts.seed, "eval_pdf")
     wi, _ = lanes.incident(opts.cells(), opts.n_finite)
     wo = lanes.sphere(r, len(wi))
+    # the lanes below the surface come after the upper ones: their random wo from a stream
+    # of their own, so the upper lanes are those of every earlier run
+    wi = whole_sphere(wi)
+    wo = np.concatenate([wo, lanes.sphere(np.random.default_rng([opts.seed, 12, 1]),
+                                          len(wi) - len(wo))])
     ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
     ev2, pd2 = probe.eval_pdf(bsdf, wi, wo)
     rel_e = np.max(rel_diff(ev2, ev), axis=1)
@@ -113,6 +133,11 @@ def _samples(bsdf, opts):
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
     r = lanes.rng(opts.seed, "weight")
     u1, u2 = r.random(len(wi)), r.random((len(wi), 2))
+    n_up = len(wi)
+    wi = whole_sphere(wi)              # the lanes below: sample values of a stream of their own
+    r_below = np.random.default_rng([opts.seed, 13, 1])
+    u1 = np.concatenate([u1, r_below.random(len(wi) - n_up)])
+    u2 = np.concatenate([u2, r_below.random((len(wi) - n_up, 2))])
     s = probe.sample(bsdf, wi, u1, u2)
     draws = [probe.sample(bsdf, perturb(wi, r), u1, u2) for _ in range(DRAWS)]
     sens_w = np.max([np.nan_to_num(np.max(rel_diff(s.weight, d.weight), axis=1), nan=0.0)
@@ -138,13 +163,16 @@ def weight_and_pdf(bsdf, opts, topics) -> list[Row]:
         if drawn.any():
             why = ("every non-delta sample has weight 0 and eval is 0 wherever sample() points: "
                    "a black BSDF, nothing to compare")
-        elif n_delta:
+        elif n_delta or lanes.delta_only(bsdf):
             why = (f"no non-delta sample with non-zero weight ({n_delta} delta samples): "
                    f"nothing to compare for a purely delta BSDF")
         else:
             why = ("sample() returned no usable sample: every weight is 0 and no bs.pdf is "
                    "finite and > 0 (a non-finite pdf is the finite topic's)")
-        return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta})
+        # a black or purely delta BSDF has nothing to compare (not applicable); a BSDF that
+        # returned no usable sample at all is not covered (core.not_covered)
+        na = {NOT_APPLICABLE: True} if (drawn.any() or n_delta or lanes.delta_only(bsdf)) else {}
+        return [Row(t, n, None, None, None, None, "skipped", why, {"delta_samples": n_delta, **na})
                 for t, n in (("weight", "weight = eval/pdf"), ("pdf", "bs.pdf = pdf(bs.wo)"))
                 if t in topics]
     wi, wo, w, bpdf = wi[live], s.wo[live], s.weight[live], s.pdf[live]
@@ -229,8 +257,58 @@ def _declaration_rows(bsdf, flags: list, s, live, cell) -> list[Row]:
     ]
 
 
+def front_side_row(bsdf, opts) -> Row | None:
+    """A BSDF declaring FrontSide and not BackSide: eval, pdf and sample's weight are exactly 0
+    for ω_i below the surface (the incidence cells mirrored, random ω_o on the sphere); None
+    for any other.  Exact (a zero is a zero in float32); a non-finite value is the finite
+    topic's and is left out, and a row with no finite eval, pdf or weight at all fails (it
+    judged nothing)."""
+    flags = int(bsdf.flags())
+    if not flags & int(mi.BSDFFlags.FrontSide) or flags & int(mi.BSDFFlags.BackSide):
+        return None
+    name = "FrontSide only: eval = pdf = 0 and no sample for ω_i below"
+    up, _ = lanes.incident(opts.cells(), opts.n_identity // 4)
+    wi = up[up[:, 2] > 0] * np.array([1.0, 1.0, -1.0])
+    r = np.random.default_rng([opts.seed, lanes.SEED_OFFSETS["component"], 2])
+    wo = lanes.sphere(r, len(wi))
+    ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
+    s = probe.sample(bsdf, wi, r.random(len(wi)), r.random((len(wi), 2)))
+    fin = {"eval": np.all(np.isfinite(ev), axis=1), "pdf": np.isfinite(pd),
+           "sample": np.all(np.isfinite(s.weight), axis=1)}
+    bad = {"eval": fin["eval"] & np.any(ev != 0, axis=1), "pdf": fin["pdf"] & (pd != 0),
+           "sample": fin["sample"] & np.any(s.weight != 0, axis=1)}
+    judged = {k: int(v.sum()) for k, v in fin.items()}
+    per_lane = bad["eval"] | bad["pdf"] | bad["sample"]
+    counts = {k: int(v.sum()) for k, v in bad.items()}
+    details = {"lanes": int(len(wi)), "finite_lanes": judged, "nonzero": counts,
+               "flags": flags}
+    if per_lane.any():
+        k = int(np.flatnonzero(per_lane)[0])
+        details.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist(),
+                       eval=float(ev[k, 0]), pdf=float(pd[k]))
+    if max(judged.values()) == 0:
+        return Row("component", name, None, 0.0, None, 0.0, "fail",
+                   "no finite eval, pdf or sample weight below the surface to judge (the "
+                   "finite topic's): nothing checked", details)
+    unjudged = [k for k, v in judged.items() if not v]
+    return bounded_row("component", name, float(per_lane.sum()), 0.0,
+                       f"count of lanes with ω_i below the surface (cos θ_i < 0) where eval, "
+                       f"pdf or sample's weight is not 0 ({counts['eval']}, {counts['pdf']}, "
+                       f"{counts['sample']}), over {len(wi)} lanes: flags() {flags:#x} declare "
+                       f"FrontSide lobes only, so an integrator (and MIS) must see nothing there"
+                       + (f"; no finite {' or '.join(unjudged)} value there (the finite "
+                          f"topic's), judged on the others" if unjudged else "")
+                       + ("" if not per_lane.any() else
+                          "; a cos θ_i > 0 test missing from "
+                          + " and ".join(k for k, v in counts.items() if v)),
+                       details, lanes=(per_lane.astype(float), {"wi": wi, "wo": wo}))
+
+
 def component(bsdf, opts) -> list[Row]:
     wi, cell = lanes.incident(opts.cells(), opts.n_identity // 2)
+    n_up = len(wi)
+    wi = whole_sphere(wi)
+    cell = np.concatenate([cell, cell[:n_up][wi[:n_up, 2] > 0] + len(opts.cells())])
     k_count = bsdf.component_count()
     flags = [int(bsdf.flags(k)) for k in range(k_count)]
     s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["component"])
@@ -250,6 +328,9 @@ def component(bsdf, opts) -> list[Row]:
                                for c, t in zip(comp[bad][:5], stype[bad][:5])]},
                  lanes=(bad.astype(float), {"wi": wi[live], "component": comp, "type": stype}))]
     rows += _declaration_rows(bsdf, flags, s, live, cell)
+    front = front_side_row(bsdf, opts)
+    if front is not None:
+        rows.append(front)
     if k_count < 2:
         return rows
     r = lanes.rng(opts.seed, "component")

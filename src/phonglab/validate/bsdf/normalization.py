@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe, stats
 from . import lanes, lobes
 from ..roundoff import PERTURB
@@ -106,7 +107,8 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     name = "∫ pdf dω_o = P(sample counted)"
     if lanes.delta_only(bsdf):
         return [Row("normalization", name, None, None, None, None, "skipped",
-                    "every lobe is a delta: pdf has no density to integrate", {})]
+                    "every lobe is a delta: pdf has no density to integrate",
+                    {NOT_APPLICABLE: True})]
     cells = opts.cells(opts.energy_cos)
     layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
                           whole_sphere=True)

@@ -112,6 +112,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
 from ..roundoff import REL_TOL, perturb
@@ -137,7 +138,7 @@ def _rng(seed: int, topic: str) -> np.random.Generator:
 def skipped(topic: str) -> list[Row]:
     """The one row of a polarized topic outside a polarized variant."""
     return [Row(topic, f"{topic}: Mueller matrices", None, None, None, None, "skipped",
-                NOT_POLARIZED.format(mi.variant()), {})]
+                NOT_POLARIZED.format(mi.variant()), {NOT_APPLICABLE: True})]
 
 
 # ----------------------------------------------------------------------------- probing
@@ -438,7 +439,8 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
     if lanes.delta_only(bsdf):
         return [Row("mueller_reciprocity", "mueller_reciprocity: Mueller matrices", None, None,
                     None, None, "skipped", "every lobe is a delta: eval is 0, nothing to compare "
-                    "(a sample-based reciprocity of delta lobes is not checked)", {})]
+                    "(a sample-based reciprocity of delta lobes is not checked)",
+                    {NOT_APPLICABLE: True})]
     r = _rng(opts.seed, "mueller_reciprocity")
     wi, wo = _pairs(opts, r, True)
 

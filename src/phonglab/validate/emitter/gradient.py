@@ -41,6 +41,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ..gradient import verdict
 from .config import rng
 from .lanes import with_edges
@@ -52,7 +53,7 @@ def gradient(setup: Setup, opts) -> list[Row]:
     if not dr.is_diff_v(mi.Float):
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {})]
+                    {NOT_APPLICABLE: True})]
     params = mi.traverse(setup.emitter)
     # ReadOnly: traversed for reading, refused on update (sunsky's sun_direction when it is
     # computed from a date and place, sunsky.cpp:291)
@@ -60,7 +61,7 @@ def gradient(setup: Setup, opts) -> list[Row]:
     keys = [k for k in params.keys() if not params.properties[k][3] & skip]
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    "mi.traverse exposes no differentiable parameter", {})]
+                    "mi.traverse exposes no differentiable parameter", {NOT_APPLICABLE: True})]
     n = max(1, opts.gradient_lanes // 4)
     groups = ref_groups(setup, n, opts.seed)
     p = np.concatenate([g.p for g in groups])

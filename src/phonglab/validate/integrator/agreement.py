@@ -13,7 +13,7 @@ validated by ``bias`` itself (docs/validate.md).
 
 Depth: 5 for an integrator that takes max_depth, its own for one held to a fixed depth
 (``direct``: ``path`` at max_depth 2 computes the same expectation, emission plus direct
-illumination with MIS); an integrator of unknown depth or an AOV integrator is skipped.
+illumination with MIS); an integrator whose measured depth matched no integer depth or an AOV integrator is skipped.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from ...engine.render import render_scene
 from . import scenes
 from .config import seed
 from .setup import Target
+from ...verdict import NOT_APPLICABLE
 from .topics import Row
 
 #: The max_depth of the agreement scene for an integrator that takes one.
@@ -38,8 +39,8 @@ def depth_of(target: Target) -> tuple[int | None, str]:
         return None, "an AOV integrator returns channels that are not radiance"
     if target.depth == "settable":
         return DEPTH, ""
-    if target.depth == "fixed":
-        return target.fixed_depth, ""
+    if target.own_depth is not None:
+        return target.own_depth, ""
     return None, target.depth_note
 
 
@@ -60,7 +61,8 @@ def agreement(target: Target, opts, m: int) -> list[Row]:
     depth, why = depth_of(target)
     name = f"block means against path (max_depth {depth})" if depth else "block means against path"
     if depth is None:
-        return [Row("agreement", name, None, None, None, None, "skipped", why)]
+        return [Row("agreement", name, None, None, None, None, "skipped", why,
+                    {NOT_APPLICABLE: True} if target.aov else {})]
     integ = target.make(depth) if target.depth == "settable" else target.integrator
     ref = mi.load_dict({"type": "path", "max_depth": int(depth)})
     scene = mi.load_dict(scenes.box(opts.agreement_res))

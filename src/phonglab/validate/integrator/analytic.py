@@ -29,6 +29,7 @@ bounce and no emitter a BSDF sample can hit, so it shows the noise alone.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import mitsuba as mi
 import numpy as np
@@ -37,7 +38,9 @@ from ... import stats
 from ...engine.render import render_scene
 from . import scenes
 from .config import seed
+from . import setup as setup_
 from .setup import Target
+from ...verdict import NOT_APPLICABLE
 from .topics import Row
 
 #: float32 accumulation budget of an image mean, relative.
@@ -54,9 +57,144 @@ def applies(target: Target, scene: scenes.Analytic):
     return target.at_depth(scene.depth)
 
 
+def inapplicable(target: Target, scene=None) -> dict:
+    """The skip details of a scene that genuinely does not apply (an AOV integrator; glass for
+    a light tracer: :func:`phonglab.validate.core.not_covered`), else {}: a scene skipped for
+    the integrator's depth (one depth of its own judges the scenes of the others) is marked
+    so too, but only when its depth is known -- an unmatched measurement covers nothing."""
+    if target.aov or (scene is not None and scene.specular and target.splatting):
+        return {NOT_APPLICABLE: True}
+    if scene is not None and target.depth != "settable" and target.own_depth is not None:
+        return {NOT_APPLICABLE: True}
+    return {}
+
+
 def bias_scenes(target: Target, opts) -> list:
     """[(scene, integrator or None, reason)] of the bias topic, in table order."""
-    return [(s, *applies(target, s)) for s in scenes.analytic(opts.res)]
+    return [(s, *applies(target, s)) for s in scenes.analytic(opts.res, target.own_depth)]
+
+
+#: The albedos the depth of an integrator that declares none is measured at, and the deepest
+#: depth a measurement names (deeper paths carry ρ^64 of Le: below any stderr here).
+MEASURE_RHOS = (0.5, 0.8)
+DEPTH_MAX = 64
+#: The seed stream of the depth measurement (scene numbers of the bias topic beyond its scenes).
+MEASURE_SCENE = 100
+
+
+@dataclass
+class DepthFit:
+    """The depth measurement of an integrator that declares none (:func:`measure_depth`)."""
+
+    best: int | None             #: the integer depth that fits both albedos best (None: not finite)
+    means: list                  #: the image mean at each albedo of :data:`MEASURE_RHOS`
+    ses: list                    #: its standard error (the pass means' spread)
+    passes: int
+    verdict: list | None = None  #: per albedo (pass?, tolerance, t) once settled with m
+    m: int | None = None
+
+    @property
+    def matched(self) -> bool:
+        return self.best is not None and self.verdict is not None and all(
+            ok for ok, _, _ in self.verdict)
+
+
+def _pass_stats(target, build, integ, opts, k):
+    res = render_scene(mi.load_dict(build(opts.res)), opts.bias_spp * opts.bias_passes,
+                       seed=seed(opts.seed, "bias", k), passes=opts.bias_passes,
+                       integrator=integ)
+    means = np.asarray(res.pass_means, np.float64).mean(axis=1)
+    return means, float(means.mean()), float(means.std(ddof=1) / math.sqrt(len(means)))
+
+
+def measure_depth(target: Target, opts) -> DepthFit | None:
+    """Measure the depth of an integrator that declares none (``target.depth == "measured"``;
+    None for any other, or an AOV one): the closed emitting enclosure at each albedo ρ of
+    :data:`MEASURE_RHOS`, P passes as ``bias`` renders them, gives the image mean L_ρ ± s_ρ;
+    the depth is the integer D in [1, :data:`DEPTH_MAX`] minimising
+    Σ_ρ ((L_ρ − Le (1 − ρ^D)/(1 − ρ)) / (s_ρ + floor_ρ))² (the smallest on a tie).  The fit
+    uses no significance level, so it is made before the plugin's m is counted (m then counts
+    the scenes judged at D); :func:`settle_depth` judges it.  Kept on the target; the target's
+    depth is the best fit until it is settled."""
+    if target.depth != "measured" or target.aov:
+        return None
+    if target.measurement is not None:
+        return target.measurement
+    means, ses, p = [], [], opts.bias_passes
+    for i, rho in enumerate(MEASURE_RHOS):
+        _, mean, se = _pass_stats(target, lambda r, rho=rho: scenes.enclosure(r, rho),
+                                  target.integrator, opts, MEASURE_SCENE + i)
+        means.append(mean)
+        ses.append(se)
+    best = None
+    if np.all(np.isfinite(means)) and np.all(np.isfinite(ses)):
+        depths = np.arange(1, DEPTH_MAX + 1)
+        chi2 = np.zeros(depths.size)
+        for rho, mean, se in zip(MEASURE_RHOS, means, ses):
+            v = np.array([scenes.enclosure_value(rho, int(d)) for d in depths])
+            chi2 += ((mean - v) / (se + ROUND_OFF * v)) ** 2
+        best = int(depths[int(np.argmin(chi2))])
+    target.measurement = DepthFit(best, means, ses, p)
+    target.fixed_depth = best
+    return target.measurement
+
+
+def settle_depth(target: Target, m: int) -> None:
+    """Judge a depth measurement with the plugin's m: at each albedo |L_ρ − L_D(ρ)| ≤
+    t_{P−1} s_ρ + 2⁻¹⁶ L_D(ρ) (two of the m tests).  When either fails, no integer depth
+    explains the enclosure (a double count, a missing 1/q), the target has no depth, and every
+    scene whose value depends on it is skipped; the ``bias`` topic's depth rows fail."""
+    fit = target.measurement
+    if fit is None or fit.verdict is not None:
+        return
+    t = stats.t_critical(fit.passes - 1, stats.ALPHA, m)
+    fit.m = m
+    fit.verdict = []
+    for rho, mean, se in zip(MEASURE_RHOS, fit.means, fit.ses):
+        if fit.best is None:
+            fit.verdict.append((False, None, t))
+            continue
+        v = scenes.enclosure_value(rho, fit.best)
+        tol = t * se + ROUND_OFF * v
+        fit.verdict.append((bool(abs(mean - v) <= tol), tol, t))
+    if fit.matched:
+        target.depth_note = (f"its depth, measured by the enclosure at ρ = "
+                             f"{' and '.join(map(str, MEASURE_RHOS))}, is {fit.best}")
+    else:
+        target.fixed_depth = None
+        target.depth_note = ("its depth, measured by the enclosure at ρ = "
+                             f"{' and '.join(map(str, MEASURE_RHOS))}, matches no integer depth "
+                             f"(see the bias topic's depth rows). {setup_.DECLARE}")
+
+
+def depth_rows(target: Target) -> list[Row]:
+    """The ``bias`` rows of a depth measurement (none for an integrator with a depth)."""
+    fit = target.measurement
+    if fit is None:
+        return []
+    rows = []
+    for (rho, mean, se), (ok, tol, t) in zip(zip(MEASURE_RHOS, fit.means, fit.ses), fit.verdict):
+        name = f"depth measured: enclosure ρ={rho}"
+        if fit.best is None:
+            rows.append(Row("bias", name, mean, None, se, None, "fail",
+                            "the enclosure's image mean is not finite: no depth can be measured",
+                            {"measured_depth": None}))
+            continue
+        v = scenes.enclosure_value(rho, fit.best)
+        why = (f"image mean of {fit.passes} passes × its bias spp against Le (1 − ρ^D)/(1 − ρ) "
+               f"at the best-fitting integer depth D = {fit.best} of both albedos "
+               f"({', '.join(map(str, MEASURE_RHOS))}); t_{fit.passes - 1} = {t:.2f} (Šidák, "
+               f"m = {fit.m}) × the pass means' stderr")
+        if not ok:
+            others = {r: scenes.enclosure_value(r, fit.best) for r in MEASURE_RHOS}
+            why = (f"matches no integer depth: the best fit D = {fit.best} predicts "
+                   + ", ".join(f"{val:.5g} at ρ={r}" for r, val in others.items())
+                   + " and measured " + ", ".join(f"{mm:.5g}" for mm in fit.means)
+                   + " (a light counted twice, a missing weight?); " + why)
+        rows.append(Row("bias", name, mean, v, se, tol, "pass" if ok else "fail", why,
+                        {"measured_depth": fit.best, "means": fit.means, "stderr": fit.ses,
+                         "albedos": list(MEASURE_RHOS)}))
+    return rows
 
 
 def convergence_applies(target: Target, opts):
@@ -71,7 +209,8 @@ def _gray(img: np.ndarray) -> np.ndarray:
 
 def finite(target: Target, opts) -> list[Row]:
     rows = []
-    cases = [(s.name, s.build, s.depth, s.specular) for s in scenes.analytic(opts.res)]
+    cases = [(s.name, s.build, s.depth, s.specular)
+             for s in scenes.analytic(opts.res, target.own_depth)]
     cases.append(("grazing plane (horizon at 1 mm)", scenes.grazing, None, False))
     for k, (name, build, depth, specular) in enumerate(cases):
         if target.aov:
@@ -101,11 +240,11 @@ def finite(target: Target, opts) -> list[Row]:
 
 
 def bias(target: Target, opts, m: int) -> list[Row]:
-    rows = []
+    rows = depth_rows(target)
     for k, (scene, integ, why) in enumerate(bias_scenes(target, opts)):
         if integ is None:
             rows.append(Row("bias", scene.name, None, scene.expected, None, None, "skipped",
-                            why, {"source": scene.source}))
+                            why, {"source": scene.source, **inapplicable(target, scene)}))
             continue
         res = render_scene(mi.load_dict(scene.build(opts.res)), opts.bias_spp * opts.bias_passes,
                            seed=seed(opts.seed, "bias", k), passes=opts.bias_passes,
@@ -142,7 +281,8 @@ def convergence(target: Target, opts, m: int) -> list[Row]:
     integ, why = convergence_applies(target, opts)
     names = ("convergence: RMSE slope over all spp", "convergence: slope of the last two spp")
     if integ is None:
-        return [Row("convergence", n, None, -0.5, None, None, "skipped", why) for n in names]
+        return [Row("convergence", n, None, -0.5, None, None, "skipped", why,
+                    inapplicable(target)) for n in names]
     res_ = opts.convergence_res
     scene = mi.load_dict(scenes.plane(res_))
     ref = scenes.plane_pixels(res_)

@@ -26,6 +26,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import stats
 from ..roundoff import EPS32
 from . import scenes
@@ -52,8 +53,8 @@ def applies(target: Target) -> str:
 
 
 def _setup(target: Target, res: int):
-    if target.depth == "settable" or (target.depth == "fixed" and target.fixed_depth >= 2):
-        depth = DEPTH if target.depth == "settable" else target.fixed_depth
+    if target.depth == "settable" or (target.own_depth or 0) >= 2:
+        depth = DEPTH if target.depth == "settable" else target.own_depth
         integ = target.make(depth) if target.depth == "settable" else target.integrator
         deriv = sum(k * RHO ** (k - 1) for k in range(1, depth)) * scenes.LE
         return (scenes.enclosure(res, RHO), "enclosure.bsdf.reflectance.value", integ,
@@ -70,7 +71,7 @@ def gradient(target: Target, opts, m: int) -> list[Row]:
     why = applies(target)
     if why:
         return [Row("gradient", "d mean / d reflectance: AD against FD", None, None, None,
-                    None, "skipped", why)]
+                    None, "skipped", why, {NOT_APPLICABLE: True})]
     scene_dict, key, integ, label, analytic = _setup(target, opts.res)
     scene = mi.load_dict(scene_dict)
     params = mi.traverse(scene)

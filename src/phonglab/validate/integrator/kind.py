@@ -25,8 +25,12 @@ from .cost import cost
 
 
 def statistical_tests(target, opts, topics) -> int:
-    """m: the applicable bias scenes, 2 convergence slopes, the agreement blocks, 1 gradient."""
-    m = 0
+    """m: the applicable bias scenes, 2 convergence slopes, the agreement blocks, 1 gradient,
+    and 2 for a measured depth (:func:`.analytic.measure_depth`: its scenes are counted at the
+    best-fitting depth, and stay counted when :func:`.analytic.settle_depth` finds that it
+    matches none -- the tests were planned before the verdict, so the level is still α)."""
+    analytic.measure_depth(target, opts)       # an undeclared depth: measured before m is counted
+    m = 2 if target.measurement is not None else 0
     if "bias" in topics:
         m += sum(1 for _, integ, _ in analytic.bias_scenes(target, opts) if integ is not None)
     if "convergence" in topics and analytic.convergence_applies(target, opts)[0] is not None:
@@ -39,6 +43,7 @@ def statistical_tests(target, opts, topics) -> int:
 
 
 def runners(target, opts, topics, m: int) -> dict:
+    analytic.settle_depth(target, m)
     return {
         "finite": lambda: analytic.finite(target, opts),
         "bias": lambda: analytic.bias(target, opts, m),

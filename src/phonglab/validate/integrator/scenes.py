@@ -201,11 +201,23 @@ class Analytic:
     floor: float = 0.0                   #: a stated bound on the value's own error
 
 
-def analytic(res: int) -> list[Analytic]:
+#: The enclosure's (ρ, max_depth) pairs of the bias scenes.
+ENCLOSURES = ((0.5, 1), (0.5, 2), (0.5, 3), (0.8, 64))
+#: The two albedos the enclosure is judged at for an integrator of one depth of its own.
+OWN_RHOS = (0.5, 0.8)
+
+
+def analytic(res: int, own_depth: int | None = None) -> list[Analytic]:
     """The bias scenes, in table order: the enclosure at depths 1, 2, 3 (ρ = 0.5) and 64
-    (ρ = 0.8, where Russian roulette acts), the plane under the point light, the glass sphere."""
+    (ρ = 0.8, where Russian roulette acts) -- and, for an integrator of one depth D of its own
+    (``own_depth``: declared, kept or measured), at D at both albedos of :data:`OWN_RHOS`
+    where the list lacks it -- the plane under the point light, the glass sphere."""
+    pairs = list(ENCLOSURES)
+    if own_depth is not None:
+        pairs += [(rho, own_depth) for rho in OWN_RHOS if (rho, own_depth) not in pairs]
+        pairs.sort(key=lambda p: (p[1], p[0]))
     out = []
-    for rho, depth in ((0.5, 1), (0.5, 2), (0.5, 3), (0.8, 64)):
+    for rho, depth in pairs:
         out.append(Analytic(f"enclosure ρ={rho} D={depth}",
                             lambda r, rho=rho: enclosure(r, rho), depth,
                             enclosure_value(rho, depth),

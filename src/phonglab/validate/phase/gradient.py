@@ -23,6 +23,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ...verdict import NOT_APPLICABLE
 from ... import probe
 from ..gradient import verdict
 from . import lanes
@@ -57,13 +58,13 @@ def gradient(phase, opts) -> list[Row]:
     if not dr.is_diff_v(mi.Float):
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {})]
+                    {NOT_APPLICABLE: True})]
     params = mi.traverse(phase)
     skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
     keys = [k for k in params.keys() if not params.properties[k][3] & skip]
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    "mi.traverse exposes no differentiable parameter", {})]
+                    "mi.traverse exposes no differentiable parameter", {NOT_APPLICABLE: True})]
     r = rng(opts.seed, "gradient")
     n = opts.gradient_lanes
     wi = lanes.sphere(r, n)
