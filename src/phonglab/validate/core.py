@@ -466,13 +466,22 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         opts = replace(opts, **sizes)
     if hasattr(opts, "source"):                 # topics that load the plugin again
         opts = replace(opts, source=target)
-    m = kind.part("statistical_tests")(target.plugin, opts, topics) * family
-    runners = kind.part("runners")(target.plugin, opts, topics, m)
+    planned = _guarded("plan", lambda: kind.part("statistical_tests")(target.plugin, opts,
+                                                                       topics))
     rows, seconds = [], {}
-    for topic in topics:
-        t0 = time.perf_counter()
-        rows += _guarded(topic, runners[topic])
-        seconds[topic] = round(time.perf_counter() - t0, 3)
+    if isinstance(planned, int):
+        m = planned * family
+        runners = kind.part("runners")(target.plugin, opts, topics, m)
+        for topic in topics:
+            t0 = time.perf_counter()
+            rows += _guarded(topic, runners[topic])
+            seconds[topic] = round(time.perf_counter() - t0, 3)
+    else:          # counting the tests ran the plugin (an integrator's depth) and it failed
+        m = 0
+        (why,) = planned
+        rows = [replace(why, topic=topic, name=f"{topic}: the check ran to completion",
+                        reason=f"{why.reason} (while the run was planned, before any topic)")
+                for topic in topics]
     rows.sort(key=lambda r: kind.topics.index(r.topic))
     mark_known(rows, known, parameter_values(kind, target))
     meta = {kind.name: target.label, "spec": target.spec, "variant": mi.variant(), "seed": seed,

@@ -207,7 +207,8 @@ def gradient(bsdf, opts) -> list[Row]:
     if lanes.delta_only(bsdf):
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "every lobe is a delta: eval is 0 everywhere, so no parameter has a "
-                    "derivative of eval to compare", {NOT_APPLICABLE: True})]
+                    "derivative of eval to compare (a limit of the check, not a defect of the "
+                    "BSDF)", {NOT_APPLICABLE: True})]
     params = mi.traverse(bsdf)
     keys = list(params.keys())
     if not keys:
