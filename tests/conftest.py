@@ -43,3 +43,65 @@ def any_variant(request):
 @pytest.fixture(scope="session")
 def scenes_dir() -> Path:
     return SCENES_DIR
+
+
+#: Tests moved to the slow tier (``.ci/run`` runs them after ``make test`` while its budget
+#: lasts), each with why: every one took ≥ 3 s of a warm default-tier run on 2 cores
+#: (2026-12-04) and has a cheaper sibling left in the default tier that guards the same code.
+SLOW_TIER: dict[str, str] = {
+    "test_validate_sweep.py::test_a_defect_at_a_parameter_edge_fails_there_and_passes_elsewhere":
+        "two planted edge defects swept at default sizes (8-17 s); the sweep's points and "
+        "its emitter sweep stay in the default tier",
+    "test_whitted.py::test_graphics_and_radiance_units_launch_the_same_kernels_without_recompiling":
+        "kernel-count check over a full scene (14 s); exponent_series already slow",
+    "test_whitted.py::test_scenes_render_with_whitted_and_path[glass_sphere]":
+        "glass_sphere renders (8 s); the other scenes stay",
+    "test_validate_integrator.py::test_cli_detects_an_integrator_and_fails_a_defect":
+        "CLI integrator run (12 s); the defect matrix below stays for the cheap defects",
+    "test_validate_integrator.py::test_defect_fails_its_topic_only[nan_grazing]":
+        "12 s; the other planted integrator defects stay",
+    "test_validate_integrator.py::test_defect_fails_its_topic_only[path_control]":
+        "a control at full quick size (9 s); path passes in test_builtins_pass elsewhere",
+    "test_parallel.py::test_cluster_results_identical_to_serial":
+        "starts a Dask LocalCluster (18 s); the serial/parallel equality of a sweep stays",
+    "test_fit_render.py::test_recovers_a_known_phong_from_its_render":
+        "an AD render fit (7 s); the BSDF-level fit tests stay",
+    "test_checks_catch_bugs.py::test_sampling_inconsistent_with_pdf_fails_chi2_and_monte_carlo_rows":
+        "7 s; the other planted check bugs stay",
+    "test_checks_catch_bugs.py::test_pdf_with_wrong_normalization_fails_chi2_and_monte_carlo_rows":
+        "7 s; the other planted check bugs stay",
+    "test_notebooks.py::test_notebook_runs[01_radiometry.ipynb]":
+        "a notebook (7 s); notebook 06 (plugin authors) stays",
+    "test_notebooks.py::test_notebook_runs[02_lambert_and_phong.ipynb]": "a notebook (6 s)",
+    "test_notebooks.py::test_notebook_runs[03_refraction.ipynb]": "a notebook (4 s)",
+    "test_convergence.py::test_render_rmse_falls_as_inverse_sqrt_spp":
+        "render convergence slopes (6-7 s each); the estimator convergence tests stay",
+    "test_fuzz_content.py::test_bitmap_textures_load_as_mitsuba_decodes_them":
+        "bitmap decoding against Mitsuba's per texture slot (4-7 s each)",
+    "test_planner.py::test_plans_price_the_stratified_sampler_and_its_render_meets_the_target":
+        "a planned render to its target (6 s); the plan-only tests stay",
+    "test_planner.py::test_a_planned_render_reuses_the_pilot_and_reaches_the_target":
+        "a planned render to its target (5 s)",
+    "test_planner.py::test_one_kernel_pilot_measures_what_per_depth_renders_measure":
+        "per-depth renders (5 s)",
+    "test_planner.py::test_achieved_error_is_near_the_target": "planned renders per scene",
+    "test_scenes.py::test_scene_loads_and_renders[glass_sphere]": "glass_sphere (6 s)",
+    "test_validate_defects.py::test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes":
+        "default sizes (5 s); every defect still runs at --quick",
+    "test_validate_emitter.py::test_builtin_emitters_pass_quick_spectral":
+        "spectral repeats of the built-in emitter cases; the RGB ones stay",
+    "test_validate_emitter.py::test_builtin_emitters_pass_quick[area (cube)]":
+        "a mesh area light (6 s); the rectangle, disk and sphere stay",
+    "test_checks_catch_bugs.py::test_dropping_inv_pi_fails_reflection_scene_constancy_and_sanity_rows":
+        "4 s; test_checks' rows keep the reflection scene",
+    "test_validate_chi2.py::test_narrow_lobes_pass_chi2_at_default_size":
+        "default sizes; the quick narrow-lobe tests stay",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the :data:`SLOW_TIER` tests slow (a key without ``[...]`` takes every parameter)."""
+    for item in items:
+        node = item.nodeid.split("/")[-1]
+        if node in SLOW_TIER or node.split("[")[0] in SLOW_TIER:
+            item.add_marker(pytest.mark.slow)
