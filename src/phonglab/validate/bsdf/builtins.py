@@ -227,6 +227,16 @@ def _hair_spectral_polarized() -> list[Case]:
              note="rough GGX"),
         Case("roughconductor/polarized", {"type": "roughconductor", "alpha": 0.3}, POLARIZED,
              note="Fresnel as Mueller matrix"),
+        Case("conductor/polarized", {"type": "conductor", "material": "Au"}, POLARIZED,
+             delta=True, note="gold mirror, Fresnel as Mueller matrix"),
+        Case("dielectric/polarized", {"type": "dielectric", "int_ior": 1.5}, POLARIZED,
+             delta=True, note="glass, Fresnel reflection and refraction as Mueller matrices"),
+        Case("roughdielectric/polarized", {"type": "roughdielectric", "alpha": 0.3}, POLARIZED,
+             note="a depolarizer in 3.9.1 (roughdielectric.cpp:117)"),
+        Case("thindielectric/polarized", {"type": "thindielectric"}, POLARIZED, delta=True,
+             note="a depolarizer in 3.9.1 (thindielectric.cpp:98)"),
+        Case("diffuse/polarized", {"type": "diffuse", "reflectance": 0.5}, POLARIZED,
+             note="control: a depolarizer"),
     ]
 
 

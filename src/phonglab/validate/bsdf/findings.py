@@ -203,7 +203,7 @@ FINDINGS: tuple[Finding, ...] = (
     Finding("beckmann-pdf-normalization", "normalization",
             ("roughconductor/beckmann-a0.2", "roughconductor/polarized",
              "roughdielectric/beckmann-a0.1", "blendbsdf/roughconductor+roughdielectric",
-             "pplastic/default"),
+             "pplastic/default", "roughdielectric/polarized"),
             "include/mitsuba/render/microfacet.h:346",
             "Beckmann's smith_g1() is a rational approximation (\"< 0.35 % rel. error\", lines "
             "346-352) while sample_visible() inverts the exact visible-normal distribution, so "
@@ -397,6 +397,28 @@ FINDINGS: tuple[Finding, ...] = (
             rows=(SAMPLE_ROW,),
             region=Union((SamplePoint((0.0, 0.5)), SampleEdgeAtNormalIncidence(),
                           BelowHorizon()))),
+    Finding("blendbsdf-stale-child-pdf", "pdf",
+            ("blendbsdf/roughconductor+roughdielectric",), "src/bsdfs/blendbsdf.cpp:138",
+            "sample() mixes bsdf_0's bs0.pdf into pdf_weighted (line 138; result0 * bs0.pdf into "
+            "the weight, line 139) without asking whether bsdf_0's sample is valid: "
+            "roughconductor sampled from below its surface returns a zero weight but a non-zero "
+            "bs.pdf on some lanes, which the blend keeps",
+            "bs.pdf 2.26e-05 against pdf(bs.wo) 2.7e-09 on 249 of 17007 samples at wi.z = -0.7; "
+            "every lane above the surface agrees",
+            "bs.pdf = pdf(bs.wo) and weight = eval/pdf for every sample",
+            "tests/repro/blendbsdf_stale_child_pdf.py",
+            rows=("bs.pdf = pdf(bs.wo)",), region=BelowHorizon()),
+    Finding("blendbsdf-stale-child-pdf-weight", "weight",
+            ("blendbsdf/roughconductor+roughdielectric",), "src/bsdfs/blendbsdf.cpp:138",
+            "sample() mixes bsdf_0's bs0.pdf into pdf_weighted (line 138; result0 * bs0.pdf into "
+            "the weight, line 139) without asking whether bsdf_0's sample is valid: "
+            "roughconductor sampled from below its surface returns a zero weight but a non-zero "
+            "bs.pdf on some lanes, which the blend keeps",
+            "bs.pdf 2.26e-05 against pdf(bs.wo) 2.7e-09 on 249 of 17007 samples at wi.z = -0.7; "
+            "every lane above the surface agrees",
+            "bs.pdf = pdf(bs.wo) and weight = eval/pdf for every sample",
+            "tests/repro/blendbsdf_stale_child_pdf.py",
+            rows=("weight = eval/pdf per sample",), region=BelowHorizon()),
     Finding("blendbsdf-nan-weight", "finite",
             ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
             "src/bsdfs/blendbsdf.cpp:151",
@@ -469,6 +491,18 @@ FINDINGS: tuple[Finding, ...] = (
             "f(a, b) = f(b, a) to float32 precision",
             "tests/repro/pplastic_polarized_grazing.py",
             rows=(REFLECTION_ROW,), region=Grazing(0.01)),
+    Finding("pplastic-polarized-grazing-mueller", "mueller_reciprocity",
+            ("pplastic/default", "pplastic/rough-ggx"), "src/bsdfs/pplastic.cpp:377",
+            "the same cause as pplastic-polarized-grazing, seen in the whole Mueller matrix: the "
+            "polarized diffuse term's second Fresnel transmission is evaluated from the "
+            "internally refracted direction, at the critical angle for grazing directions, "
+            "where float32 cancels (lines 375-377), so f(wo, wi) and the reversed f(wi, wo) "
+            "differ there",
+            "M/M00 of f(wo, wi) against R_out Q f(wi, wo)^T Q R_in^T differs by 17x its "
+            "tolerance (M22, rough-ggx) at cos theta_o = 3.2e-4",
+            "the reversed path's matrix to float32 precision",
+            "tests/repro/pplastic_polarized_grazing.py",
+            rows=("f(wo, wi) = R_out Q f(wi, wo)ᵀ Q R_inᵀ, reflection",), region=Grazing(0.01)),
     Finding("pplastic-polarized-grazing-intensity", "intensity",
             ("pplastic/default", "pplastic/rough-ggx"), "src/bsdfs/pplastic.cpp:377",
             "the same cause as pplastic-polarized-grazing: at cos_theta_i = 1e-4 the internally "
@@ -482,6 +516,19 @@ FINDINGS: tuple[Finding, ...] = (
             "tests/repro/pplastic_polarized_grazing_intensity.py",
             rows=("eval M00 = eval in llvm_ad_spectral",
                   "sample: wo, pdf, weight M00 = llvm_ad_spectral's"), region=Grazing(0.01)),
+    Finding("dielectric-polarized-grazing-transmission", "intensity", ("dielectric/polarized",),
+            "src/bsdfs/dielectric.cpp:305",
+            "in polarized variants sample() evaluates the transmission Mueller matrix at the "
+            "refracted direction (cos_theta_o_hat, line 305) but divides it by bs.pdf, the "
+            "transmission probability computed from the incident side (line 266); for grazing "
+            "wi the refracted direction lies at the critical angle, where "
+            "cos = sqrt(1 - eta^2 sin^2) cancels in float32, so the two disagree there (the "
+            "unpolarized branch divides t_i by t_i)",
+            "weight M00 1.788 against the unpolarized 0.4447 (= 1/eta^2) at cos_theta_i = 1e-4, "
+            "int_ior 1.5; every sample at cos_theta_i >= 0.01 agrees",
+            "weight M00 = the unpolarized weight to float32 precision",
+            "tests/repro/dielectric_polarized_grazing.py",
+            rows=("sample: wo, pdf, weight M00 = llvm_ad_spectral's",), region=Grazing(0.01)),
     Finding("retarder-jump-y0", "mueller_identities", ("retarder/quarter", "retarder/half"),
             "src/bsdfs/retarder.cpp:129",
             "sample() re-expresses the element's Mueller matrix from the fixed axis (1, 0, 0) to "
