@@ -1,37 +1,15 @@
-r"""The parameters of a BSDF that a sweep varies, and the range of each
-(:mod:`phonglab.validate.ranges` does the kind-independent part).
+r"""The parameters of a BSDF that a sweep varies, and the range of each: which parameters, the
+order of precedence of their ranges (declared, documented, probed) and the edges are
+:mod:`phonglab.validate.ranges`'; this module holds the BSDF kind's documented table.
 
-A BSDF is checked at a derived set of parameter points (:mod:`phonglab.validate.sweep`), not
-at its defaults alone: real defects live at other settings (a lobe weight k_s/(k_d + k_s) that
-is 0/0 only at k_d = k_s = 0; a normalization that is wrong only at small exponents).
-
-Which parameters.  The scalar and spectrum parameters ``mi.traverse`` exposes (a constant
-texture's ``NAME.value`` is the load-time parameter ``NAME``, set as a constant; bitmap data,
-strings and nested plugins are not swept), read at their loaded value (a colour by the mean of
-its channels), minus the parameters the caller pins (``--set NAME=VALUE``).  A built-in whose
-load-time names differ from the traversed ones (roughplastic's ``int_ior`` is traversed as
-``eta``) is swept by the load-time names of its table below.
-
-The range of each, in this order of precedence:
-
-1. declared by the plugin: a class attribute ``PARAMETER_RANGES = {"name": (lo, hi)}`` or
-   ``{"name": (lo, hi, (edge, ...))}`` on the Python class (phonglab's ``lambert`` and
-   ``phong`` declare theirs);
-2. Mitsuba 3.9.1's documented ranges of its built-ins (:data:`BUILTIN`, from the plugin
-   reference: reflectances in [0, 1], microfacet roughness α, where the docs give 0.001-0.01
-   as "very smooth" to 0.3+ as "rough", IORs between equal (1) and the densest tabulated
-   materials (≈ 2.4 for diamond; 3 here), a conductor's η ∈ [0, 5] and k ∈ [0.01, 10] (η = k
-   = 0 is no material)); ``alpha`` is held ≥ 0.01, the smoothest lobe the χ² bins resolve;
-3. otherwise probed: the candidates 0, 10⁻⁴, d/10, d, 10d, 1, 10 and 10⁴ around the loaded
-   value d, each loaded once; a value the plugin refuses at load time is outside the range,
-   not a failure, and the range is [smallest accepted, largest accepted] (a parameter that
-   accepts only its default is not swept).
-
-Edges.  Besides the ends and the middle of its range a parameter is tried at the values where
-formulas break: 0 and the tiniest positive value where the range starts at 0 (1e-4: a cos^p
-lobe at p → 0, a division by a reflectance), and a declared range's own edges (a huge
-exponent).  A point a plugin refuses at load (k_d + k_s > 1 for phong at "all at maximum")
-is reported as outside the plugin's range, not run.
+:data:`BUILTIN`: Mitsuba 3.9.1's documented ranges of its built-ins, from the plugin reference:
+reflectances in [0, 1], microfacet roughness α, where the docs give 0.001-0.01 as "very smooth"
+to 0.3+ as "rough", IORs between equal (1) and the densest tabulated materials (≈ 2.4 for
+diamond; 3 here), a conductor's η ∈ [0, 5] and k ∈ [0.01, 10] (η = k = 0 is no material);
+``alpha`` is held ≥ 0.01, the smoothest lobe the χ² bins resolve.  A built-in whose load-time
+names differ from the traversed ones (roughplastic's ``int_ior`` is traversed as ``eta``) is
+swept by the load-time names of this table.  A point a plugin refuses at load (k_d + k_s > 1 for
+phong at "all at maximum") is reported as outside the plugin's range, not run.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-r"""The ``gradient`` topic (its verdict: :func:`phonglab.validate.gradient.verdict`): Dr.Jit's derivative of the sampled radiance / intensity against a
+r"""The ``gradient`` topic: Dr.Jit's derivative of the sampled radiance / intensity against a
 central finite difference, for every differentiable parameter ``mi.traverse`` exposes
 (radiance, intensity, irradiance, an envmap's data, a spot's cutoff_angle and beam_width).
 
@@ -16,23 +16,8 @@ depend on x (point, spot, area, constant) the two sides are the same function.  
 w₀/e₀ keeps the topic apart from ``weight``: a weight wrong by a factor (that topic's defect)
 still has the derivative of that factor times the radiance's.
 
-As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction v_i = |x_i|
-(max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
-D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2).  h starts at 2⁻⁷ and is halved (at most 16
-times) until the sums Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound: a spectral
-variant's ``radiance.value`` holds the polynomial coefficients of Mitsuba's RGB-to-spectrum
-model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷ · 0.1 drives its sigmoid into
-saturation, where the quotients measure nothing (the step is chosen from the quotients alone,
-never from AD).  Lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the
-round-off bound: a jump moving with x), or whose one-sided quotients at h/2 disagree
-(|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within h/2 of x, e.g. a spot lane just outside
-its cutoff, lit for a larger cutoff_angle only, whose central quotient is half the one-sided
-slope at any step while AD gives the left one, 0) are left out and counted.  Tolerance on the
-kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  Lanes along which no radiance arrives
-at x (e₀ = 0: an emitter swept to an emitted quantity of 0) while the weight's derivative is not
-0 have no sampling factor (0/0) and are left out too; where they are most lanes the row is
-skipped, saying so.  x is written as an opaque value so
-the kernels compile once, and restored after each parameter.
+The step, its halving, the lanes left out (jumps, kinks, no arriving radiance) and the
+tolerance are the shared verdict's: :func:`phonglab.validate.gradient.verdict`.
 """
 
 from __future__ import annotations
