@@ -52,17 +52,12 @@ def add_plugin(p: argparse.ArgumentParser, register: str = "mi.register_bsdf") -
 
 
 def check_plugin_files(paths, register: str = "mi.register_bsdf") -> None:
-    """Each ``--plugin`` path is a file, before any work (one sentence otherwise)."""
-    from pathlib import Path
-
-    from ..validate.kind import ValidateError
+    """Each ``--plugin`` path is a file, before any work (one sentence otherwise:
+    :func:`phonglab.validate.inputs.check_plugin_file`)."""
+    from ..validate.inputs import check_plugin_file
 
     for path in paths:
-        p = Path(path)
-        if not p.is_file():
-            raise ValidateError(f"plugin file {str(path)!r} "
-                                f"{'is a folder' if p.is_dir() else 'does not exist'}; give the "
-                                f"path of a Python file that calls {register}")
+        check_plugin_file(path, register)
 
 
 def load_plugin_files(paths) -> list[tuple[str, str]]:

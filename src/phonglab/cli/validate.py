@@ -23,7 +23,7 @@ from pathlib import Path
 from ..parallel import add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate import registry
-from ..validate.inputs import ValidateError, check_topics
+from ..validate.inputs import ValidateError, check_plugin_file, check_topics
 from ..verdict import Report
 from .options import add_seed
 
@@ -124,11 +124,7 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
         raise ValidateError("name the plugin to validate (e.g. phonglab validate diffuse) or "
                             "give --all-builtins")
     for path in args.plugin:
-        if not Path(path).is_file():
-            raise ValidateError(f"plugin file {path!r} "
-                                f"{'is a folder' if Path(path).is_dir() else 'does not exist'}; "
-                                f"give the path of a Python file that calls mi.register_bsdf "
-                                f"(or another mi.register_*)")
+        check_plugin_file(path)
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")

@@ -53,15 +53,8 @@ def _face(kind):
 
     def validate_kind(spec, *, params=None, sweep=False, **options) -> Report:
         from . import sweep as sweep_  # lazy: imports Mitsuba
-        from .inputs import ValidateError
 
-        for name in kind.load_options:
-            value = options.pop(name, None)
-            if value is None:
-                continue
-            if name in (params or {}):
-                raise ValidateError(f"give the {name} once: as {name}= or as --set {name}.*")
-            params = {**(params or {}), name: value}
+        params = kind.with_load_options(params, options)
         return sweep_.validate(kind, spec, params=params, sweep=sweep, **options)
 
     validate_kind.__name__ = validate_kind.__qualname__ = kind.function

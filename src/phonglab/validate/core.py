@@ -45,7 +45,7 @@ import numpy as np
 from .. import registration, stats
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
-from .inputs import ValidateError, check_topics
+from .inputs import ValidateError, check_plugin_file, check_topics
 from .kind import Kind
 
 __all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
@@ -72,12 +72,7 @@ def load_plugins(paths, kind: Kind | None = None) -> list[tuple[str, str]]:
     """
     by_file: dict[str, list[tuple[str, str]]] = {}
     for p in paths:
-        path = Path(p)
-        if not path.is_file():
-            raise ValidateError(f"plugin file {str(p)!r} "
-                                f"{'is a folder' if path.is_dir() else 'does not exist'}; give "
-                                f"the path of a Python file that calls "
-                                f"{kind.register if kind else 'mi.register_bsdf (or another mi.register_*)'}")
+        path = check_plugin_file(p, kind.register) if kind else check_plugin_file(p)
         by_file[str(p)] = _run_plugin_file(path, kind)
     if kind is not None:
         check_registered(by_file, kind)

@@ -6,9 +6,25 @@ documented there); plugins are loaded by :func:`phonglab.settings.load_plugin`.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from .kind import ValidateError, check_topics
 
-__all__ = ["ValidateError", "check_topics", "xml_head", "xml_root_tag"]
+__all__ = ["ValidateError", "check_plugin_file", "check_topics", "xml_head", "xml_root_tag"]
+
+#: What a ``--plugin`` file calls when the kind it registers is not known yet.
+ANY_REGISTER = "mi.register_bsdf (or another mi.register_*)"
+
+
+def check_plugin_file(path, register: str = ANY_REGISTER) -> Path:
+    """A ``--plugin`` file that exists and is not a folder, else one sentence naming which and
+    the call (``register``) such a file makes."""
+    p = Path(path)
+    if not p.is_file():
+        raise ValidateError(f"plugin file {str(path)!r} "
+                            f"{'is a folder' if p.is_dir() else 'does not exist'}; give the path "
+                            f"of a Python file that calls {register}")
+    return p
 
 
 def xml_head(path: str) -> str:

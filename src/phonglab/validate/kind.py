@@ -108,6 +108,19 @@ class Kind:
             return own
         return getattr(self.module(), name, None) if self.impl else None
 
+    def with_load_options(self, params, options: dict) -> dict | None:
+        """``params`` with the validator keywords that are load-time parameters
+        (:attr:`load_options`, e.g. an emitter's ``shape``) taken out of ``options`` and added;
+        one given both ways is bad input."""
+        for name in self.load_options:
+            value = options.pop(name, None)
+            if value is None:
+                continue
+            if name in (params or {}):
+                raise ValidateError(f"give the {name} once: as {name}= or as --set {name}.*")
+            params = {**(params or {}), name: value}
+        return params
+
     def check_topics(self, topics) -> tuple[str, ...]:
         """The topics to run, in table order (all of them when ``topics`` is empty)."""
         return check_topics(topics, self.topics)

@@ -75,20 +75,11 @@ def load(spec, params, hint) -> Loaded:
     return Loaded(target, loaded.label, spec_meta)
 
 
-def with_shape(params, shape) -> dict | None:
-    """``params`` with ``shape`` (a keyword of :func:`validate_emitter`) added; given twice is
-    bad input."""
-    if shape is None:
-        return params
-    if "shape" in (params or {}):
-        raise ValidateError("give the shape once: as shape= or as --set shape.*")
-    return {**(params or {}), "shape": shape}
-
-
 def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loaded:
     """Set the variant, run the plugin files, load the emitter attached to ``shape``
     (:func:`phonglab.validate.core.prepare`)."""
-    return core.prepare(EMITTER, spec, variant=variant, params=with_shape(params, shape),
+    params = EMITTER.with_load_options(params, {"shape": shape})
+    return core.prepare(EMITTER, spec, variant=variant, params=params,
                         plugins=plugins)
 
 
