@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import stats as scipy_stats
 
 from phonglab import stats
 from phonglab.validate import validate_bsdf
@@ -85,6 +86,22 @@ def test_samples_where_the_pdf_is_zero_reject():
     exp = np.array([10.0, 10.0, 0.0])
     t = stats.pearson_chi2(np.array([10.0, 9.0, 1.0]), exp)
     assert t.impossible == 1 and t.p_value == 0.0
+
+
+def test_one_pool_sums_every_sparse_cell_into_one_cell():
+    """pooling="one" (the emitters'): cells [20, 30] stand; the sparse cells 1, 2, 0 pool into
+    one of expected 3 < 5, merged into the smallest standing cell: cells [23, 30] against
+    observed [18 + 4 + 1 + 1, 30], so χ² = (24 − 23)²/23 on 1 degree of freedom; the sample in
+    the empty-expected cell is pooled, not impossible."""
+    exp = np.array([20.0, 30.0, 1.0, 2.0, 0.0])
+    obs = np.array([18.0, 30.0, 4.0, 1.0, 1.0])
+    t = stats.pearson_chi2(obs, exp, pooling="one")
+    assert t.statistic == pytest.approx(1.0 / 23.0) and t.dof == 1
+    assert t.p_value == pytest.approx(float(scipy_stats.chi2.sf(1.0 / 23.0, 1)))
+    assert (t.pooled_in, t.pooled_out, t.impossible) == (3, 1, 0)
+    assert stats.pearson_chi2(obs, exp).p_value == 0.0            # the running pooling rejects
+    with pytest.raises(ValueError, match="pooling"):
+        stats.pearson_chi2(obs, exp, pooling="mitsuba")
 
 
 def test_narrow_lobe_refines_only_its_bins():

@@ -18,7 +18,12 @@ comparisons made together:
   (:func:`pearson_chi2`), with Mitsuba's pooling of sparse cells (``mitsuba::math::chi2``,
   include/mitsuba/core/math.h): cells sorted by expected count, those below 5 summed in that
   order into groups that each exceed 5 (a last group that does not is dropped), dof = cells
-  + groups − 1, p = P(χ²_dof ≥ statistic).
+  + groups − 1, p = P(χ²_dof ≥ statistic).  A sample in a cell of expected count 0 makes
+  p = 0: the BSDF and phase-function topics re-integrate such slivers first
+  (:mod:`phonglab.validate.sphere_bins`).  ``pooling="one"`` instead sums every sparse cell,
+  empty-expected ones included, into one cell (merged into the smallest remaining cell when
+  that pool is itself below 5): the emitters' (cos θ, φ) lattice has no re-integration, so a
+  sample in a bin whose quadrature found 0 is pooled, not impossible.
 
 :data:`ALPHA` = 0.01 is the project's family-wise level: a correct plugin fails a whole
 check run, or a test, at most 1 % of the time.
@@ -107,16 +112,23 @@ class PearsonChi2:
     residual: np.ndarray         #: (obs − exp)/√exp per cell, NaN where pooled or empty
 
 
-def pearson_chi2(observed, expected, pool_below: float = POOL_BELOW) -> PearsonChi2:
+def pearson_chi2(observed, expected, pool_below: float = POOL_BELOW,
+                 pooling: str = "running") -> PearsonChi2:
     """Pearson's χ² of ``observed`` counts against ``expected`` ones (same shape).
 
-    Pooling as ``mitsuba::math::chi2``: cells sorted by expected count (stable), cells with
-    both counts 0 skipped, a cell of expected count < ``pool_below`` added to a running group
-    that counts as one cell once its expected count exceeds ``pool_below``.  The residual map
-    has the shape of the inputs: (obs − exp)/√exp for every cell tested on its own.
+    ``pooling="running"`` pools as ``mitsuba::math::chi2``: cells sorted by expected count
+    (stable), cells with both counts 0 skipped, a cell of expected count < ``pool_below``
+    added to a running group that counts as one cell once its expected count exceeds
+    ``pool_below``.  ``pooling="one"`` sums every cell below ``pool_below`` into one cell (see
+    the module docstring).  The residual map has the shape of the inputs: (obs − exp)/√exp for
+    every cell tested on its own.
     """
     obs = np.asarray(observed, np.float64)
     exp = np.asarray(expected, np.float64)
+    if pooling == "one":
+        return _one_pool(obs, exp, pool_below)
+    if pooling != "running":
+        raise ValueError(f"pooling must be 'running' or 'one', not {pooling!r}")
     o, e = obs.ravel(), exp.ravel()
     order = np.argsort(e, kind="stable")
     o, e = o[order], e[order]
@@ -139,3 +151,30 @@ def pearson_chi2(observed, expected, pool_below: float = POOL_BELOW) -> PearsonC
     with np.errstate(divide="ignore", invalid="ignore"):
         residual = np.where(exp >= pool_below, (obs - exp) / np.sqrt(exp), np.nan)
     return PearsonChi2(stat, dof, p, pooled_in, pooled_out, int(impossible), residual)
+
+def _one_pool(obs: np.ndarray, exp: np.ndarray, pool_below: float) -> PearsonChi2:
+    """:func:`pearson_chi2` with every cell of expected count < ``pool_below`` in one pool."""
+    o, e = obs.ravel(), exp.ravel()
+    low = e < pool_below
+    cells_o, cells_e = list(o[~low]), list(e[~low])
+    po, pe = float(o[low].sum()), float(e[low].sum())
+    pooled_in = int(np.count_nonzero(low & ((o != 0) | (e != 0))))
+    if pe >= pool_below or not cells_e:
+        cells_o.append(po)
+        cells_e.append(pe)
+    elif po > 0 or pe > 0:
+        k = int(np.argmin(cells_e))
+        cells_o[k] += po
+        cells_e[k] += pe
+    co, ce = np.array(cells_o), np.array(cells_e)
+    impossible = float(np.sum(co[ce <= 0]))
+    keep = ce > 0
+    if impossible > 0:
+        stat, dof, p = float("inf"), len(ce) - 1, 0.0
+    else:
+        stat, dof = float(np.sum((co[keep] - ce[keep]) ** 2 / ce[keep])), max(1, int(keep.sum()) - 1)
+        p = float(_scipy_stats.chi2.sf(stat, dof))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        residual = np.where(exp >= pool_below, (obs - exp) / np.sqrt(exp), np.nan)
+    return PearsonChi2(stat, dof, p, pooled_in, int(pooled_in > 0), int(impossible), residual)
+

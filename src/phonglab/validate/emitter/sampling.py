@@ -21,15 +21,14 @@ N ∫_bin pdf_direction dω:
   bins where the nodes disagree (:func:`bin_integrals`), pdf_direction from the direction
   alone.
 
-Pearson's χ² statistic over the bins, bins with expected count < 5 pooled into one (merged
-into the smallest remaining bin when the pool is itself < 5), p-value from the χ² distribution
-with (cells − 1) degrees of freedom; each reference point is one test at the Šidák level of the
-emitter's m statistical tests (:func:`~phonglab.stats.sidak`).  :func:`pearson` pools as
-Mitsuba's ``mi.chi2`` does; :func:`phonglab.stats.pearson_chi2` (the BSDF and phase-function
-topics') instead rejects outright any sample in a bin whose integral is exactly 0, which those
-topics pair with a re-integration of such slivers (:mod:`phonglab.validate.sphere_bins`).  The
-emitter's (cos θ, φ) lattice has no such re-integration, so it keeps this pooling; over 60
-emitter tests (seven built-in cases, seeds 0-3) the two p-values differ by at most 0.058.  A reference point whose histogram is empty while
+Pearson's χ² statistic over the bins (:func:`phonglab.stats.pearson_chi2` with
+``pooling="one"``: bins with expected count < 5 pooled into one, merged into the smallest
+remaining bin when the pool is itself < 5), p-value from the χ² distribution with (cells − 1)
+degrees of freedom; each reference point is one test at the Šidák level of the emitter's m
+statistical tests (:func:`~phonglab.stats.sidak`).  The emitter's (cos θ, φ) lattice has no
+re-integration of slivers, so a sample in a bin whose quadrature found 0 is pooled rather than
+impossible (the BSDF and phase-function topics' running pooling rejects it, after
+:mod:`phonglab.validate.sphere_bins` re-integrates such bins).  A reference point whose histogram is empty while
 ∫pdf > 0 fails; one where both are empty (the back of a one-sided emitter) is not tested.
 ``mi.chi2.EmitterAdapter`` (mitsuba/python/chi2.py) samples from one zero Interaction3f and drops the weight; here every
 reference point is its own test and a sample counts only when its weight is not 0 (an emitter
@@ -47,7 +46,6 @@ import math
 
 import mitsuba as mi
 import numpy as np
-from scipy import stats as scipy_stats
 
 from ... import probe, stats
 from . import lanes as lanes_
@@ -58,32 +56,6 @@ from .topics import Row
 
 #: Tolerance of a delta light's direction, per component of the unit vector.
 DIRECTION_TOL = 1e-4
-#: Bins whose expected count is below this are pooled (Pearson's rule of thumb).
-MIN_EXPECTED = 5.0
-
-
-def pearson(observed: np.ndarray, expected: np.ndarray) -> tuple[float, float, int]:
-    """(statistic, p-value, degrees of freedom) of Pearson's χ² with low bins pooled."""
-    obs, exp = np.ravel(observed).astype(np.float64), np.ravel(expected).astype(np.float64)
-    low = exp < MIN_EXPECTED
-    cells_o, cells_e = list(obs[~low]), list(exp[~low])
-    po, pe = float(obs[low].sum()), float(exp[low].sum())
-    if pe >= MIN_EXPECTED or not cells_e:
-        cells_o.append(po)
-        cells_e.append(pe)
-    elif po > 0 or pe > 0:
-        k = int(np.argmin(cells_e))
-        cells_o[k] += po
-        cells_e[k] += pe
-    o, e = np.array(cells_o), np.array(cells_e)
-    if np.any((e <= 0) & (o > 0)):
-        return math.inf, 0.0, len(e) - 1
-    keep = e > 0
-    chi = float(np.sum((o[keep] - e[keep]) ** 2 / e[keep]))
-    dof = max(1, int(keep.sum()) - 1)
-    return chi, float(scipy_stats.chi2.sf(chi, dof)), dof
-
-
 def frame(setup: Setup, p: np.ndarray) -> tuple[np.ndarray, float]:
     """(basis rows s, t, n, c₀): the histogram frame at p and the lowest cos θ it spans."""
     if setup.kind == "infinite":
@@ -311,7 +283,8 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int,
         return {**rec, "status": "fail", "p_value": 0.0,
                 "why": "no sample has a non-zero weight" if keep.sum() == 0 else
                 f"{outside} samples lie outside the emitter's bounding sphere"}
-    stat, pv, dof = pearson(hist, expected)
+    test = stats.pearson_chi2(hist, expected, pooling="one")
+    stat, pv, dof = test.statistic, test.p_value, test.dof
     rec.update(p_value=pv, statistic=stat, dof=dof, status="pass" if pv >= level else "fail")
     if pv < level:
         rec["histogram"], rec["expected"] = hist.tolist(), expected.tolist()
