@@ -10,11 +10,15 @@ cases · N · 0.01 failing runs in all; the script prints P(≥ that many | ALPH
 and ``lambert`` sample the same cosine density from the same random numbers at one seed, so
 their χ² outcomes coincide.
 
-With ``--sweep`` each run is a parameter sweep (issue #29): ``diffuse``, ``lambert``, ``phong``,
-GGX ``roughconductor`` and GGX ``roughplastic`` (the Beckmann pdfs are a Mitsuba finding) across
-their parameters, with every documented cause of the conformance table's cases of that plugin
-(``bsdf.builtins.known_for_plugin``: each explains only its own signature); the Šidák family is the
-points, so each sweep still fails by chance with probability ≤ ALPHA.  Its planted defects are
+With ``--sweep`` each run is a parameter sweep (issues #29, #36), over every kind: BSDFs
+``diffuse``, ``lambert``, ``phong``, GGX ``roughconductor`` and GGX ``roughplastic`` (the
+Beckmann pdfs are a Mitsuba finding) across their parameters, emitters ``point`` and ``area``
+across theirs, integrators ``path`` and ``direct`` at their given point (integrators have no
+swept parameters), and two author-written plugins that declare no parameter ranges
+(``tests/authors/my_lambert.py``, ``tests/defects_emitter/area_control.py``).  A built-in runs
+with every documented cause of its conformance table (the kind's ``known_for``: each explains
+only its own signature), as ``phonglab validate`` does; the Šidák family is the points, so
+each sweep still fails by chance with probability ≤ ALPHA.  Its planted defects are
 ``tests/defects/sweep`` (firing only at a parameter edge).
 
 False passes: the planted-defect plugins of ``tests/defects`` (each with one defect a
@@ -37,11 +41,12 @@ from pathlib import Path
 from scipy import stats as scipy_stats
 
 from phonglab import stats
+from phonglab.validate import registry
 from phonglab.validate.batch import false_failures
-from phonglab.validate.bsdf.builtins import known_for_plugin
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFECTS = ROOT / "tests" / "defects"
+AUTHORS = ROOT / "tests" / "authors"
 GLOSSY = {"diffuse_reflectance": 0.0, "specular_reflectance": 0.8}
 
 #: label -> (plugin, params): correct BSDFs; every failing run is a false failure.
@@ -61,21 +66,30 @@ CORRECT = {
 }
 
 
-#: label -> (plugin, params): correct BSDFs swept across their parameters (``--sweep``).
+#: label -> (kind, plugin, params, plugin files): correct plugins swept across their
+#: parameters (``--sweep``).
 SWEPT = {
-    "diffuse": ("diffuse", {}),
-    "lambert": ("lambert", {}),
-    "phong": ("phong", {}),
-    "roughconductor ggx": ("roughconductor", {"distribution": "ggx"}),
-    "roughplastic ggx": ("roughplastic", {"distribution": "ggx"}),
+    "diffuse": ("bsdf", "diffuse", {}, ()),
+    "lambert": ("bsdf", "lambert", {}, ()),
+    "phong": ("bsdf", "phong", {}, ()),
+    "roughconductor ggx": ("bsdf", "roughconductor", {"distribution": "ggx"}, ()),
+    "roughplastic ggx": ("bsdf", "roughplastic", {"distribution": "ggx"}, ()),
+    "point": ("emitter", "point", {}, ()),
+    "area": ("emitter", "area", {}, ()),
+    "path": ("integrator", "path", {}, ()),
+    "direct": ("integrator", "direct", {}, ()),
+    "my_lambert (author)": ("bsdf", "my_lambert", {}, (AUTHORS / "my_lambert.py",)),
+    "area_control (author)": ("emitter", "defect_area_control", {},
+                              (ROOT / "tests" / "defects_emitter" / "area_control.py",)),
 }
 
 
-def run(spec, params, seeds, quick, plugins=(), sweep=False) -> list[dict]:
+def run(spec, params, seeds, quick, plugins=(), sweep=False, kind="bsdf") -> list[dict]:
     """One record per seed: the failing topics."""
-    known = known_for_plugin(spec) if sweep else None
+    known_for = registry.by_name(kind).part("known_for")
+    known = (known_for(spec, params or {}) or None) if sweep and not plugins and known_for else None
     ((_, runs),) = false_failures({"case": (spec, params, known)}, seeds, quick, plugins,
-                                  sweep=sweep).items()
+                                  sweep=sweep, kind=kind).items()
     return [{"seed": seed, "failing": failing} for seed, failing in runs]
 
 
@@ -112,13 +126,17 @@ def main() -> int:
     for size in args.sizes:
         quick = size == "quick"
         failures = runs = 0
-        for label, (spec, params) in chosen.items():
-            recs = run(spec, params, args.seeds, quick, sweep=args.sweep)
+        for label, case in chosen.items():
+            kind, spec, params, files = case if args.sweep else ("bsdf", *case, ())
+            t = time.perf_counter()
+            recs = run(spec, params, args.seeds, quick, files, sweep=args.sweep, kind=kind)
+            per_run = (time.perf_counter() - t) / max(1, len(recs))
             result["correct"].setdefault(label, {})[size] = recs
+            result.setdefault("seconds_per_run", {}).setdefault(label, {})[size] = round(per_run, 1)
             bad = [(r["seed"], r["failing"]) for r in recs if r["failing"]]
             failures, runs = failures + len(bad), runs + len(recs)
-            print(f"[{size}] {label}: {len(bad)} failing runs of {len(recs)}"
-                  + (f" {bad}" if bad else ""), flush=True)
+            print(f"[{size}] {label}: {len(bad)} failing runs of {len(recs)}, {per_run:.1f} s "
+                  f"per run" + (f" {bad}" if bad else ""), flush=True)
         if chosen:
             print(f"[{size}] total: {failures} failing runs of {runs}; expected ≤ "
                   f"{runs * stats.ALPHA:.2f} at ALPHA = {stats.ALPHA}; "

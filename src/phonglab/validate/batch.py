@@ -21,9 +21,7 @@ from ..parallel import Job, Runner
 from ..engine.outputs import jsonable
 from ..verdict import Report, Row, point_label
 from . import registry
-from . import validate_bsdf
 from .. import validate as face
-from .bsdf.topics import TOPICS
 from .registry import catalogue
 
 
@@ -159,26 +157,28 @@ def run_all(cases=None, options: dict | None = None, progress=None,
             "reports": reports}
 
 
-def false_failures(cases, seeds: int, quick: bool = False, plugins=(), sweep=False) -> dict:
+def false_failures(cases, seeds: int, quick: bool = False, plugins=(), sweep=False,
+                   kind: str = "bsdf") -> dict:
     """Run each case over seeds 0..seeds−1: {label: [(seed, failing topics), ...]}, one pair
     per seed (an empty list: the run passed; in a sweep a topic is named with its point,
     ``chi2 at exponent=1``).
 
     ``cases``: plugin names, or {label: (spec, params)} or {label: (spec, params, known)}
-    (``known``: the documented causes, as for :func:`validate_bsdf`); ``plugins``: files that
-    register them; ``sweep``: each run across the plugin's parameter sweep (``params``
-    pinned).  ``cost`` is left out (informational, it never fails).  For a correct plugin every
-    failing run is a false failure and each run fails with probability ≤ ALPHA by
-    construction; for a planted defect every passing run (no failing topic) is a false pass.
+    (``known``: the documented causes, as for :func:`phonglab.validate.validate`), all of one ``kind``
+    (a :data:`~phonglab.validate.registry.KINDS` word); ``plugins``: files that register
+    them; ``sweep``: each run across the plugin's parameter sweep (``params`` pinned).
+    ``cost`` is left out (informational, it never fails).  For a correct plugin every failing
+    run is a false failure and each run fails with probability ≤ ALPHA by construction; for a
+    planted defect every passing run (no failing topic) is a false pass.
     """
-    topics = [t for t in TOPICS if t != "cost"]
+    topics = [t for t in registry.by_name(kind).topics if t != "cost"]
     if not isinstance(cases, dict):
         cases = {name: (name, None) for name in cases}
     out = {}
     for label, (spec, params, *known) in cases.items():
         out[label] = []
         for seed in range(seeds):
-            report = validate_bsdf(spec, params=params or None, seed=seed, quick=quick,
+            report = face.validate(spec, params=params or None, seed=seed, quick=quick,
                                    topics=topics, plugins=list(plugins), sweep=sweep,
                                    known=known[0] if known else None)
             out[label].append((seed, sorted({r.topic if r.point is None
