@@ -3,6 +3,8 @@ VENV  := .venv
 BIN   := $(VENV)/bin
 STAMP := $(VENV)/.phonglab-installed
 PYTEST_ARGS ?=
+# The default tier runs on every core (pytest-xdist); PYTEST_WORKERS=0 runs it in one process.
+PYTEST_WORKERS ?= auto
 
 .PHONY: setup demo test test-slow test-all bench check clean classic-figure
 
@@ -16,7 +18,7 @@ demo: setup
 	$(BIN)/phonglab render cornell_phong --spp 256 -o out/demo.exr
 
 test: setup
-	$(BIN)/python -m pytest -m "not slow" $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -m "not slow" -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
 test-slow: setup
 	$(BIN)/python -m pytest -m slow $(PYTEST_ARGS)
