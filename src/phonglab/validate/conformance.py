@@ -56,6 +56,10 @@ class Finding:
     region: Any = None
     #: parameter values it holds at ((name, value) or (name, (lo, hi)), ...; () -- every point)
     at: tuple[tuple[str, Any], ...] = ()
+    #: load-time settings its cause lives in ((name, value), ...; e.g. a BSDF's microfacet
+    #: ``distribution``): validated away from the table, it explains nothing where the user's
+    #: settings differ (() -- whatever they are)
+    given: tuple[tuple[str, str], ...] = ()
 
     def known_text(self) -> str:
         """The ``known`` entry of a case: ``file:line: cause``."""

@@ -273,12 +273,24 @@ def known_for_plugin(plugin: str, given: dict | None = None) -> dict[str, tuple]
     """topic -> every documented cause of the cases of ``plugin`` (a type name), for that
     plugin validated away from the table's points (a sweep): each cause still holds only
     inside its own signature, so a failure outside all of them stays a fail.  With ``given``
-    (the parameters a user set), only the cases of the same microfacet ``distribution`` (the
-    default Beckmann when not given) count: the Beckmann pdf's documented normalization defect
-    says nothing about a GGX lobe, so a GGX failure of that row stays a fail."""
-    wanted = None if given is None else str(given.get("distribution", DEFAULT_DISTRIBUTION))
-    return known_of(cases(), plugin, lambda case: wanted is None or str(
-        case.spec.get("distribution", DEFAULT_DISTRIBUTION)).lower() == wanted.lower())
+    (the parameters a user set), a finding whose cause lives in a load-time setting
+    (:attr:`~phonglab.validate.conformance.Finding.given`, e.g. the Beckmann pdf's
+    normalization defect in ``distribution = beckmann``, the default when not given) counts
+    only where that setting agrees: it says nothing about a GGX lobe, so a GGX failure of that
+    row stays a fail; a cause elsewhere (the conductor Fresnel term's derivative at eta = 0)
+    holds for every distribution."""
+    out = known_of(cases(), plugin)
+    if given is None:
+        return out
+    settings = {"distribution": DEFAULT_DISTRIBUTION, **given}
+    needs = {f.key: f.given for f in findings.FINDINGS}
+
+    def holds(cause) -> bool:
+        return all(str(settings.get(name, "")).lower() == value.lower()
+                   for name, value in needs.get(getattr(cause, "key", ""), ()))
+
+    kept = {topic: tuple(c for c in causes if holds(c)) for topic, causes in out.items()}
+    return {topic: causes for topic, causes in kept.items() if causes}
 
 
 def catalogue() -> Catalogue:

@@ -212,7 +212,8 @@ FINDINGS: tuple[Finding, ...] = (
             "int pdf dm = 0.99724 at cos theta_i = 1e-4, 1.00283 at 0.05, 1.00036 at 0.5 "
             "(alpha 0.3; GGX 1.00000 at each)",
             "int pdf = 1 with every sample valid (the exact G1, as for GGX at line 354)",
-            "tests/repro/beckmann_pdf_normalization.py", rows=(NORM_ROW,)),
+            "tests/repro/beckmann_pdf_normalization.py", rows=(NORM_ROW,),
+            given=(("distribution", "beckmann"),)),
     Finding("mask-diffuse-reflectance-opacity", "eval_diffuse_reflectance",
             ("mask/diffuse-0.5",),
             "src/bsdfs/mask.cpp:229",
