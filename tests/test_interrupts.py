@@ -83,11 +83,12 @@ sys.exit(cli.main(["render", "cornell_phong", "--spp", "256", "-o", sys.argv[1]]
 
 
 def test_ctrl_c_inside_a_render_never_runs_mitsubas_signal_handler(tmp_path):
-    """Mitsuba 3.9.1 installs a C SIGINT handler for each render that logs ("Received interrupt
-    signal, winding down..") from inside the handler (integrator_v.cpp:30-49): not
-    async-signal-safe, it hung `phonglab render` for good in CI (the slow Ctrl-C test at
-    0.5 s), and a Ctrl-C in the instant before it stores the previous handler kills the
-    process with SIG_DFL.  phonglab takes SIGINT on a thread of its own
+    """Mitsuba 3.9.1 installs a C SIGINT handler for each render (the lambda passed to
+    `signal` at src/render/python/integrator_v.cpp:37) that logs ("Received interrupt
+    signal, winding down..", line 38) from inside the handler: not async-signal-safe, so it
+    can deadlock (the reproducer shows the Log call, not a hang), and a Ctrl-C in the instant
+    before line 37 stores the previous handler kills the process with SIG_DFL (a first
+    render).  phonglab takes SIGINT on a thread of its own
     (runtime.interrupts_routed): Mitsuba's handler never runs, the command says one line and
     exits 130.  Without the routing the handler runs and cancels the integrator (checked)."""
     out = tmp_path / "x.exr"

@@ -176,3 +176,45 @@ def test_principled_sweep_findings_hold_only_at_their_points():
     assert not metal.holds_at({"metallic": 1.0, "specular": 0.5})
     energy = {f.key for f in FINDINGS if f.topic == "energy" and not f.bug}
     assert {"principled-diffuse-retro-energy", "principled-specular-uncoupled-energy"} <= energy
+
+
+def test_roughdielectric_index_matched_energy_explains_its_signature_only(variant_llvm_rgb):
+    """#36: roughdielectric's energy row fails near eta = 1 (the sweep's corner int_ior 1
+    against the default ext_ior, air: eta 0.99972); the finding explains that row at
+    eta in [0.998, 1.015] and nothing else: not the same row at eta 1.5 or 0.99, not
+    another topic's failing row at eta 0.99972."""
+    from phonglab.validate.bsdf.builtins import known_for_plugin
+    from phonglab.validate.bsdf.findings import ENERGY_ROW
+
+    key = "roughdielectric-index-matched-energy"
+    cause = {f.key: f.known() for f in FINDINGS}[key]
+    assert cause.rows == (ENERGY_ROW,)
+    for eta in (0.998, 0.99972, 1.0001, 1.015):
+        assert cause.holds_at({"eta": eta}), eta
+    for eta in (0.99, 0.995, 1.02, 1.5):
+        assert not cause.holds_at({"eta": eta}), eta
+    assert not cause.holds_at({})
+    known = known_for_plugin("roughdielectric")
+    assert cause in known["energy"]
+
+    def failing(topic, name):
+        return Row(topic, name, 1.01, 1.0, None, 1e-4, "fail", "why", {})
+    rows = [failing("energy", ENERGY_ROW), failing("weight", "sample weight = eval / pdf")]
+    mark_known(rows, known, {"eta": 0.99972, "alpha": 0.1})
+    assert [r.status for r in rows] == ["KNOWN", "fail"]
+    assert rows[0].details["known_by"] == [key]
+    for eta in (1.5, 0.99):
+        row = failing("energy", ENERGY_ROW)
+        mark_known([row], known, {"eta": eta, "alpha": 0.1})
+        assert row.status == "fail", eta
+
+    # the real row: Beckmann alpha 0.1 at int_ior 1 (eta 0.99972) fails, and is this finding
+    spec = {"alpha": 0.1, "int_ior": 1.0}
+    plain = validate_bsdf("roughdielectric", params=spec, topics=["energy"])
+    assert [r.status for r in plain.rows] == ["fail"]
+    marked = validate_bsdf("roughdielectric", params=spec, topics=["energy"], known=known)
+    assert [r.status for r in marked.rows] == ["KNOWN"]
+    assert marked.rows[0].details["known_by"] == [key]
+    glass = validate_bsdf("roughdielectric", params={"alpha": 0.1, "int_ior": 1.5},
+                          topics=["energy"], known=known)
+    assert [r.status for r in glass.rows] == ["pass"]

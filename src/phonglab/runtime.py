@@ -228,12 +228,16 @@ def interrupts_routed():
     """Take Ctrl-C (SIGINT) on a thread of phonglab's own for the block: Mitsuba never sees it.
 
     Mitsuba 3.9.1's ``Integrator.render`` binding installs a C signal handler for the length
-    of each render (``ScopedSignalHandler``, src/render/python/integrator_v.cpp:30-49) that
-    calls ``Log`` -- a mutex, string formatting, ``malloc`` -- from inside the handler, which
-    POSIX forbids (not async-signal-safe).  A Ctrl-C that lands on a thread holding one of
-    those locks hangs the process for good (``phonglab render`` stuck at "rendering 0%", seen
-    in CI); one that lands before ``sigint_handler_prev`` is assigned (line 36) restores
-    ``SIG_DFL`` and kills the process outright (exit -2, no message).  So for the block SIGINT
+    of each render (``ScopedSignalHandler``: the handler is the lambda that
+    src/render/python/integrator_v.cpp:37 passes to ``signal``) whose first statement calls
+    ``Log`` (line 38) -- a mutex, string formatting, ``malloc`` -- from inside the handler,
+    which POSIX does not allow (not async-signal-safe): a Ctrl-C that lands on a thread
+    holding one of those locks can deadlock the process.  tests/repro/sigint_handler_logs.py
+    shows the ``Log`` call running in the handler, not a hang.  The same line 37 stores
+    ``signal``'s return value in ``sigint_handler_prev`` only after the handler is installed:
+    a Ctrl-C in between re-installs the old value (line 42) and re-raises (line 43), and in a
+    process's first render that value is still null (line 26: ``SIG_DFL``), which kills the
+    process outright (exit -2, no message).  So for the block SIGINT
     is blocked in the main thread -- and so in every thread started inside it (Dr.Jit's and
     Mitsuba's workers, tqdm's, Dask's), which inherit the mask -- and a listener thread takes
     it with ``sigwait`` and hands it to the main thread as ``_thread.interrupt_main()``: no C

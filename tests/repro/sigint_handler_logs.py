@@ -1,16 +1,20 @@
 """Mitsuba 3.9.1: the SIGINT handler of a render calls Log, which a signal handler must not.
 
-src/render/python/integrator_v.cpp (commit 478e193a), lines 30-49: each ``Integrator.render``
-call from Python installs ``ScopedSignalHandler``, a C handler that runs
+src/render/python/integrator_v.cpp (commit 478e193a): each ``Integrator.render`` call from
+Python installs ``ScopedSignalHandler`` (lines 30-49), whose handler is the lambda passed to
+``signal`` on line 37.  Its first statement, line 38, is
 ``Log(Warn, "Received interrupt signal, winding down..")`` -- a mutex, string formatting and
 ``malloc`` -- then ``integrator->cancel()``, ``signal(SIGINT, sigint_handler_prev)`` and
-``raise(SIGINT)``.  None of these but ``signal``/``raise`` is async-signal-safe (POSIX
-signal-safety(7)): a Ctrl-C landing on a thread that holds the logger's mutex or an allocator
-lock deadlocks the process (``phonglab render`` hung at "rendering 0%" in CI until phonglab
-routed SIGINT itself, runtime.interrupts_routed).  ``sigint_handler_prev`` is also assigned
-only after ``signal()`` returns (line 36): a Ctrl-C in between restores SIG_DFL (null) and the
-re-raise kills the process with no Python cleanup.  What it costs a render: nothing while no
-Ctrl-C comes; a hung or killed process when one does.
+``raise(SIGINT)`` (lines 39-43).  None of these but ``signal``/``raise`` is async-signal-safe
+(POSIX signal-safety(7)): a Ctrl-C landing on a thread that holds the logger's mutex or an
+allocator lock can deadlock the process.  ``sigint_handler_prev`` is also assigned only after
+``signal()`` returns (line 37): a Ctrl-C in between re-installs its old value, null (SIG_DFL,
+line 26) in a process's first render, and the re-raise kills the process with no Python
+cleanup.  What it costs a render: nothing while no Ctrl-C comes; a possible deadlock or a
+killed process when one does.  phonglab routes SIGINT itself (runtime.interrupts_routed).
+
+This script shows that the handler runs ``Log`` from signal context (its message is printed
+during a render); it does not produce a hang, which depends on where the signal lands.
 
 Run: python tests/repro/sigint_handler_logs.py  -> exit 1 while the behaviour is present
 (the handler ran Log from signal context: its message is printed during a render).

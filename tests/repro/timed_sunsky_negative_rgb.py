@@ -1,13 +1,14 @@
-"""Mitsuba 3.9.1 timed_sunsky in an RGB variant: negative radiance near the horizon, by design.
+"""Mitsuba 3.9.1 timed_sunsky in an RGB variant: negative radiance near the horizon.
 
-src/emitters/timed_sunsky.cpp:171-176 (commit 478e193a; sunsky.cpp says the same): "the sun's
-radiance is ill-represented by the linear sRGB color space ... it can happen that it contains
-negative pixel values ... These results are left un-clamped".  The sky (Hosek-Wilkie fit,
-include/mitsuba/render/sunsky.h:642-655, c1 c2 R without a clamp) and the sun's RGB
-(sunsky.h:580-581) go below zero in the blue channel close to the horizon: the sky within
-~0.07 deg of it, the sun disc while it is under ~1 deg high, where timed_sunsky's default day
-puts it part of the time: 36 % of its direction samples are sun samples with weights like
-(0.73, 0.20, -0.011) (radiance (3819, 1032, -58)).
+include/mitsuba/render/sunsky.h:642-655 (commit 478e193a): the sky's Hosek-Wilkie fit eval_sky
+returns c1 c2 R without a clamp, and its blue channel goes below zero within ~0.07 deg of the
+horizon -- a bug: nothing documents it.  The sun's RGB (sunsky.h:580-581) is negative in blue
+too while the sun disc is under ~1 deg high, where timed_sunsky's default day puts it part of
+the time: 36 % of its direction samples are sun samples with weights like (0.73, 0.20, -0.011)
+(radiance (3819, 1032, -58)).  That part is documented: src/emitters/timed_sunsky.cpp:171-176
+(sunsky.cpp says the same), "the sun's radiance is ill-represented by the linear sRGB color
+space ... it can happen that it contains negative pixel values ... These results are left
+un-clamped".
 
 Run: python tests/repro/timed_sunsky_negative_rgb.py  -> exit 1 while the behaviour is present.
 """

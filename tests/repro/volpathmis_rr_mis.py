@@ -1,15 +1,18 @@
 """Mitsuba 3.9.1 volpathmis: Russian roulette is left out of the NEE density of the MIS weight
-of emitters hit by BSDF sampling, so paths that survived roulette are too dark.
+of emitters hit by BSDF- or phase-sampled rays, in the iterations where roulette runs.
 
-src/integrators/volpathmis.cpp (commit 478e193a): roulette divides the path weight by the
-survival probability q by multiplying p_over_f (the path's pdf/f) by q (line 240), but
-p_over_f_nee, the NEE strategy's pdf/f of the same path, was copied from p_over_f before it
-(line 437) and is not updated; an emitter hit by a BSDF-sampled ray adds
-emitted / (p_over_f + p_over_f_nee) (lines 393-397, mis_weight at 657-671), i.e.
-f / (q p_bsdf + p_nee) where the balance heuristic after roulette needs f / (q (p_bsdf + p_nee)).
-With q < 1 this is too small: a closed emitting box of albedo 0.8 (Le = 2, max_depth 64,
-exact 10) reads 9.79 with the default rr_depth 5 and 9.68 with rr_depth 1; 10.000 with
-roulette off (rr_depth 1000) and in volpath.
+src/integrators/volpathmis.cpp (commit 478e193a): in an iteration with depth > rr_depth
+(line 238) a surviving path's p_over_f (its pdf/f) is multiplied by the survival probability q
+(lines 239-240), but p_over_f_nee, the NEE strategy's pdf/f of the same path, was copied from
+p_over_f at the last real scattering (line 437; line 339 in a medium) and is not updated; an
+emitter hit by a BSDF-sampled ray adds emitted / (p_over_f + p_over_f_nee) (lines 393-397,
+mis_weight at 657-671), i.e. f / (q p_bsdf + p_nee) where the balance heuristic after roulette
+needs f / (q (p_bsdf + p_nee)).  With q < 1 those hits are under-weighted; next-event estimation
+keeps p_nee / (p_nee + p_bsdf) (lines 410-415), hits by camera rays and specular chains take
+mis_weight(p_over_f) alone (count_direct, line 384), and iterations up to rr_depth are not
+affected.  This script's scene, a closed emitting box of albedo 0.8 (Le = 2, max_depth 64,
+every pixel sees exactly 10), reads 9.79 with the default rr_depth 5 and 9.68 with rr_depth 1;
+10.000 with roulette off (rr_depth 1000) and in volpath.
 
 Run: python tests/repro/volpathmis_rr_mis.py  -> exit 1 while the behaviour is present.
 """

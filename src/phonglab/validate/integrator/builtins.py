@@ -36,16 +36,22 @@ FINDINGS: tuple[Finding, ...] = (
             rows=_SLOPES),
     Finding("volpathmis-roulette-mis", "bias", ("volpathmis",),
             "src/integrators/volpathmis.cpp:240",
-            "Russian roulette divides the path weight by the survival probability q by "
-            "multiplying p_over_f by q (line 240), but p_over_f_nee, the next-event strategy's "
-            "pdf/f of the same path, was copied before it (line 437) and keeps no q: an "
-            "emitter hit by a BSDF-sampled ray adds emitted / (p_over_f + p_over_f_nee) "
-            "(lines 393-397, 657-671), f / (q p_bsdf + p_nee) instead of the balance "
-            "heuristic's f / (q (p_bsdf + p_nee)), so every path that survived roulette is too "
-            "dark: -2.1 % in the albedo-0.8 enclosure with the default rr_depth 5, -3.3 % "
-            "with rr_depth 1; no bias below rr_depth (volpath is unaffected)",
-            "9.791 ± 0.004 for 10 (rho 0.8, D 64, rr_depth 5); reproducer: 9.674 ± 0.035 "
-            "at rr_depth 1, 9.999 ± 0.002 with roulette off",
+            "in an iteration where Russian roulette runs (depth > rr_depth, line 238) a "
+            "surviving path's p_over_f is multiplied by the survival probability q (lines "
+            "239-240), but p_over_f_nee, the next-event strategy's pdf/f of the same path, was "
+            "copied from p_over_f at the last real scattering (line 437; line 339 in a medium) "
+            "and keeps no q.  An emitter hit by a BSDF- or phase-sampled ray then adds "
+            "emitted / (p_over_f + p_over_f_nee) (lines 393-397, 657-671), f / (q p_bsdf + "
+            "p_nee) instead of the balance heuristic's f / (q (p_bsdf + p_nee)).  Only those "
+            "hits are under-weighted, and only in roulette iterations: next-event estimation "
+            "keeps its weight p_nee / (p_nee + p_bsdf) (lines 410-415), so the two weights sum "
+            "to less than one; hits by camera rays and specular chains take mis_weight(p_over_f) "
+            "alone (count_direct, line 384); no iteration up to rr_depth is affected, and "
+            "volpath is not.  In the closed enclosure of albedo 0.8 (Le = 2, "
+            "max_depth 64, every pixel sees 10) the image is -2.1 % with the default rr_depth "
+            "5 and -3.3 % with rr_depth 1",
+            "9.791 ± 0.004 for 10 (enclosure rho 0.8, D 64, rr_depth 5); reproducer (the same "
+            "enclosure): 9.674 ± 0.035 at rr_depth 1, 9.999 ± 0.002 with roulette off",
             "Le (1 - rho^D)/(1 - rho) = 10", "tests/repro/volpathmis_rr_mis.py",
             rows=("enclosure ρ=0.8 D=64",)),
     Finding("prbvolpath-depth-limit", "bias", ("prbvolpath",),
