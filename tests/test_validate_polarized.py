@@ -208,3 +208,43 @@ def test_intensity_reloads_nested_values_and_skips_objects(polarized):
                            topics=["intensity"], variant=POLARIZED)
     (row,) = report.rows
     assert row.status == "skipped" and "does not load in llvm_ad_spectral" in row.reason
+
+
+def test_intensity_reference_process_starts_once_per_run_and_ends(polarized, monkeypatch):
+    """A sweep's points share one unpolarized reference process (intensity.session), which has
+    ended, its folder removed, when the run returns -- and when a topic raises mid-run."""
+    from pathlib import Path as P
+    from phonglab.validate.bsdf import intensity
+
+    started = []
+    init = intensity.ReferenceServer.__init__
+
+    def counting(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        started.append(self)
+
+    monkeypatch.setattr(intensity.ReferenceServer, "__init__", counting)
+    report = validate_bsdf("roughconductor", sweep=True, quick=True, seed=0, variant=POLARIZED,
+                           topics=["intensity"])
+    points = report.meta["sweep"]["points"]
+    assert points > 2
+    assert len([r for r in report.rows if r.status == "pass"]) == 2 * points, report.table()
+    assert len(started) == 1 and started[0].requests == points
+    assert started[0].proc.poll() is not None and not P(started[0].tmp.name).exists()
+
+    started.clear()
+    request = intensity.ReferenceServer.request
+    calls = []
+
+    def interrupted(self, spec, arrays):
+        calls.append(spec)
+        if len(calls) == 2:
+            raise KeyboardInterrupt          # Ctrl-C while the second point is served
+        return request(self, spec, arrays)
+
+    monkeypatch.setattr(intensity.ReferenceServer, "request", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        validate_bsdf("roughconductor", sweep=True, quick=True, seed=0, variant=POLARIZED,
+                      topics=["intensity"])
+    assert len(started) == 1 and started[0].proc.poll() is not None
+    assert not P(started[0].tmp.name).exists()
