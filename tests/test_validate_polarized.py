@@ -143,6 +143,41 @@ def test_criteria_on_known_matrices():
     assert pol.stokes_margin(amplify_v)[0] == pytest.approx(-0.2, abs=1e-6)
 
 
+def test_stokes_margin_cover_is_the_grids_covering_radius():
+    """COVER bounds the chordal distance from any unit vector to the nearest grid point: the
+    largest circumradius of the grid's convex-hull facets (its spherical Delaunay triangles)."""
+    from scipy.spatial import ConvexHull
+    grid = pol.fibonacci(pol.GRID)
+    hull = ConvexHull(grid)
+    radius = np.linalg.norm(hull.equations[:, None, :3] - grid[hull.simplices], axis=-1).max()
+    assert radius <= pol.COVER < radius + 1e-3
+    u = np.random.default_rng(4).normal(size=(20000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    assert np.max(np.min(np.linalg.norm(u[:, None] - grid[None], axis=-1), axis=1)) <= radius
+
+
+def test_stokes_margin_sign_unchanged_by_the_certified_skip():
+    """Mixtures of Jones matrices and depolarizers, some certified positive without a search:
+    the margin's sign is the sign of a dense brute-force minimum wherever that is clear."""
+    rng = np.random.default_rng(5)
+    jones = np.array([pol.jones_to_mueller(j) for j in _random_jones(rng, 60)])
+    depol = np.zeros((60, 4, 4))
+    depol[:, 0, 0] = np.abs(jones[:, 0, 0])
+    mix = jones * rng.uniform(0, 1, (60, 1, 1)) + depol * rng.uniform(0, 1, (60, 1, 1))
+    over = mix.copy()
+    over[:, 1, 0] += 1.2 * over[:, 0, 0]                     # over-polarizing: negative margin
+    m = np.concatenate([mix, over])
+    margin, _ = pol.stokes_margin(m)
+    dense = pol.fibonacci(40000)
+    s = np.concatenate([np.ones((len(dense), 1)), dense], axis=1)
+    brute = (np.einsum("nij,kj->nki", m, s)[..., 0]
+             - np.linalg.norm(np.einsum("nij,kj->nki", m, s)[..., 1:], axis=-1)).min(axis=1)
+    scale = np.abs(m).max(axis=(1, 2))
+    clear = np.abs(brute) > 1e-3 * scale
+    assert np.all(np.sign(margin[clear]) == np.sign(brute[clear]))
+    assert np.sum(margin > 0) > 20 and np.sum(margin < 0) > 20
+
+
 def test_jones_transpose_is_p_mt_p():
     """The identity behind the reciprocity form: M(Jᵀ) = P M(J)ᵀ P, P = diag(1, 1, 1, −1)."""
     p = np.diag([1.0, 1.0, 1.0, -1.0])
