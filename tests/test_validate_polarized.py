@@ -143,6 +143,41 @@ def test_criteria_on_known_matrices():
     assert pol.stokes_margin(amplify_v)[0] == pytest.approx(-0.2, abs=1e-6)
 
 
+def test_stokes_margin_cover_is_the_grids_covering_radius():
+    """COVER bounds the chordal distance from any unit vector to the nearest grid point: the
+    largest circumradius of the grid's convex-hull facets (its spherical Delaunay triangles)."""
+    from scipy.spatial import ConvexHull
+    grid = pol.fibonacci(pol.GRID)
+    hull = ConvexHull(grid)
+    radius = np.linalg.norm(hull.equations[:, None, :3] - grid[hull.simplices], axis=-1).max()
+    assert radius <= pol.COVER < radius + 1e-3
+    u = np.random.default_rng(4).normal(size=(20000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    assert np.max(np.min(np.linalg.norm(u[:, None] - grid[None], axis=-1), axis=1)) <= radius
+
+
+def test_stokes_margin_sign_unchanged_by_the_certified_skip():
+    """Mixtures of Jones matrices and depolarizers, some certified positive without a search:
+    the margin's sign is the sign of a dense brute-force minimum wherever that is clear."""
+    rng = np.random.default_rng(5)
+    jones = np.array([pol.jones_to_mueller(j) for j in _random_jones(rng, 60)])
+    depol = np.zeros((60, 4, 4))
+    depol[:, 0, 0] = np.abs(jones[:, 0, 0])
+    mix = jones * rng.uniform(0, 1, (60, 1, 1)) + depol * rng.uniform(0, 1, (60, 1, 1))
+    over = mix.copy()
+    over[:, 1, 0] += 1.2 * over[:, 0, 0]                     # over-polarizing: negative margin
+    m = np.concatenate([mix, over])
+    margin, _ = pol.stokes_margin(m)
+    dense = pol.fibonacci(40000)
+    s = np.concatenate([np.ones((len(dense), 1)), dense], axis=1)
+    brute = (np.einsum("nij,kj->nki", m, s)[..., 0]
+             - np.linalg.norm(np.einsum("nij,kj->nki", m, s)[..., 1:], axis=-1)).min(axis=1)
+    scale = np.abs(m).max(axis=(1, 2))
+    clear = np.abs(brute) > 1e-3 * scale
+    assert np.all(np.sign(margin[clear]) == np.sign(brute[clear]))
+    assert np.sum(margin > 0) > 20 and np.sum(margin < 0) > 20
+
+
 def test_jones_transpose_is_p_mt_p():
     """The identity behind the reciprocity form: M(Jᵀ) = P M(J)ᵀ P, P = diag(1, 1, 1, −1)."""
     p = np.diag([1.0, 1.0, 1.0, -1.0])
@@ -208,3 +243,43 @@ def test_intensity_reloads_nested_values_and_skips_objects(polarized):
                            topics=["intensity"], variant=POLARIZED)
     (row,) = report.rows
     assert row.status == "skipped" and "does not load in llvm_ad_spectral" in row.reason
+
+
+def test_intensity_reference_process_starts_once_per_run_and_ends(polarized, monkeypatch):
+    """A sweep's points share one unpolarized reference process (intensity.session), which has
+    ended, its folder removed, when the run returns -- and when a topic raises mid-run."""
+    from pathlib import Path as P
+    from phonglab.validate.bsdf import intensity
+
+    started = []
+    init = intensity.ReferenceServer.__init__
+
+    def counting(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        started.append(self)
+
+    monkeypatch.setattr(intensity.ReferenceServer, "__init__", counting)
+    report = validate_bsdf("roughconductor", sweep=True, quick=True, seed=0, variant=POLARIZED,
+                           topics=["intensity"])
+    points = report.meta["sweep"]["points"]
+    assert points > 2
+    assert len([r for r in report.rows if r.status == "pass"]) == 2 * points, report.table()
+    assert len(started) == 1 and started[0].requests == points
+    assert started[0].proc.poll() is not None and not P(started[0].tmp.name).exists()
+
+    started.clear()
+    request = intensity.ReferenceServer.request
+    calls = []
+
+    def interrupted(self, spec, arrays):
+        calls.append(spec)
+        if len(calls) == 2:
+            raise KeyboardInterrupt          # Ctrl-C while the second point is served
+        return request(self, spec, arrays)
+
+    monkeypatch.setattr(intensity.ReferenceServer, "request", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        validate_bsdf("roughconductor", sweep=True, quick=True, seed=0, variant=POLARIZED,
+                      topics=["intensity"])
+    assert len(started) == 1 and started[0].proc.poll() is not None
+    assert not P(started[0].tmp.name).exists()

@@ -138,13 +138,31 @@ def _is_jit() -> bool:
     return dr.is_jit_v(mi.Float)
 
 
+#: The byte alignment of every column handed to Dr.Jit (:func:`aligned`).
+ALIGN = 64
+
+
+def aligned(c: np.ndarray) -> np.ndarray:
+    """A float32 copy of the 1-D array ``c`` whose data starts on an :data:`ALIGN`-byte
+    boundary.  Dr.Jit's LLVM backend uses a host array's memory in place and compiles an
+    aligned or an unaligned vector load into the kernel depending on where that memory starts
+    (numpy's allocations start anywhere 16 bytes apart), so the same query on arrays that
+    happen to lie differently is a different kernel, compiled again; aligned columns make one
+    kernel per query."""
+    buf = np.empty(len(c) + ALIGN // 4, dtype=np.float32)
+    start = (-buf.ctypes.data % ALIGN) // 4
+    out = buf[start:start + len(c)]
+    out[:] = c
+    return out
+
+
 def _dr(cls, a: np.ndarray):
-    """numpy -> Dr.Jit ``cls`` (float32).  JIT: (N,) -> Float, (N, k) -> k Float columns.
-    Scalar variants: one lane, a number or a (k,) row."""
+    """numpy -> Dr.Jit ``cls`` (float32).  JIT: (N,) -> Float, (N, k) -> k Float columns
+    (each :func:`aligned`).  Scalar variants: one lane, a number or a (k,) row."""
     a = np.asarray(a, dtype=np.float32)
     if dr.is_jit_v(mi.Float):
         cols = [a] if a.ndim == 1 else [a[:, j] for j in range(a.shape[1])]
-        return cls(*(mi.Float(np.ascontiguousarray(c)) for c in cols))
+        return cls(*(mi.Float(aligned(c)) for c in cols))
     return cls(*(float(x) for x in a.reshape(-1)))
 
 

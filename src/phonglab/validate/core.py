@@ -467,10 +467,11 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     if isinstance(planned, int):
         m = planned * family
         runners = kind.part("runners")(target.plugin, opts, topics, m)
-        for topic in topics:
-            t0 = time.perf_counter()
-            rows += _guarded(topic, runners[topic])
-            seconds[topic] = round(time.perf_counter() - t0, 3)
+        with session(kind):
+            for topic in topics:
+                t0 = time.perf_counter()
+                rows += _guarded(topic, runners[topic])
+                seconds[topic] = round(time.perf_counter() - t0, 3)
     else:          # counting the tests ran the plugin (an integrator's depth) and it failed
         m = 0
         (why,) = planned
@@ -490,6 +491,13 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
     if sizes:
         meta["sizes"] = dict(sizes)
     return Report(meta, rows)
+
+
+def session(kind: Kind):
+    """The kind's ``session`` part entered (what its topics keep across the points of one
+    run; nested sessions share the outermost's), or a block that does nothing."""
+    part = kind.part("session")
+    return part() if part is not None else contextlib.nullcontext()
 
 
 def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0, quick=False,

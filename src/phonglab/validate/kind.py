@@ -25,6 +25,9 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``returns``         (plugin, label) -> None: the types its Python methods return, checked on
                     one lane right after the default load (:mod:`.returns`); a mismatch is a
                     :class:`ValidateError`
+``session``         () -> a context manager around a whole run (every point of a sweep):
+                    what its topics keep across points, closed when it ends (a BSDF's
+                    unpolarized reference process, :func:`.bsdf.intensity.session`)
 ==================  ==========================================================================
 
 The kind's public validator, ``validate_<name>`` (``validate_bsdf``), is made by the package
@@ -51,7 +54,7 @@ class ValidateError(PhonglabError):
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
 PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "domain", "values",
-         "known_for", "catalogue", "returns")
+         "known_for", "catalogue", "returns", "session")
 
 
 @dataclass(frozen=True)

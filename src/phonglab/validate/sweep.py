@@ -147,8 +147,9 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
     options = {"variant": base_variant(), "topics": list(topics), "seed": seed, "quick": quick,
                "known": known, "plugins": [str(p) for p in plugins], "family": size,
                "sizes": sizes, "kind": kind.name}
-    reports = _run_points(spec, params or {}, runnable, loaded, options, runner, progress,
-                          [t for t in topics if t not in kind.informational])
+    with core.session(kind):             # one for every point run here
+        reports = _run_points(spec, params or {}, runnable, loaded, options, runner, progress,
+                              [t for t in topics if t not in kind.informational])
     rows: list[Row] = []
     records = []
     for pt, rep in zip(runnable, reports):

@@ -1,15 +1,20 @@
 r"""The ``intensity`` topic: M00 in a polarized variant against what the same plugin returns in
 the matching unpolarized variant, direction by direction (the derivation and tolerances are in
-:mod:`.polarization`'s docstring).  The unpolarized reference runs in a child process: it sets
-that variant, registers phonglab's plugins, runs the ``--plugin`` files and loads the spec
-again (:func:`reference`).
+:mod:`.polarization`'s docstring).  The unpolarized reference runs in a child process
+(:class:`ReferenceServer`): it sets that variant, registers phonglab's plugins and runs the
+``--plugin`` files once, then loads each spec it is sent again and answers with its eval and
+samples (:func:`reference`).  One such process serves a whole validate run -- every point of
+its sweep (:func:`session`): starting an interpreter and Mitsuba's variant is most of the cost
+of a request.
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
+import select
 import subprocess
 import sys
 import tempfile
@@ -56,30 +61,48 @@ def provenance(bsdf, opts):
     return source.spec, files
 
 
-_CHILD = r"""
-import json, runpy, sys
+_SERVER = r"""
+import json, os, runpy, signal, sys, traceback
+signal.signal(signal.SIGINT, signal.SIG_IGN)    # the validating process owns its lifetime
+reply = os.fdopen(os.dup(1), "w", buffering=1)  # the protocol's channel: the original stdout
+os.dup2(2, 1)                                   # what Mitsuba or a plugin prints: stderr
+sys.stdout = sys.stderr
 import numpy as np
-args = json.load(open(sys.argv[1]))
+variant, plugins = json.loads(sys.argv[1])
 import phonglab
-phonglab.register(args["variant"])
+phonglab.register(variant)
 import mitsuba as mi
 from phonglab import probe
-for f in args["plugins"]:
+for f in plugins:
     runpy.run_path(f, run_name="__phonglab_plugin__")
-spec = args["spec"]
-try:
-    if set(spec) == {"file"}:
-        bsdf = mi.load_string(open(spec["file"]).read())
-    else:
-        bsdf = mi.load_dict(spec)
-except Exception as exc:
-    print(str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc), file=sys.stderr)
-    sys.exit(3)
-d = np.load(sys.argv[2])
-ev = probe.eval(bsdf, d["wi"], d["wo"])
-s = probe.sample(bsdf, d["swi"], d["u1"], d["u2"])
-np.savez(sys.argv[3], eval=ev, wo=s.wo, weight=s.weight, pdf=s.pdf)
+for line in sys.stdin:
+    req = json.loads(line)
+    spec = req["spec"]
+    try:
+        if set(spec) == {"file"}:
+            bsdf = mi.load_string(open(spec["file"]).read())
+        else:
+            bsdf = mi.load_dict(spec)
+    except Exception as exc:
+        text = str(exc).strip()
+        reply.write(json.dumps({"unavailable": text.splitlines()[-1] if text else repr(exc)})
+                    + "\n")
+        continue
+    try:
+        d = np.load(req["in"])
+        ev = probe.eval(bsdf, d["wi"], d["wo"])
+        s = probe.sample(bsdf, d["swi"], d["u1"], d["u2"])
+        np.savez(req["out"], eval=ev, wo=s.wo, weight=s.weight, pdf=s.pdf)
+    except Exception as exc:
+        traceback.print_exc()
+        reply.write(json.dumps({"error": traceback.format_exception_only(exc)[-1].strip()})
+                    + "\n")
+        continue
+    reply.write(json.dumps({"done": req["out"]}) + "\n")
 """
+
+#: How long one request may take before the reference process is given up (seconds).
+REQUEST_TIMEOUT = 600.0
 
 
 class ReferenceUnavailable(RuntimeError):
@@ -101,24 +124,139 @@ def restored(spec: dict) -> dict:
     return out
 
 
-def reference(spec, files, variant, arrays) -> dict:
-    """Run the unpolarized ``variant`` in a subprocess on ``arrays``; its eval and samples."""
-    with tempfile.TemporaryDirectory(prefix="phonglab-pol-") as tmp:
-        a, inp, out = (Path(tmp) / n for n in ("args.json", "in.npz", "out.npz"))
-        a.write_text(json.dumps({"variant": variant, "spec": spec, "plugins": files}))
-        np.savez(inp, **arrays)
+class ReferenceServer:
+    """One child interpreter in an unpolarized ``variant`` with the ``plugins`` files run,
+    answering requests (a spec and arrays) for as long as it is open.
+
+    The protocol is JSON lines: a request ``{"spec", "in", "out"}`` on the child's stdin (the
+    arrays in the ``.npz`` file ``in``, the answers written to ``out``: binary, so the numbers
+    are exact), one reply line on its stdout -- ``{"done"}``, ``{"unavailable": why}`` (the
+    spec does not load there) or ``{"error": why}``.  The child writes everything else (Mitsuba's
+    log, a plugin's prints) to a log file, whose last line a failure reports.  It ignores
+    SIGINT: Ctrl-C reaches the validating process (routed there by
+    :func:`phonglab.runtime.interrupts_routed`), which closes it (:meth:`close`); it also ends
+    on its own when its stdin closes, so a validating process that dies takes it along."""
+
+    def __init__(self, variant: str, plugins):
+        self.variant = variant
+        self.tmp = tempfile.TemporaryDirectory(prefix="phonglab-pol-")
+        self.log = open(Path(self.tmp.name) / "child.log", "w+")
+        self.requests = 0
         env = dict(os.environ)
         src = str(Path(phonglab.__path__[0]).resolve().parent)   # where phonglab came from
         env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
-        proc = subprocess.run([sys.executable, "-c", _CHILD, str(a), str(inp), str(out)],
-                              capture_output=True, text=True, env=env, timeout=600)
-        if proc.returncode != 0:
-            tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            if proc.returncode == 3:
-                raise ReferenceUnavailable(f"the spec does not load in {variant}: {tail[:300]}")
-            raise RuntimeError(f"the {variant} reference failed: {tail[:300]}")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _SERVER, json.dumps([variant, list(plugins)])],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.log, text=True, env=env)
+
+    def _tail(self) -> str:
+        self.log.flush()
+        self.log.seek(0)
+        lines = self.log.read().strip().splitlines()
+        return (lines or ["no output"])[-1][:300]
+
+    def _reply(self) -> dict:
+        ready, _, _ = select.select([self.proc.stdout], [], [], REQUEST_TIMEOUT)
+        line = self.proc.stdout.readline() if ready else ""
+        if not line:
+            if ready:
+                self.proc.wait()
+                raise RuntimeError(f"the {self.variant} reference failed: {self._tail()}")
+            raise RuntimeError(f"the {self.variant} reference did not answer within "
+                               f"{REQUEST_TIMEOUT:g} s")
+        return json.loads(line)
+
+    def request(self, spec, arrays) -> dict:
+        """The unpolarized eval and samples of ``spec`` on ``arrays``."""
+        self.requests += 1
+        inp, out = (Path(self.tmp.name) / f"{n}{self.requests}.npz" for n in ("in", "out"))
+        np.savez(inp, **arrays)
+        self.proc.stdin.write(json.dumps({"spec": spec, "in": str(inp), "out": str(out)})
+                              + "\n")
+        self.proc.stdin.flush()
+        answer = self._reply()
+        inp.unlink()
+        if "unavailable" in answer:
+            raise ReferenceUnavailable(f"the spec does not load in {self.variant}: "
+                                       f"{answer['unavailable'][:300]}")
+        if "error" in answer:
+            raise RuntimeError(f"the {self.variant} reference failed: {answer['error'][:300]}")
         with np.load(out) as d:
-            return {k: d[k] for k in d.files}
+            result = {k: d[k] for k in d.files}
+        out.unlink()
+        return result
+
+    @property
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def close(self) -> None:
+        """End the child: its stdin closed (it leaves its loop), killed if it has not ended
+        within 10 s; the folder removed."""
+        try:
+            if self.proc.stdin and not self.proc.stdin.closed:
+                try:
+                    self.proc.stdin.close()
+                except OSError:              # it died first: the pipe is broken
+                    pass
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        finally:
+            if self.proc.stdout:
+                self.proc.stdout.close()
+            self.log.close()
+            self.tmp.cleanup()
+
+
+#: The open servers, by (variant, plugin files), while a :func:`session` is open.
+_servers: dict[tuple, ReferenceServer] = {}
+#: How many :func:`session` blocks are open (nested ones share the outermost's servers).
+_depth = 0
+
+
+@contextlib.contextmanager
+def session():
+    """For the block, one reference process per (variant, plugin files), started at the first
+    request and reused by every later one -- every parameter point of a sweep -- and closed
+    when the outermost block ends, however it ends (an exception, Ctrl-C).  The BSDF kind's
+    part ``session`` (:mod:`phonglab.validate.kind`): :func:`phonglab.validate.core.run` opens
+    one per point, :func:`phonglab.validate.sweep.run` one around all its points."""
+    global _depth
+    _depth += 1
+    try:
+        yield
+    finally:
+        _depth -= 1
+        if _depth == 0:
+            while _servers:
+                _servers.popitem()[1].close()
+
+
+def reference(spec, files, variant, arrays) -> dict:
+    """The unpolarized ``variant``'s eval and samples of ``spec`` on ``arrays``, from the
+    session's reference process (:func:`session`; outside one, a process for this request)."""
+    key = (variant, tuple(files))
+    server = _servers.get(key)
+    if server is None or not server.alive:
+        if server is not None:
+            server.close()
+        server = _servers[key] = ReferenceServer(variant, files)
+    try:
+        return server.request(spec, arrays)
+    except ReferenceUnavailable:
+        raise
+    except BaseException:
+        # a reply may still be pending (a timeout, Ctrl-C): this process cannot be reused
+        _servers.pop(key, None)
+        server.proc.kill()
+        server.close()
+        raise
+    finally:
+        if _depth == 0 and key in _servers:
+            _servers.pop(key).close()
 
 
 def intensity(bsdf, opts) -> list[Row]:

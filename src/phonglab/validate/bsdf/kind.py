@@ -22,7 +22,7 @@ from .energy import energy
 from .gradient import gradient
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .normalization import normalization
-from .intensity import intensity
+from . import intensity as intensity_topic
 from .polarization import mueller, mueller_identities, mueller_reciprocity
 from .reciprocity import reciprocity
 from .sampling import chi2
@@ -60,7 +60,7 @@ def runners(bsdf, opts, topics, m: int) -> dict:
         "eval_null_transmission": lambda: eval_null_transmission(bsdf, opts, m),
         "eval_diffuse_reflectance": lambda: eval_diffuse_reflectance(bsdf, opts),
         "mueller": lambda: mueller(bsdf, opts),
-        "intensity": lambda: intensity(bsdf, opts),
+        "intensity": lambda: intensity_topic.intensity(bsdf, opts),
         "mueller_identities": lambda: mueller_identities(bsdf, opts),
         "mueller_reciprocity": lambda: mueller_reciprocity(bsdf, opts),
         "gradient": lambda: gradient(bsdf, opts),
@@ -72,6 +72,8 @@ def runners(bsdf, opts, topics, m: int) -> dict:
 parameters = ranges.parameters
 domain = ranges.domain
 values = ranges.traversed
+#: What a run keeps across its points: the unpolarized reference process of ``intensity``.
+session = intensity_topic.session
 
 #: The BSDF kind (declared by the package, whose parts this module holds).
 BSDF = KIND

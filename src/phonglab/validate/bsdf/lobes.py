@@ -96,12 +96,21 @@ def nodes(lobe_r: Lobe, lobe_t: Lobe | None, n: int) -> tuple[np.ndarray, np.nda
     return wo / np.linalg.norm(wo, axis=1, keepdims=True), w
 
 
-def integrate(fn, cells: np.ndarray, lobes: list, n: int) -> list[tuple[float, int]]:
+def integrate(fn, cells: np.ndarray, lobes: list, n: int,
+              memo: dict | None = None) -> list[tuple[float, int]]:
     """Q_n = Σ_k w_k fn(ω_i, ω_k) per cell, and its count of non-finite nodes (left out).
 
     ``fn(wi (M, 3), wo (M, 3)) -> (M,)`` is called once for all cells' nodes (one kernel).
+    ``memo``: a dict keeping the nodes built here for later calls on the same lobes and ``n``
+    (a topic that integrates several functions by one rule builds its nodes once).
     """
-    parts = [nodes(lobe_r, lobe_t, n) for lobe_r, lobe_t in lobes]
+    memo = {} if memo is None else memo
+    parts = []
+    for lobe_r, lobe_t in lobes:
+        key = (lobe_r, lobe_t, n)
+        if key not in memo:
+            memo[key] = nodes(lobe_r, lobe_t, n)
+        parts.append(memo[key])
     wis = lanes.exact(probe.direction(cells[:, 0], cells[:, 1]))
     wi = np.concatenate([np.repeat(w[None], len(p[0]), 0) for w, p in zip(wis, parts)])
     values = fn(wi, np.concatenate([p[0] for p in parts]))
@@ -114,13 +123,15 @@ def integrate(fn, cells: np.ndarray, lobes: list, n: int) -> list[tuple[float, i
     return out
 
 
-def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int) -> tuple:
+def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int,
+                         memo: dict | None = None) -> tuple:
     """(Q(n) (M,), error (M,), non-finite nodes) per cell: error = max(|Q(n) − Q(n/2)|,
-    |Q(n) − Q(3n/4)|), the module docstring says why two coarser rules."""
-    q = integrate(fn, cells, lobes, n)
+    |Q(n) − Q(3n/4)|), the module docstring says why two coarser rules.  ``memo``: as
+    :func:`integrate`'s."""
+    q = integrate(fn, cells, lobes, n, memo)
     value = np.array([v for v, _ in q])
     err = np.zeros_like(value)
     for m in sorted({max(1, n // 2), max(1, (3 * n) // 4)} - {n}):
-        coarse = np.array([v for v, _ in integrate(fn, cells, lobes, m)])
+        coarse = np.array([v for v, _ in integrate(fn, cells, lobes, m, memo)])
         err = np.maximum(err, np.abs(value - coarse))
     return value, err, sum(c for _, c in q)

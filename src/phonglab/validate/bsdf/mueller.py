@@ -28,7 +28,7 @@ def _g(m: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 
 def stokes_margin(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per matrix (…, 4, 4): (min over unit u of s0' − |s'| for s = (1, u), the minimizing u).
+    r"""Per matrix (…, 4, 4): (min over unit u of s0' − |s'| for s = (1, u), the minimizing u).
 
     A matrix keeps the Stokes cone iff the margin is ≥ 0 (the module docstring).  A grid of
     :data:`GRID` directions (spacing ≈ 0.1 rad), then 40 steps of a shrinking random local
@@ -38,7 +38,27 @@ def stokes_margin(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     whose region on the sphere holds no grid point and lies outside the basins of the best
     ones could be missed; the tests check it against matrices whose margin is known (Jones
     matrices: 0 everywhere; over-polarizers, M00 < 0, amplified circular polarization).
-    The zero matrix (margin 0) is not searched, equal matrices once."""
+    The zero matrix (margin 0) is not searched, equal matrices once.
+
+    A matrix whose grid minimum already proves the margin positive is not searched either: its
+    margin is returned as the grid minimum (an upper bound of the true one, both > 0; a
+    positive margin is all the criterion asks, so the rows are the same).  The proof: write
+    M = [[m00, aᵀ], [c, N]], so g(u) = m00 + a·u − |c + N u|.  For unit u, v,
+
+        |g(u) − g(v)| ≤ |a·(u − v)| + | |c + N u| − |c + N v| | ≤ (|a| + ‖N‖₂) |u − v|
+
+    (Cauchy–Schwarz, the reverse triangle inequality), so g is L-Lipschitz in the chordal
+    distance with L = |a| + ‖N‖₂.  Every unit u lies within chordal distance :data:`COVER` of
+    a grid point (the grid's covering radius), hence min_u g ≥ min_grid g − L·COVER, and
+    min_grid g − L·COVER > 0 certifies a positive margin.  The covering radius of a point set
+    on the sphere is the largest circumradius of its spherical Delaunay triangles (the point
+    of the sphere farthest from the set is a Voronoi vertex, the circumcentre of a Delaunay
+    triangle), i.e. of the facets of its convex hull: for the 512-point Fibonacci grid the
+    largest chordal circumradius is 0.12051 (0.12058 rad), rounded up to 0.1206
+    (tests/test_validate_polarized.py recomputes it with scipy's ConvexHull).  The test has a
+    relative slack of 1e-12 of the entries' size, far above float64 round-off of g.  A Jones
+    (non-depolarizing) matrix has g ≡ 0 and is always searched; a depolarizing one is often
+    certified."""
     shape = m.shape[:-2]
     mm = m.reshape(-1, 4, 4)
     val = np.zeros(len(mm))
@@ -59,20 +79,31 @@ def stokes_margin(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         k = np.argsort(g, axis=1)[:, :STARTS]                  # (n, S)
         b = grid[k]                                            # (n, S, 3)
         v = np.take_along_axis(g, k, axis=1)                   # (n, S)
-        step = 0.15
-        rng = np.random.default_rng(7)
-        for _ in range(40):
-            cand = b[:, :, None, :] + step * rng.normal(size=(n, STARTS, 6, 3))
-            cand /= np.linalg.norm(cand, axis=-1, keepdims=True)
-            sc = np.concatenate([np.ones((n, STARTS * 6, 1)), cand.reshape(n, -1, 3)], axis=-1)
-            gc = _g(mv, sc).reshape(n, STARTS, 6)
-            j = np.argmin(gc, axis=2)                          # (n, S)
-            gj = np.take_along_axis(gc, j[..., None], axis=2)[..., 0]
-            cj = np.take_along_axis(cand, j[..., None, None], axis=2)[:, :, 0]
-            better = gj < v
-            b = np.where(better[..., None], cj, b)
-            v = np.where(better, gj, v)
-            step *= 0.75
+        # matrices whose grid minimum certifies a positive margin are not searched (their
+        # random steps are still drawn, so every other matrix's search is unchanged)
+        lip = np.linalg.norm(mv[:, 0, 1:], axis=1) + np.linalg.norm(mv[:, 1:, 1:], ord=2,
+                                                                    axis=(1, 2))
+        size = np.abs(mv[:, 0, 0]) + np.linalg.norm(mv[:, 1:, 0], axis=1) + lip
+        search = np.flatnonzero(~(v[:, 0] - lip * COVER > 1e-12 * size))
+        bs, vs, ms = b[search], v[search], mv[search]
+        if search.size:
+            step = 0.15
+            rng = np.random.default_rng(7)
+            for _ in range(40):
+                cand = (bs[:, :, None, :]
+                        + step * rng.normal(size=(n, STARTS, 6, 3))[search])
+                cand /= np.linalg.norm(cand, axis=-1, keepdims=True)
+                sc = np.concatenate([np.ones((len(search), STARTS * 6, 1)),
+                                     cand.reshape(len(search), -1, 3)], axis=-1)
+                gc = _g(ms, sc).reshape(len(search), STARTS, 6)
+                j = np.argmin(gc, axis=2)                          # (n, S)
+                gj = np.take_along_axis(gc, j[..., None], axis=2)[..., 0]
+                cj = np.take_along_axis(cand, j[..., None, None], axis=2)[:, :, 0]
+                better = gj < vs
+                bs = np.where(better[..., None], cj, bs)
+                vs = np.where(better, gj, vs)
+                step *= 0.75
+        b[search], v[search] = bs, vs
         j = np.argmin(v, axis=1)
         v, b = v[np.arange(n), j], b[np.arange(n), j]
         val[live], best[live] = v[inverse], b[inverse]
@@ -160,3 +191,7 @@ GRID = 512
 
 #: ... and how many of the best of them its local search starts from.
 STARTS = 3
+
+#: The chordal covering radius of the :data:`GRID`-point Fibonacci grid, rounded up: every unit
+#: vector lies this close to a grid point (:func:`stokes_margin` derives its use).
+COVER = 0.1206

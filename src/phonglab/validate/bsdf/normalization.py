@@ -83,17 +83,18 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     return np.array(ks), np.array(totals), blacks
 
 
-def _conditioning(density, cells, layout, nodes) -> np.ndarray:
+def _conditioning(density, cells, layout, nodes, memo=None) -> np.ndarray:
     """Per cell: the largest |Q(wi·(1 ± PERTURB)) − Q(wi)| -- how far ∫pdf moves when the
     incidence direction's float32 norm moves by 8u (the identities' perturbation) -- by the
     rule of ``nodes`` per panel (a difference of two integrals by one rule: its own error
     cancels to first order, so a coarse rule measures it)."""
-    integral = np.array([v for v, _ in lobes.integrate(density, cells, layout, nodes)])
+    integral = np.array([v for v, _ in lobes.integrate(density, cells, layout, nodes, memo)])
     moved = []
     for scale in (1.0 + PERTURB, 1.0 - PERTURB):
         def scaled(wi, wo, scale=scale):
             return density(wi * scale, wo)
-        moved.append(np.array([v for v, _ in lobes.integrate(scaled, cells, layout, nodes)]))
+        moved.append(np.array([v for v, _ in lobes.integrate(scaled, cells, layout, nodes,
+                                                             memo)]))
     return np.max(np.abs(np.array(moved) - integral), axis=0)
 
 
@@ -117,8 +118,9 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
         return probe.pdf(bsdf, wi, wo)
 
     nodes = opts.normalization_nodes
-    integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes)
-    qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2)))
+    memo: dict = {}                 # the rules' nodes, built once for both
+    integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes, memo)
+    qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2), memo))
     n = opts.normalization_samples
     k, n_f, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)

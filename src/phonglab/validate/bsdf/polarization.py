@@ -24,9 +24,10 @@ sample values), per wavelength.  Three rows each: every entry is finite where M0
   rays (1, u), |u| = 1, so M maps the cone into itself iff g(u) = (M(1,u))₀ − |(M(1,u))₁..₃| ≥ 0
   for every unit u (M00 ≥ 0 is then implied: g(u) + g(−u) ≤ 2 M00). We evaluate min_u g(u)
   directly -- on a Fibonacci grid of :data:`GRID` directions, then a local search from the best
-  few (:func:`stokes_margin`) -- instead of Givens & Kostinski's eigen-criterion (J. Mod. Opt.
-  40, 471, 1993: the eigenvalues of G MᵀG M, G = diag(1,−1,−1,−1), real, and the eigenvector of
-  the largest one physical), which it is equivalent to, because the eigenvector of a degenerate
+  few, unless the grid already certifies a positive margin (:func:`stokes_margin`) -- instead
+  of Givens & Kostinski's eigen-criterion (J. Mod. Opt. 40, 471, 1993: the eigenvalues of
+  G MᵀG M, G = diag(1,−1,−1,−1), real, and the eigenvector of the largest one physical),
+  which it is equivalent to, because the eigenvector of a degenerate
   eigenvalue is not determined numerically and degeneracy is the rule here (a retarder or a
   rotated mirror has G MᵀG M ∝ I; a depolarizer diag(a,0,0,0) has a triple 0). The row names the
   worst lane (ω_i, ω_o, wavelength), the matrix and the input u whose image leaves the cone, and
@@ -52,7 +53,8 @@ same ω_o with the same pdf and a weight whose M00 equals the unpolarized weight
 runs in a subprocess (a fresh interpreter: switching variants in this one would change
 Mitsuba's global state under the other topics): it sets the unpolarized variant, registers
 phonglab's plugins, reruns the ``--plugin`` files of this run there (a Python plugin is
-registered per variant), loads the same spec and writes its numbers back.  A BSDF given as a
+registered per variant), loads the same spec and writes its numbers back.  One such process
+serves every parameter point of a run (:func:`.intensity.session`).  A BSDF given as a
 loaded object (no spec to reload), or whose spec does not load in the unpolarized variant (a
 value that was a Mitsuba object), is ``skipped`` with the reason.  Tolerance: REL_TOL relative, per entry.
 
