@@ -166,8 +166,9 @@ def _findings_section(data: dict, cat: Catalogue) -> list[str]:
 def _signature(f) -> str:
     rows = ", ".join(f"`{r}`" for r in f.rows)
     at = ("; at " + at_text(f.at)) if f.at else ""
+    given = "".join(f"; only with {name} = {value}" for name, value in f.given)
     return f"{f.topic} rows {rows}; " + (f.region.text if f.region is not None
-                                         else "every failing lane of those rows") + at
+                                         else "every failing lane of those rows") + at + given
 
 
 def _validator_section(data: dict, cat: Catalogue) -> list[str]:
