@@ -26,9 +26,12 @@ true relative error exceeds three times its budget e_p* (pixels stopped too earl
 
 **Oracle** (:func:`oracle_row`, issue 28): per scene of :attr:`Config.adaptive_oracle_scenes`,
 at full depth (unbiased against the cached full-depth reference, so every error is noise), the
-speed-up of the best per-pixel allocation, mean(v)/mean(√v)² (:func:`phonglab.engine.adaptive.
-oracle_speedup`) from a converged variance map (a uniform render of :data:`ORACLE_MAP_SPP`
-samples per pixel, per-sample moments: spp − 1 degrees of freedom a pixel), beside the
+speed-up of the best per-pixel allocation, mean(u)/mean(√u)² (:func:`phonglab.engine.adaptive.
+neyman_gain`) from a converged map of u, the relative variance one sample of each source
+pixel adds to the image's relative MSE (a uniform render of :data:`ORACLE_MAP_SPP` samples
+per pixel with the exact squared-weight filter sums: the filter spreads each sample over
+several pixels, so the per-target-pixel mean(v)/mean(√v)² of ``oracle_speedup`` is the limit
+only for a box filter), beside the
 speed-up adaptive sampling achieves at the scene's planner target E (paired with uniform
 renders as above, wall time included).  Targets: achieved >= :data:`ORACLE_SHARE` of the
 oracle where the oracle is >= :data:`ORACLE_MATTERS`, cost <= :data:`OVERHEAD_TARGET` of
@@ -169,8 +172,7 @@ def oracle_row(name: str, target: float, params: dict, cfg: Config) -> dict[str,
     integ = scenes.path_integrator(-1, info)
     vmap = adaptive.render_adaptive(loaded, target, seed=70, min_spp=ORACLE_MAP_SPP,
                                     max_spp=ORACLE_MAP_SPP, integrator=integ)
-    variance = vmap.stderr.astype(np.float64) ** 2 * vmap.spp[..., None]
-    oracle = adaptive.oracle_speedup(variance, ref.image)
+    oracle = adaptive.neyman_gain(vmap.source_variance)
     render.render_scene(loaded, 4, seed=999, integrator=integ)                 # compile
     adaptive.render_adaptive(loaded, 0.2, seed=998, integrator=integ)
     rows = []
@@ -323,8 +325,9 @@ def report_section(out: Path, rel: str = ".") -> list[str]:
     if data.get("oracle"):
         L += ["\n### Adaptive sampling against its limit (issue 28)\n",
               "Oracle: the speed-up of the best per-pixel allocation at equal samples, "
-              "mean(v)/mean(√v)² with v_p = mean_c σ²_pc/(r_pc² + ε) (Neyman allocation for "
-              "phonglab's relative MSE; `adaptive.oracle_speedup`), from a "
+              "mean(u)/mean(√u)² with u_q the relative variance one sample of source pixel q "
+              "adds to the image's relative MSE through the film's filter (Neyman allocation "
+              "for phonglab's relative MSE; `adaptive.neyman_gain`), from a "
               f"{ORACLE_MAP_SPP}-spp variance map; achieved: adaptive sampling at the scene's "
               "planner target E against a uniform render of the same mean spp, wall time "
               "included (median [min–max] over seeds). Both at full depth, against the cached "
