@@ -18,7 +18,7 @@ from scipy import ndimage, signal
 
 from phonglab import cli, stats
 
-from phonglab.engine import adaptive, exr, metrics, references, render, scenes, spp_map
+from phonglab.engine import adaptive, cost, exr, metrics, references, render, scenes, spp_map
 from phonglab.bench import adaptive_sweeps
 from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
@@ -360,3 +360,14 @@ def test_exact_estimate_matches_the_true_error_where_the_model_overestimates(var
         assert abs(achieved - estimate) <= z * sd, (achieved, estimate, sd)
         model = float(np.mean(wf.variance(image) / (ref.image ** 2 + metrics.REL_EPS)))
         assert model > 2 * achieved
+
+
+def test_cost_map_counts_the_rays_of_paths_path_would_trace(variant_llvm_rgb):
+    """Inside the closed furnace every ray hits a smooth wall: at max_depth 3 below rr_depth
+    a path casts 3 intersections and 2 shadow rays (path.cpp: no emitter sample at the last
+    vertex), exactly; other integrators have no cost map."""
+    info = scenes.inspect_scene("check_furnace_enclosure", res=8)
+    scene = _load("check_furnace_enclosure", res=8)
+    wf = adaptive.Wavefront(scene, scenes.path_integrator(3, info))
+    assert np.array_equal(wf.cost_map(seed=1), np.full((8, 8), cost.FIXED_COST + 5.0))
+    assert adaptive.Wavefront(scene, mi.load_dict({"type": "direct"})).cost_map(1) is None

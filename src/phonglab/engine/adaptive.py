@@ -95,7 +95,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import exr
+from . import cost, exr
 from ..errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import spp_paths
@@ -319,6 +319,23 @@ class Wavefront:
             for c, v in enumerate([mi.Float(1.0)] + vals + [v * v for v in vals]):
                 dr.scatter_reduce(dr.ReduceOp.Add, self.splat2, w2 * v, base + c)
         dr.eval(self.splat2)
+
+    def cost_map(self, seed: int, spp: int = cost.PROBE_SPP) -> np.ndarray | None:
+        """(H, W) c_q = a + s_q, the cost of one sample of pixel q in rays
+        (:mod:`phonglab.engine.cost`): ``spp`` probe paths per pixel, s_q their mean ray
+        count averaged over the 3×3 window; None when the integrator is not ``path``."""
+        depths = cost.path_depths(self.integrator)
+        if depths is None:
+            return None
+        index = np.repeat(np.arange(self.pixels, dtype=np.uint32), spp)
+        self.sampler.seed(dr.opaque(mi.UInt32, seed), len(index))
+        idx = mi.UInt32(index)
+        ray, _, _ = self._camera_rays(idx)
+        casts = cost.path_casts(self.scene, self.sampler, ray, *depths)
+        total = dr.zeros(mi.Float, self.pixels)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, mi.Float(casts), idx)
+        rays = np.array(total, dtype=np.float64).reshape(self.height, self.width) / spp
+        return cost.FIXED_COST + window_mean(rays, 1)
 
     def image(self) -> np.ndarray:
         """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring), on the device."""
