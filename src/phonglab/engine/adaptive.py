@@ -64,6 +64,22 @@ grows with N_p, and it asks for ever more).  The model's u is ``mean_c σ²_qc �
 :meth:`Wavefront.source_variance`).  u is scaled by one factor so that Σ u/N equals the
 stop's estimate P · mean e².
 
+**Target and allocation.**  The target E is the image's relative RMSE against a converged
+reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.engine.metrics.relative_rmse`), as far as
+noise makes it: the renderer has no depth-bias estimate, so E is the total error only for an
+unbiased render (:mod:`phonglab.engine.metrics`, the one definition of E; the planner passes
+√(E² − b²)).  Its square is the mean of the ``e_p²``, i.e. mean_q u_q/N_q.  Minimising the
+samples Σ N_q subject to mean_q u_q/N_q = E² (Lagrange) gives the Neyman allocation
+``N_q* = √u_q · mean √u / E²``.  **By time** (``by_time``): a sample of pixel q costs c_q
+(:mod:`phonglab.engine.cost`, the pilot's cost map), and minimising the time Σ c_q N_q at the
+same error gives ``N_q* = √(u_q/c_q) · mean(u √(c/u)) / E²``.  **The limit** each can reach
+over uniform sampling at equal samples is mean(u)/mean(√u)², at equal time
+mean(u)·mean(c)/mean(√(u c))² (uniform's time is N̄ Σ c, its error mean(u)/N̄; Cauchy–Schwarz;
+:func:`neyman_gain`).  A pass adds ``min(N_q* − N_q, (GROWTH − 1)·N_q)`` samples to each
+pixel below N_q* (re-estimated every pass, so a noisy pilot estimate cannot overshoot far);
+the render stops when the estimated image error √mean e_p² <= E (1 + :data:`STOP_SLACK`),
+when no pixel is below N_q*, or at a cap.
+
 **Guards against pixels that only look converged** (no sample has found the light yet):
 every pixel gets the pilot's :data:`MIN_SPP` samples, and the allocation is shaped by
 ``g_q = max(u_q, mean of u over the window)`` (:data:`NEIGHBOURHOOD`), so a pixel whose
@@ -113,6 +129,12 @@ GROWTH = 4
 #: After the pilot, Q is kept for the pixels whose position-free u is off the exact one by
 #: more than this factor (:meth:`Wavefront.select_exact`).
 EXACT_RATIO = 1.5
+#: No pass is started for an estimate within this fraction above E: the pass that sizing
+#: aims at E lands on either side of it, and another pass for a 1 % miss costs a pass's
+#: fixed work for nothing measurable (the estimate's own noise is larger).
+STOP_SLACK = 0.01
+#: Pass number whose seed the cost map's probe paths use (no pass reaches it).
+COST_SEED = 1 << 20
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
 #: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels, kept in the
@@ -134,6 +156,8 @@ class AdaptiveResult:
     stopped: str                 #: 'target', 'max_spp' or 'max_seconds'
     #: (H, W) u_q: relative variance one sample of source pixel q adds (× pixels) to mean e²
     source_variance: np.ndarray | None = None
+    #: (H, W) c_q, the cost of one sample of pixel q in rays (by_time renders of ``path``)
+    cost: np.ndarray | None = None
     passes: list[dict[str, Any]] = field(default_factory=list)  #: per pass: pixels, samples, s
     metadata: dict[str, Any] = field(default_factory=dict)
 
@@ -534,17 +558,21 @@ def _check(target_error, max_seconds, max_spp, min_spp) -> None:
                             f"{MAX_SPP}, got {max_spp!r}")
 
 
-def allocation(u: np.ndarray, target_error: float, neighbourhood: bool = True) -> np.ndarray:
-    """N_q* = √g_q · mean(u/√g) / E², u_q the relative variance one sample of source pixel q
-    adds (module docstring), g = u or, with the neighbourhood guard, g_q = max(u_q, mean of u
-    over the window).
+def allocation(u: np.ndarray, target_error: float, neighbourhood: bool = True,
+               cost: np.ndarray | None = None) -> np.ndarray:
+    """N_q* = √(g_q/c_q) · mean(u √(c/g)) / E², u_q the relative variance one sample of source
+    pixel q adds (module docstring), c_q what it costs (1 without a cost map), g = u or, with
+    the neighbourhood guard, g_q = max(u_q, mean of u over the window).
 
     g shapes the allocation (a pixel whose own samples show no variance yet gets its
     neighbours'), and the estimates u set its size: the predicted error mean(u/N*) is then E²
     exactly.  (Sizing it by g, N* = √g · mean √g / E², predicts E² only for g's own pixels
-    and overshoots.)  Without the guard it is the Neyman allocation √u · mean √u / E²."""
+    and overshoots.)  Without the guard and costs it is the Neyman allocation
+    √u · mean √u / E²; with costs, the one that minimises the time Σ c N at that error."""
     v = np.where(np.isfinite(u), u, np.nanmax(np.where(np.isfinite(u), u, 0.0)))
     g = np.maximum(v, window_mean(v)) if neighbourhood else v
+    if cost is not None:
+        g = g / cost
     root = np.sqrt(g)
     scale = float(np.mean(np.where(root > 0, v / np.where(root > 0, root, 1.0), 0.0)))
     return root * scale / (target_error * target_error)
@@ -564,7 +592,7 @@ def fit_time(counts: np.ndarray, seconds_left: float, seconds_per_sample: float)
 
 def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: float | None = None,
                     max_spp: int | None = None, min_spp: int = MIN_SPP, integrator=None,
-                    sensor: int = 0, neighbourhood: bool = True,
+                    sensor: int = 0, neighbourhood: bool = True, by_time: bool = False,
                     path: str | Path = "the scene") -> AdaptiveResult:
     """Render ``scene`` until its estimated relative RMSE is at most ``target_error``.
 
@@ -581,7 +609,7 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     t0 = time.perf_counter()
     passes = []
     counts = np.full(wf.pixels, min_spp, dtype=np.int64)
-    stopped, k = "target", 0
+    stopped, k, costs = "target", 0, None
     wf.squares = True          # the pilot's samples all enter Q
     while True:
         t = time.perf_counter()
@@ -591,15 +619,17 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
         err2 = relative_error_map(image, var)
         if k == 0:
             wf.select_exact(image, u)
+            if by_time:
+                costs = wf.cost_map(pass_seed(seed, COST_SEED))
         estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
         passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
                        "seconds": time.perf_counter() - t, "estimated_error": estimate})
         k += 1
-        if estimate <= target_error and np.all(np.isfinite(err2)):
+        if estimate <= target_error * (1.0 + STOP_SLACK) and np.all(np.isfinite(err2)):
             break
         # In floating point up to the cap + 1 before the cast: an unreachable target asks for
         # more samples than int64 holds ("invalid value encountered in cast").
-        want = np.ceil(np.minimum(allocation(u, target_error, neighbourhood),
+        want = np.ceil(np.minimum(allocation(u, target_error, neighbourhood, costs),
                                   cap + 1.0)).astype(np.int64).ravel()
         # At least a quarter more samples per pass: re-estimates creep, launches cost.
         step = np.maximum(want - wf.n, -(-wf.n // 4))
@@ -618,7 +648,7 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
     return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),
                           wf.n.reshape(shape), seconds, float(target_error), estimate, stopped,
-                          u, passes)
+                          u, costs, passes)
 
 
 @dataclass

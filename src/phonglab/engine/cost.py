@@ -31,7 +31,6 @@ import re
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 #: Probe samples per pixel of :func:`cost_map`.
 PROBE_SPP = 4
