@@ -263,6 +263,9 @@ def test_bench_part_writes_chart_speedups_and_report(tmp_path, monkeypatch, vari
     text = "\n".join(adaptive_sweeps.report_section(tmp_path, "docs/bench"))
     assert "Adaptive sampling" in text and "docs/bench/adaptive_error_time.png" in text
     assert "adaptive" in bench_config.PARTS
+    for o in data["oracle"]:          # the cost-aware limit beside the sample one (issue 39)
+        assert o["oracle_time"] >= 1 - 1e-9 and o["share_time"] > 0
+    assert "oracle (time)" in text
 
 
 def test_fit_time_sizes_a_pass_to_the_time_left():
