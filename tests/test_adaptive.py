@@ -18,7 +18,7 @@ from scipy import ndimage, signal
 
 from phonglab import cli, stats
 
-from phonglab.engine import adaptive, exr, metrics, references, render, scenes, spp_map
+from phonglab.engine import adaptive, cost, exr, metrics, references, render, scenes, spp_map
 from phonglab.bench import adaptive_sweeps
 from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
@@ -263,6 +263,9 @@ def test_bench_part_writes_chart_speedups_and_report(tmp_path, monkeypatch, vari
     text = "\n".join(adaptive_sweeps.report_section(tmp_path, "docs/bench"))
     assert "Adaptive sampling" in text and "docs/bench/adaptive_error_time.png" in text
     assert "adaptive" in bench_config.PARTS
+    for o in data["oracle"]:          # the cost-aware limit beside the sample one (issue 39)
+        assert o["oracle_time"] >= 1 - 1e-9 and o["share_time"] > 0
+    assert "oracle (time)" in text
 
 
 def test_fit_time_sizes_a_pass_to_the_time_left():
@@ -323,3 +326,51 @@ def test_oracle_speedup_refuses_a_variance_map_that_is_not_finite():
     var[0, 0, 0] = np.nan
     with pytest.raises(PhonglabError, match="finite variance map"):
         adaptive.oracle_speedup(var, np.ones((2, 2, 1)))
+
+
+def test_exact_sums_split_the_image_error_over_source_pixels(variant_llvm_rgb):
+    """Σ_p mean_c Var x_pc/(x_pc² + ε) from the exact squared-weight sums equals Σ_q u_q/N_q
+    (the identity the allocation rests on), for any counts."""
+    wf = adaptive.Wavefront(_load("gray_room", res=16))
+    wf.squares = True
+    wf.trace(np.random.default_rng(1).integers(4, 40, wf.pixels), 3)
+    image = wf.image()
+    var, u = wf.exact_variances(image, np.ones(wf.pixels, bool))
+    n = wf.n.reshape(16, 16)
+    lhs = np.mean(var / (image * image + metrics.REL_EPS))
+    assert lhs == pytest.approx(np.mean(u / n), rel=1e-9)
+
+
+def test_exact_estimate_matches_the_true_error_where_the_model_overestimates(variant_llvm_rgb):
+    """gray_room (a light's edge against a dark ceiling), 32², 64 spp: the achieved relMSE
+    against the cached reference is within z·sd of the exact estimate (sd of
+    :func:`_relmse_spread`, Sidak over 2 seeds), while the position-free model's is more than
+    twice it."""
+    params = {"res": 32}
+    ref = references.reference("gray_room", 4096, params=params)
+    scene = _load("gray_room", **params)
+    z = stats.z_critical(stats.ALPHA, 2)
+    for seed in range(2):
+        wf = adaptive.Wavefront(scene)
+        wf.squares = True
+        wf.trace(np.full(wf.pixels, 64), 10 + seed)
+        image = wf.image()
+        var, _ = wf.estimate(image)
+        err2 = var / (ref.image ** 2 + metrics.REL_EPS)
+        estimate = float(np.mean(err2))
+        achieved = metrics.rel_mse(image, ref.image, ref_stderr=ref.stderr)
+        sd = _relmse_spread(err2, scene.sensors()[0].film().rfilter())
+        assert abs(achieved - estimate) <= z * sd, (achieved, estimate, sd)
+        model = float(np.mean(wf.variance(image) / (ref.image ** 2 + metrics.REL_EPS)))
+        assert model > 2 * achieved
+
+
+def test_cost_map_counts_the_rays_of_paths_path_would_trace(variant_llvm_rgb):
+    """Inside the closed furnace every ray hits a smooth wall: at max_depth 3 below rr_depth
+    a path casts 3 intersections and 2 shadow rays (path.cpp: no emitter sample at the last
+    vertex), exactly; other integrators have no cost map."""
+    info = scenes.inspect_scene("check_furnace_enclosure", res=8)
+    scene = _load("check_furnace_enclosure", res=8)
+    wf = adaptive.Wavefront(scene, scenes.path_integrator(3, info))
+    assert np.array_equal(wf.cost_map(seed=1), np.full((8, 8), cost.FIXED_COST + 5.0))
+    assert adaptive.Wavefront(scene, mi.load_dict({"type": "direct"})).cost_map(1) is None

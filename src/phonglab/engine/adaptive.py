@@ -22,40 +22,70 @@ its own pixel, ``dr.scatter_reduce``): ``N_q``, ``S1_q = Σ f``, ``S2_q = Σ f²
 host across passes).
 
 **Per-pixel error (honest, from the samples themselves).**  The filtered value is a ratio of
-sums of i.i.d. terms, so (delta method) its variance is
+sums of i.i.d. terms, x_p = Σ_q (1/N_q) Σ_{s∈q} w_sp f_s / W_p, W_p = Σ_q (1/N_q) Σ_{s∈q} w_sp
+(the image's weight), so by the delta method, with z_s = w_sp (f_s − x_p),
 
-    Var x_p ≈ Σ_q B_{q−p} · Σ_{s∈q} (f_s − x_p)² / (Σ_q A_{q−p} N_q)²,
-    Σ_{s∈q} (f_s − x_p)² = S2_q − 2 x_p S1_q + x_p² N_q,
+    Var x_p ≈ Σ_q t_qp,   t_qp = [Σ_{s∈q} z_s² − (Σ_{s∈q} z_s)²/N_q] / (N_q (N_q − 1) W_p²),
+    Σ z² = Σ w² f² − 2 x_p Σ w² f + x_p² Σ w²,   Σ z = Σ w f − x_p Σ w,
 
-with ``A_d = a(d_x) a(d_y)``, ``B_d = b(d_x) b(d_y)``, ``a(d) = ∫₀¹ w(u − ½ − d) du`` and
-``b(d) = ∫₀¹ w(u − ½ − d)² du`` the pixel integrals of the (separable) filter w
-(:func:`filter_tables`), assuming a sample's position within its pixel is independent of its
-value.  For the box filter this is the textbook variance of the mean of the pixel's own
-samples.  It is scaled by ``D²/(D² − Σ A² N)`` (D the denominator; N/(N−1) for a box: the
-unbiased sample variance).  Per-sample moments, not the spread of pass images: every sample
-count is an integer, passes of one pixel differ in size, and the moments give N − 1 degrees
-of freedom instead of passes − 1.  The relative error of pixel p is
-``e_p² = mean_c Var x_pc / (x_pc² + ε)`` (ε = :data:`phonglab.engine.metrics.REL_EPS`, the project's
-relative MSE).
+the sums over the samples of source pixel q with the weight w_sp they give target pixel p
+(:meth:`Wavefront.exact_variances`): the film's ``T`` table holds Σ w f and Σ w per source
+pixel and filter offset; the **squared-weight table** ``Q`` holds Σ w², Σ w² f, Σ w² f².  The
+position-free model replaces w_sp² by its mean over the pixel, b(d) = ∫₀¹ w(u − ½ − d)² du
+(``B_d = b(d_x) b(d_y)``, ``A_d`` likewise with w, :func:`filter_integrals`), and the sums by
+the box moments ``N_q, S1_q = Σ f, S2_q = Σ f²``:
+
+    Var x_p ≈ Σ_q B_{q−p} · Σ_{s∈q} (f_s − x_p)² / (Σ_q A_{q−p} N_q)²
+
+(:meth:`Wavefront.variance`: convolutions, the textbook variance of the mean for a box
+filter).  It assumes a sample's value is independent of where in its pixel it lies, and
+fails where that is most false: a pixel straddling a bright edge (an area light seen against
+a dark ceiling) has samples of 15 on one side and 0.1 on the other, and its neighbour p on the
+dark side takes the bright samples with the filter's far tail, where w² is tiny, not with
+b's pixel average — the model puts their variance into p, and
+overestimates it by orders of magnitude along such edges (docs/adaptive.md has the figures).  The exact table costs 2C + 1 scatters per offset and sample, so
+the pilot fills it for every pixel and later passes only for the source pixels where the
+pilot found the two u (below) a factor :data:`EXACT_RATIO` apart, and their 3×3 neighbours
+(:meth:`Wavefront.select_exact`, a second launch over those lanes only); the rest use the
+model (:meth:`Wavefront.estimate`).  The relative error of pixel p is
+``e_p² = mean_c Var x_pc / (max(x_pc² − Var x_pc, 0) + ε)`` (ε =
+:data:`phonglab.engine.metrics.REL_EPS`, the project's relative MSE; E x² = r² + Var x, so
+x² − Var is the unbiased estimate of r²).  Per-sample sums, not the spread of pass images:
+passes of one pixel differ in size, and the sums give N − 1 degrees of freedom.
+
+**Where the variance lives: source pixels.**  Summed over the image, P · mean_p e_p² =
+Σ_q u_q / N_q with ``u_q = N_q Σ_p mean_c t_qpc / (x_pc² + ε)``: the relative variance one
+sample of *source* pixel q adds, independent of N_q.  It is what a sample placed in q buys,
+so the allocation works on u, not on the target pixels' e_p² N_p, which with a filter wider
+than a pixel mixes the neighbours' counts into p's (the source of a runaway: a target pixel
+whose variance comes from a neighbour's samples gains nothing from its own, its e_p² N_p
+grows with N_p, and it asks for ever more).  The model's u is ``mean_c σ²_qc ·
+Σ_p B_{p−q} / (D_p² (x_pc² + ε))`` (σ²_q the box sample variance, D_p = Σ A;
+:meth:`Wavefront.source_variance`).  u is scaled by one factor so that Σ u/N equals the
+stop's estimate P · mean e².
 
 **Target and allocation.**  The target E is the image's relative RMSE against a converged
 reference, √mean_pc((x − r)²/(r² + ε)) (:func:`phonglab.engine.metrics.relative_rmse`), as far as
 noise makes it: the renderer has no depth-bias estimate, so E is the total error only for an
 unbiased render (:mod:`phonglab.engine.metrics`, the one definition of E; the planner passes
-√(E² − b²)).  Its square is the mean of the ``e_p²``.  With ``v_p = e_p² N_p`` (relative
-variance of one sample), minimising Σ N_p subject to mean_p v_p/N_p = E² (Lagrange) gives
-``N_p* = √v_p · mean_q √v_q / E²`` — each pixel's budget is ``e_p*² = v_p/N_p* =
-E² √v_p / mean √v``: noisy pixels are allowed more error, quiet ones less, and the mean meets
-E².  A pass adds ``min(N_p* − N_p, (GROWTH − 1)·N_p)`` samples to each pixel below N_p*
-(re-estimated every pass, so a noisy pilot estimate cannot overshoot far); the render stops
-when the estimated image error √mean e_p² <= E, when no pixel is below N_p*, or at a cap.
+√(E² − b²)).  Its square is the mean of the ``e_p²``, i.e. mean_q u_q/N_q.  Minimising the
+samples Σ N_q subject to mean_q u_q/N_q = E² (Lagrange) gives the Neyman allocation
+``N_q* = √u_q · mean √u / E²``.  **By time** (``by_time``): a sample of pixel q costs c_q
+(:mod:`phonglab.engine.cost`, the pilot's cost map), and minimising the time Σ c_q N_q at the
+same error gives ``N_q* = √(u_q/c_q) · mean(u √(c/u)) / E²``.  **The limit** each can reach
+over uniform sampling at equal samples is mean(u)/mean(√u)², at equal time
+mean(u)·mean(c)/mean(√(u c))² (uniform's time is N̄ Σ c, its error mean(u)/N̄; Cauchy–Schwarz;
+:func:`neyman_gain`).  A pass adds ``min(N_q* − N_q, (GROWTH − 1)·N_q)`` samples to each
+pixel below N_q* (re-estimated every pass, so a noisy pilot estimate cannot overshoot far);
+the render stops when the estimated image error √mean e_p² <= E (1 + :data:`STOP_SLACK`),
+when no pixel is below N_q*, or at a cap.
 
 **Guards against pixels that only look converged** (no sample has found the light yet):
 every pixel gets the pilot's :data:`MIN_SPP` samples, and the allocation is shaped by
-``g_p = max(v_p, mean of v over the window)`` (:data:`NEIGHBOURHOOD`), so a pixel whose
+``g_q = max(u_q, mean of u over the window)`` (:data:`NEIGHBOURHOOD`), so a pixel whose
 own samples show no variance inherits its neighbours', while its size is set by the
-estimates v themselves: ``N_p* = √g_p · mean(v/√g) / E²`` predicts exactly E² (sized by g,
-the guard made renders stop 13–22 % below E with a third more samples; :func:`allocation`).
+estimates u themselves: ``N_q* = √g_q · mean(u/√g) / E²`` predicts exactly E²
+(:func:`allocation`).
 (The window's *max* would inflate a uniform-variance image's budget by the noise of nine
 estimates; the mean is unbiased there.)
 The bench (:mod:`phonglab.bench.adaptive_sweeps`) measures what they do: the fraction of
@@ -81,7 +111,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import exr
+from . import cost, exr
 from ..errors import PhonglabError
 from .metrics import REL_EPS
 from .outputs import spp_paths
@@ -96,6 +126,15 @@ MIN_SPP = 16
 NEIGHBOURHOOD = 2
 #: A pass at most multiplies a pixel's sample count by this.
 GROWTH = 4
+#: After the pilot, Q is kept for the pixels whose position-free u is off the exact one by
+#: more than this factor (:meth:`Wavefront.select_exact`).
+EXACT_RATIO = 1.5
+#: No pass is started for an estimate within this fraction above E: the pass that sizing
+#: aims at E lands on either side of it, and another pass for a 1 % miss costs a pass's
+#: fixed work for nothing measurable (the estimate's own noise is larger).
+STOP_SLACK = 0.01
+#: Pass number whose seed the cost map's probe paths use (no pass reaches it).
+COST_SEED = 1 << 20
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
 #: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels, kept in the
@@ -115,6 +154,10 @@ class AdaptiveResult:
     target_error: float
     estimated_error: float       #: √mean e_p² at the end (the estimate the stop uses)
     stopped: str                 #: 'target', 'max_spp' or 'max_seconds'
+    #: (H, W) u_q: relative variance one sample of source pixel q adds (× pixels) to mean e²
+    source_variance: np.ndarray | None = None
+    #: (H, W) c_q, the cost of one sample of pixel q in rays (by_time renders of ``path``)
+    cost: np.ndarray | None = None
     passes: list[dict[str, Any]] = field(default_factory=list)  #: per pass: pixels, samples, s
     metadata: dict[str, Any] = field(default_factory=dict)
 
@@ -212,6 +255,12 @@ class Wavefront:
         #: only the developed image comes back to the host each pass)
         self.splat = dr.zeros(mi.Float, npix * len(self.offsets) * (self.channels + 1))
         self.sampler = mi.load_dict({"type": "independent"})
+        #: while on, :meth:`trace` also accumulates Q[q, k] = Σ_{s in q} w² · (1, f_s, f_s²)
+        #: (the exact squared-weight sums of :meth:`exact_variances`; the pilot's)
+        self.squares = False
+        self.splat2 = None
+        #: source pixels (flat bool) whose samples enter Q; None: every pixel
+        self.exact = None
 
     @property
     def pixels(self) -> int:
@@ -267,10 +316,50 @@ class Wavefront:
             base = idx * width + k * (self.channels + 1)
             for c, v in enumerate(values + [mi.Float(1.0)]):
                 dr.scatter_reduce(dr.ReduceOp.Add, self.splat, w * v, base + c)
-        dr.eval(s1, s2, self.splat)
+        dr.eval(s1, s2, self.splat, values, u)
+        if self.squares:
+            self._squares(index, values, u)
         self.s1 += np.stack([np.array(a, dtype=np.float64) for a in s1], axis=1)
         self.s2 += np.stack([np.array(a, dtype=np.float64) for a in s2], axis=1)
         self.n += np.bincount(index, minlength=self.pixels)
+
+    def _squares(self, index: np.ndarray, values, u) -> None:
+        """Add the samples of the pixels in :attr:`exact` (all in the pilot) to Q: a second,
+        smaller launch over those lanes of the evaluated pass."""
+        lanes = np.arange(len(index)) if self.exact is None else np.flatnonzero(self.exact[index])
+        if len(lanes) == 0:
+            return
+        width = len(self.offsets) * (2 * self.channels + 1)
+        if self.splat2 is None:
+            self.splat2 = dr.zeros(mi.Float, self.pixels * width)
+        sel = mi.UInt32(lanes.astype(np.uint32))
+        vals = [dr.gather(mi.Float, v, sel) for v in values]
+        ux, uy = dr.gather(mi.Float, u.x, sel), dr.gather(mi.Float, u.y, sel)
+        idx = mi.UInt32(index[lanes])
+        for k, (dy, dx) in enumerate(self.offsets):
+            w = self.rfilter.eval(ux - (dx + 0.5)) * self.rfilter.eval(uy - (dy + 0.5))
+            w2 = w * w
+            base = idx * width + k * (2 * self.channels + 1)
+            for c, v in enumerate([mi.Float(1.0)] + vals + [v * v for v in vals]):
+                dr.scatter_reduce(dr.ReduceOp.Add, self.splat2, w2 * v, base + c)
+        dr.eval(self.splat2)
+
+    def cost_map(self, seed: int, spp: int = cost.PROBE_SPP) -> np.ndarray | None:
+        """(H, W) c_q = a + s_q, the cost of one sample of pixel q in rays
+        (:mod:`phonglab.engine.cost`): ``spp`` probe paths per pixel, s_q their mean ray
+        count averaged over the 3×3 window; None when the integrator is not ``path``."""
+        depths = cost.path_depths(self.integrator)
+        if depths is None:
+            return None
+        index = np.repeat(np.arange(self.pixels, dtype=np.uint32), spp)
+        self.sampler.seed(dr.opaque(mi.UInt32, seed), len(index))
+        idx = mi.UInt32(index)
+        ray, _, _ = self._camera_rays(idx)
+        casts = cost.path_casts(self.scene, self.sampler, ray, *depths)
+        total = dr.zeros(mi.Float, self.pixels)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, mi.Float(casts), idx)
+        rays = np.array(total, dtype=np.float64).reshape(self.height, self.width) / spp
+        return cost.FIXED_COST + window_mean(rays, 1)
 
     def image(self) -> np.ndarray:
         """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring), on the device."""
@@ -291,10 +380,12 @@ class Wavefront:
         t = np.stack([np.array(a, dtype=np.float64) for a in total], axis=1)
         t = t.reshape(self.height, self.width, self.channels + 1)
         weight = t[..., -1:]
+        self.weight = weight          # W_p, the ratio's denominator (exact_variances)
         return np.where(weight > 0, t[..., :-1] / np.where(weight > 0, weight, 1), 0.0)
 
-    def variance(self, image: np.ndarray) -> np.ndarray:
-        """(H, W, C) the delta-method variance of each filtered pixel (module docstring).
+    def variance(self, image: np.ndarray, exclude: np.ndarray | None = None) -> np.ndarray:
+        """(H, W, C) the delta-method variance of each filtered pixel, position-free model
+        (module docstring), from the source pixels not in ``exclude`` (flat bool).
 
         The sum over source pixels q = p − d of ``[B_d (S2 − 2x S1 + x² N) − A_d² (S1 −
         x N)²/N] / (N (N − 1))`` expands into convolutions of per-pixel arrays with the
@@ -304,6 +395,8 @@ class Wavefront:
         n = self.n.reshape(h, w, 1).astype(np.float64)
         s1, s2 = self.s1.reshape(h, w, c), self.s2.reshape(h, w, c)
         scale = np.where(n > 1, 1.0 / np.maximum(n * (n - 1.0), 1.0), 0.0)
+        if exclude is not None:
+            scale = scale * ~exclude.reshape(h, w, 1)
 
         a2 = self.a * self.a
         x = image
@@ -322,9 +415,115 @@ class Wavefront:
         return np.where((den > 0) & ~lonely, var, np.inf)
 
 
+    def estimate(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """((H, W, C) Var x_p, (H, W) u_q): the exact sums' terms for the source pixels in Q
+        (:attr:`exact`; every pixel in the pilot), the position-free model's for the rest."""
+        h, w = self.height, self.width
+        if self.squares:
+            exact = np.ones(self.pixels, bool) if self.exact is None else self.exact
+            var_q, u_q = self.exact_variances(image, exact)
+            var = self.variance(image, exclude=exact) + var_q
+            u = np.where(exact.reshape(h, w), u_q, self.source_variance(image))
+        else:
+            var, u = self.variance(image), self.source_variance(image)
+        # u weighs by 1/(x² + ε); relative_error_map by the unbiased 1/(x² − Var + ε): scaled
+        # so that Σ u/N is P · mean e² (the allocation's prediction is the stop's estimate)
+        n = self.n.reshape(h, w)
+        err2, pred = relative_error_map(image, var), np.where(n > 0, u / np.maximum(n, 1), 0.0)
+        ok = np.isfinite(err2).all() and pred.sum() > 0
+        return var, u * (float(err2.mean() / pred.mean()) if ok else 1.0)
+
+    def select_exact(self, image: np.ndarray, u_q: np.ndarray,
+                     spread: float = EXACT_RATIO) -> None:
+        """After the pilot (``u_q`` its exact u, :meth:`estimate`): keep Q only for the source
+        pixels where the position-free model's u is off the exact one by more than ``spread``
+        either way, and their 3×3 neighbours (an edge the pilot only grazed); none: Q is
+        dropped."""
+        u_m = self.source_variance(image)
+        ok = (u_m > 0) & (u_q > 0)
+        ratio = np.where(ok, u_q / np.where(ok, u_m, 1.0), 1.0)
+        off = (ratio > spread) | (ratio < 1.0 / spread) | ((u_m > 0) != (u_q > 0))
+        off = separable_filter(np.ones(3), off.astype(np.float64)) > 0
+        self.exact = off.reshape(self.pixels)
+        if not self.exact.any():
+            self.squares, self.splat2 = False, None
+
+    def source_variance(self, image: np.ndarray) -> np.ndarray:
+        """(H, W) u_q of the position-independent model: per-sample variance of source pixel q
+        (its box moments) times Σ_p B_{p−q} / (D_p² (x_p² + ε)), mean over channels (module
+        docstring, "Where the variance lives")."""
+        h, w, c = self.height, self.width, self.channels
+        n = self.n.reshape(h, w, 1).astype(np.float64)
+        s1, s2 = self.s1.reshape(h, w, c), self.s2.reshape(h, w, c)
+        sigma2 = np.where(n > 1, (s2 - s1 * s1 / np.maximum(n, 1)) / np.maximum(n - 1, 1), 0.0)
+        den = separable_filter(self.a, (n > 0).astype(np.float64))
+        omega = np.where(den > 0, 1.0 / np.maximum(den * den, 1e-300), 0.0) \
+            / (image * image + REL_EPS)
+        return np.mean(np.maximum(sigma2, 0.0) * separable_filter(self.b, omega), axis=2)
+
+    def exact_variances(self, image: np.ndarray, sources: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """((H, W, C) Var x_p, (H, W) u_q) by the delta method on the exact squared-weight sums
+        Q (module docstring): no assumption on where in its pixel a sample lies; the terms of
+        the source pixels in ``sources`` (flat bool), each of which has every sample in Q.
+        ``image`` is the last :meth:`image` (its weights W_p are reused)."""
+        h, w, c, k = self.height, self.width, self.channels, len(self.offsets)
+        var, u = np.zeros((self.pixels, c)), np.zeros(self.pixels)
+        q = np.flatnonzero(sources & (self.n > 1))
+        if len(q) == 0:
+            return var.reshape(h, w, c), u.reshape(h, w)
+        # the rows of T and Q of those pixels only, gathered on the device
+        rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
+            (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
+            dtype=np.float64).reshape(len(q), k, size)
+        T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
+        d = np.array(self.offsets)
+        py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
+        inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
+        p = np.where(inside, py * w + px, 0)                       # target p = q + d, (M, K)
+        x = image.reshape(-1, c)[p]                                 # (M, K, C)
+        wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
+        n = self.n[q].astype(np.float64)[:, None, None]
+        sz = T[..., :c] - x * T[..., c:]
+        sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
+        term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
+        term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
+        for ch in range(c):
+            var[:, ch] = np.bincount(p.ravel(), term[..., ch].ravel(), minlength=self.pixels)
+        u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
+        return var.reshape(h, w, c), u.reshape(h, w)
+
+
+def shift(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
+    """``out[y, x] = a[y − dy, x − dx]`` over the first two axes, zero outside."""
+    h, w = a.shape[:2]
+    out = np.zeros_like(a)
+    out[max(0, dy):min(h, h + dy), max(0, dx):min(w, w + dx)] = \
+        a[max(0, -dy):min(h, h - dy), max(0, -dx):min(w, w - dx)]
+    return out
+
+
 def relative_error_map(image: np.ndarray, variance: np.ndarray) -> np.ndarray:
-    """(H, W) e_p² = mean over channels of Var / (x² + ε)."""
-    return np.mean(variance / (image * image + REL_EPS), axis=2)
+    """(H, W) e_p² = mean over channels of Var / (r̂² + ε), r̂² = max(x² − Var, 0) the
+    first-order unbiased estimate of the true value's square (E x² = r² + Var x)."""
+    var = np.nan_to_num(variance, posinf=np.inf)
+    return np.mean(variance / (np.maximum(image * image - np.where(np.isfinite(var), var, 0.0),
+                                          0.0) + REL_EPS), axis=2)
+
+
+def neyman_gain(u: np.ndarray, cost: np.ndarray | None = None) -> float:
+    """The most a per-pixel allocation can gain over uniform sampling on the relative MSE
+    Σ_q u_q/N_q: at equal samples mean(u)/mean(√u)², at equal time (one sample of pixel q
+    costing c_q) mean(u)·mean(c)/mean(√(u c))² (module docstring, "The limit"); >= 1."""
+    u = np.asarray(u, np.float64)
+    c = np.ones_like(u) if cost is None else np.broadcast_to(np.asarray(cost, np.float64),
+                                                              u.shape)
+    if u.size == 0 or not (np.isfinite(u).all() and np.isfinite(c).all() and (c > 0).all()):
+        raise PhonglabError("the oracle needs a finite variance map of at least one pixel "
+                            "(and positive finite costs); render the map with more samples "
+                            "per pixel")
+    root = float(np.mean(np.sqrt(u * c)))
+    return float(np.mean(u) * np.mean(c)) / (root * root) if root > 0 else 1.0
 
 
 def oracle_speedup(variance: np.ndarray, reference: np.ndarray, eps: float = REL_EPS) -> float:
@@ -339,13 +538,8 @@ def oracle_speedup(variance: np.ndarray, reference: np.ndarray, eps: float = REL
     module docstring's N_p*) gives mean(√v)²/n̄, so the speed-up is mean(v) / mean(√v)² ≥ 1
     (Cauchy–Schwarz; 1 exactly when every pixel has the same v).
     """
-    v = np.mean(np.asarray(variance, np.float64)
-                / (np.asarray(reference, np.float64) ** 2 + eps), axis=2)
-    if not np.isfinite(v).all() or v.size == 0:
-        raise PhonglabError("the oracle needs a finite variance map of at least one pixel; "
-                            "render the map with more samples per pixel")
-    root = float(np.mean(np.sqrt(v)))
-    return float(np.mean(v)) / (root * root) if root > 0 else 1.0
+    return neyman_gain(np.mean(np.asarray(variance, np.float64)
+                               / (np.asarray(reference, np.float64) ** 2 + eps), axis=2))
 
 
 def _check(target_error, max_seconds, max_spp, min_spp) -> None:
@@ -364,20 +558,21 @@ def _check(target_error, max_seconds, max_spp, min_spp) -> None:
                             f"{MAX_SPP}, got {max_spp!r}")
 
 
-def allocation(err2: np.ndarray, n: np.ndarray, target_error: float,
-               neighbourhood: bool = True) -> np.ndarray:
-    """N_p* = √g_p · mean(v/√g) / E², v_p = e_p² N_p, g = v or, with the neighbourhood guard,
-    g_p = max(v_p, mean of v over the window).
+def allocation(u: np.ndarray, target_error: float, neighbourhood: bool = True,
+               cost: np.ndarray | None = None) -> np.ndarray:
+    """N_q* = √(g_q/c_q) · mean(u √(c/g)) / E², u_q the relative variance one sample of source
+    pixel q adds (module docstring), c_q what it costs (1 without a cost map), g = u or, with
+    the neighbourhood guard, g_q = max(u_q, mean of u over the window).
 
     g shapes the allocation (a pixel whose own samples show no variance yet gets its
-    neighbours'), and the estimates v set its size: the predicted error mean(v/N*) is then E²
+    neighbours'), and the estimates u set its size: the predicted error mean(u/N*) is then E²
     exactly.  (Sizing it by g, N* = √g · mean √g / E², predicts E² only for g's own pixels
-    and overshot: cornell_phong 128² stopped at 0.87 E with 36 % more samples than needed,
-    textured_room at 0.78 E with 30 % more.)  Without the guard it is the Neyman allocation
-    √v · mean √v / E² (module docstring)."""
-    v = err2 * n
-    v = np.where(np.isfinite(v), v, np.nanmax(np.where(np.isfinite(v), v, 0.0)))
+    and overshoots.)  Without the guard and costs it is the Neyman allocation
+    √u · mean √u / E²; with costs, the one that minimises the time Σ c N at that error."""
+    v = np.where(np.isfinite(u), u, np.nanmax(np.where(np.isfinite(u), u, 0.0)))
     g = np.maximum(v, window_mean(v)) if neighbourhood else v
+    if cost is not None:
+        g = g / cost
     root = np.sqrt(g)
     scale = float(np.mean(np.where(root > 0, v / np.where(root > 0, root, 1.0), 0.0)))
     return root * scale / (target_error * target_error)
@@ -397,7 +592,7 @@ def fit_time(counts: np.ndarray, seconds_left: float, seconds_per_sample: float)
 
 def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: float | None = None,
                     max_spp: int | None = None, min_spp: int = MIN_SPP, integrator=None,
-                    sensor: int = 0, neighbourhood: bool = True,
+                    sensor: int = 0, neighbourhood: bool = True, by_time: bool = False,
                     path: str | Path = "the scene") -> AdaptiveResult:
     """Render ``scene`` until its estimated relative RMSE is at most ``target_error``.
 
@@ -414,23 +609,28 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     t0 = time.perf_counter()
     passes = []
     counts = np.full(wf.pixels, min_spp, dtype=np.int64)
-    stopped, k = "target", 0
+    stopped, k, costs = "target", 0, None
+    wf.squares = True          # the pilot's samples all enter Q
     while True:
         t = time.perf_counter()
         traced = wf.trace(counts, pass_seed(seed, k))
         image = wf.image()
-        var = wf.variance(image)
+        var, u = wf.estimate(image)
         err2 = relative_error_map(image, var)
+        if k == 0:
+            wf.select_exact(image, u)
+            if by_time:
+                costs = wf.cost_map(pass_seed(seed, COST_SEED))
         estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
         passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
                        "seconds": time.perf_counter() - t, "estimated_error": estimate})
         k += 1
-        if estimate <= target_error and np.all(np.isfinite(err2)):
+        if estimate <= target_error * (1.0 + STOP_SLACK) and np.all(np.isfinite(err2)):
             break
         # In floating point up to the cap + 1 before the cast: an unreachable target asks for
         # more samples than int64 holds ("invalid value encountered in cast").
-        want = np.ceil(np.minimum(allocation(err2, wf.n.reshape(shape), target_error,
-                                             neighbourhood), cap + 1.0)).astype(np.int64).ravel()
+        want = np.ceil(np.minimum(allocation(u, target_error, neighbourhood, costs),
+                                  cap + 1.0)).astype(np.int64).ravel()
         # At least a quarter more samples per pass: re-estimates creep, launches cost.
         step = np.maximum(want - wf.n, -(-wf.n // 4))
         counts = np.where(want > wf.n, np.minimum(step, (GROWTH - 1) * wf.n), 0)
@@ -448,7 +648,7 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
     return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),
                           wf.n.reshape(shape), seconds, float(target_error), estimate, stopped,
-                          passes)
+                          u, costs, passes)
 
 
 @dataclass
