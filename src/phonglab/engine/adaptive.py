@@ -600,7 +600,10 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     pixels below their allocation N_p* (module docstring), until the estimated error meets
     the target, no pixel needs more, a pixel would pass ``max_spp`` (those stop there), or
     ``max_seconds`` of wall time have passed (each pass after the pilot is sized to fit the
-    time left at the measured cost per sample: :func:`fit_time`).
+    time left at the measured cost per sample: :func:`fit_time`).  ``by_time``: allocate for
+    the least time instead of the fewest samples, with the pilot's cost map
+    (:meth:`Wavefront.cost_map`; only for a ``path`` integrator, else by count), kept in
+    :attr:`AdaptiveResult.cost`.
     """
     _check(target_error, max_seconds, max_spp, min_spp)
     cap = max_spp or MAX_SPP
@@ -661,6 +664,8 @@ class AdaptiveSampling:
     max_seconds: float | None = None
     max_spp: int | None = None
     min_spp: int = MIN_SPP
+    #: allocate by time (:func:`render_adaptive`'s ``by_time``)
+    by_time: bool = False
     #: Mitsuba's warnings are silenced while the scene loads
     quiet_load = True
 
@@ -681,7 +686,8 @@ class AdaptiveSampling:
         integrator, depth, filter)."""
         result = render_adaptive(sf.scene, self.target_error, seed=seed,
                                  max_seconds=self.max_seconds, max_spp=self.max_spp,
-                                 min_spp=self.min_spp, integrator=sf.integrator, path=sf.path)
+                                 min_spp=self.min_spp, integrator=sf.integrator,
+                                 by_time=self.by_time, path=sf.path)
         integ = sf.integrator or sf.scene.integrator()
         return result, {
             "adaptive": True, "target_error": self.target_error,
@@ -689,6 +695,7 @@ class AdaptiveSampling:
             "spp_mean": round(result.total_spp, 3), "spp_min": int(result.spp.min()),
             "spp_max": int(result.spp.max()), "min_spp": self.min_spp,
             "passes": len(result.passes), "seed": seed, "integrator": integ.class_name(),
+            "by_time": result.cost is not None,
             "max_depth": sf.max_depth if sf.max_depth is not None
             else sf.declared.get("max_depth"),
             "filter": "the film's, density-normalised (phonglab.engine.adaptive)"}
@@ -708,7 +715,8 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
                          max_seconds: float | None = None, max_spp: int | None = None,
                          max_depth: int | None = None, min_spp: int = MIN_SPP,
                          params: dict[str, Any] | None = None, integrator=None,
-                         extra_metadata: dict[str, Any] | None = None) -> AdaptiveResult:
+                         extra_metadata: dict[str, Any] | None = None,
+                         by_time: bool = False) -> AdaptiveResult:
     """Load ``scene``, render it adaptively and write ``out`` (+ .stderr.exr, .png, .spp.exr, .spp.png).
 
     :class:`AdaptiveSampling` through :func:`phonglab.engine.render.render_scene_file`, the one
@@ -719,7 +727,7 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
     scene's (the planner's models).  ``target_error`` is a noise target: see
     :mod:`phonglab.engine.metrics` for what it means against a converged reference.
     """
-    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp)
+    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp, by_time)
     sampling.check()
     return render_scene_file(scene, out, sampling, variant=variant, seed=seed,
                              max_depth=max_depth, params=params, integrator=integrator,
