@@ -127,12 +127,15 @@ NEIGHBOURHOOD = 2
 #: A pass at most multiplies a pixel's sample count by this.
 GROWTH = 4
 #: After the pilot, Q is kept for the pixels whose position-free u is off the exact one by
-#: more than this factor (:meth:`Wavefront.select_exact`).
-EXACT_RATIO = 1.5
+#: more than this factor (:meth:`Wavefront.select_exact`) ...
+EXACT_RATIO = 3
 #: No pass is started for an estimate within this fraction above E: the pass that sizing
 #: aims at E lands on either side of it, and another pass for a 1 % miss costs a pass's
 #: fixed work for nothing measurable (the estimate's own noise is larger).
 STOP_SLACK = 0.01
+#: ... where the larger of the two is at least this share of the image's mean u (a pixel
+#: whose u hardly counts either way keeps the model).
+EXACT_FLOOR = 0.1
 #: Pass number whose seed the cost map's probe paths use (no pass reaches it).
 COST_SEED = 1 << 20
 #: Most samples one wavefront traces (larger passes are split into several launches).
@@ -437,12 +440,11 @@ class Wavefront:
                      spread: float = EXACT_RATIO) -> None:
         """After the pilot (``u_q`` its exact u, :meth:`estimate`): keep Q only for the source
         pixels where the position-free model's u is off the exact one by more than ``spread``
-        either way, and their 3×3 neighbours (an edge the pilot only grazed); none: Q is
-        dropped."""
+        either way while the larger is at least :data:`EXACT_FLOOR` of the mean u, and their
+        3×3 neighbours (an edge the pilot only grazed); none: Q is dropped."""
         u_m = self.source_variance(image)
-        ok = (u_m > 0) & (u_q > 0)
-        ratio = np.where(ok, u_q / np.where(ok, u_m, 1.0), 1.0)
-        off = (ratio > spread) | (ratio < 1.0 / spread) | ((u_m > 0) != (u_q > 0))
+        big, small = np.maximum(u_q, u_m), np.minimum(u_q, u_m)
+        off = (big > spread * small) & (big > EXACT_FLOOR * float(np.mean(u_q)))
         off = separable_filter(np.ones(3), off.astype(np.float64)) > 0
         self.exact = off.reshape(self.pixels)
         if not self.exact.any():
