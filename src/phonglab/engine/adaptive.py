@@ -140,10 +140,14 @@ EXACT_FLOOR = 0.1
 COST_SEED = 1 << 20
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
-#: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels, kept in the
-#: JIT backend's memory (host memory on LLVM), with temporaries (25 offsets for the gaussian
-#: filter: about 1 KiB a pixel, 1 GiB at 1024²).
-HOST_BYTES_PER_PIXEL_OFFSET = 40
+#: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels and the pilot's
+#: squared-weight sums of 2C + 1, kept in the JIT backend's memory (host memory on LLVM),
+#: with temporaries (25 offsets for the gaussian filter: about 1.7 KiB a pixel, 1.7 GiB at
+#: 1024²).
+HOST_BYTES_PER_PIXEL_OFFSET = 68
+#: Source pixels per block of :meth:`Wavefront.exact_variances` (float64 host copies of
+#: their rows: ~90 MB a block for RGB and 25 offsets).
+EXACT_BLOCK = 1 << 15
 
 
 @dataclass
@@ -471,28 +475,29 @@ class Wavefront:
         ``image`` is the last :meth:`image` (its weights W_p are reused)."""
         h, w, c, k = self.height, self.width, self.channels, len(self.offsets)
         var, u = np.zeros((self.pixels, c)), np.zeros(self.pixels)
-        q = np.flatnonzero(sources & (self.n > 1))
-        if len(q) == 0:
-            return var.reshape(h, w, c), u.reshape(h, w)
-        # the rows of T and Q of those pixels only, gathered on the device
-        rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
-            (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
-            dtype=np.float64).reshape(len(q), k, size)
-        T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
+        every = np.flatnonzero(sources & (self.n > 1))
         d = np.array(self.offsets)
-        py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
-        inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
-        p = np.where(inside, py * w + px, 0)                       # target p = q + d, (M, K)
-        x = image.reshape(-1, c)[p]                                 # (M, K, C)
-        wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
-        n = self.n[q].astype(np.float64)[:, None, None]
-        sz = T[..., :c] - x * T[..., c:]
-        sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
-        term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
-        term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
-        for ch in range(c):
-            var[:, ch] = np.bincount(p.ravel(), term[..., ch].ravel(), minlength=self.pixels)
-        u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
+        for start in range(0, len(every), EXACT_BLOCK):     # bounded host memory
+            q = every[start:start + EXACT_BLOCK]
+            # the rows of T and Q of those pixels only, gathered on the device
+            rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
+                (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
+                dtype=np.float64).reshape(len(q), k, size)
+            T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
+            py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
+            inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
+            p = np.where(inside, py * w + px, 0)                   # target p = q + d, (M, K)
+            x = image.reshape(-1, c)[p]                             # (M, K, C)
+            wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
+            n = self.n[q].astype(np.float64)[:, None, None]
+            sz = T[..., :c] - x * T[..., c:]
+            sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
+            term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
+            term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
+            for ch in range(c):
+                var[:, ch] += np.bincount(p.ravel(), term[..., ch].ravel(),
+                                          minlength=self.pixels)
+            u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
         return var.reshape(h, w, c), u.reshape(h, w)
 
 
