@@ -214,6 +214,8 @@ def test_cli_writes_image_stderr_and_spp_map(tmp_path, capsys):
     (["--adaptive", "--target-error", "0.1", "--max-seconds", "nan"], "--max-seconds"),
     (["--adaptive", "--target-error", "0.1", "--spp", "8"], "drop --spp"),
     (["--max-spp", "8"], "add --adaptive"),
+    (["--by-time"], "--by-time is about adaptive sampling"),
+    (["--adaptive", "--by-time"], "--by-time is about adaptive sampling"),
 ])
 def test_cli_bad_input_exits_2_before_work(tmp_path, capsys, args, message):
     out = tmp_path / "x.exr"
@@ -374,3 +376,31 @@ def test_cost_map_counts_the_rays_of_paths_path_would_trace(variant_llvm_rgb):
     wf = adaptive.Wavefront(scene, scenes.path_integrator(3, info))
     assert np.array_equal(wf.cost_map(seed=1), np.full((8, 8), cost.FIXED_COST + 5.0))
     assert adaptive.Wavefront(scene, mi.load_dict({"type": "direct"})).cost_map(1) is None
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.tuples(st.floats(1e-4, 1e2), st.floats(0.1, 10.0)), min_size=2, max_size=30))
+def test_allocation_by_time_and_the_time_oracle(uc):
+    """Without the guard, the allocation by time is √(u/c) sized to predict E² exactly, and
+    the time oracle is the time uniform sampling needs for that error over the allocation's
+    time (computed directly), and at least 1; with equal costs it is the sample oracle."""
+    u, c = (np.asarray(x)[None, :] for x in zip(*uc))
+    target = 0.05
+    n = adaptive.allocation(u, target, neighbourhood=False, cost=c)
+    assert np.mean(u / n) == pytest.approx(target ** 2, rel=1e-9)
+    assert np.allclose(n / np.sqrt(u / c), (n / np.sqrt(u / c)).flat[0], rtol=1e-9)
+    uniform_n = np.mean(u) / target ** 2                     # same error, one count for all
+    gain = uniform_n * np.sum(c) / np.sum(c * n)
+    assert adaptive.neyman_gain(u, c) == pytest.approx(gain, rel=1e-9)
+    assert gain >= 1 - 1e-9
+    assert adaptive.neyman_gain(u) == pytest.approx(adaptive.neyman_gain(u, np.ones_like(u)))
+
+
+def test_by_time_render_keeps_its_cost_map_and_meets_its_estimate(variant_llvm_rgb):
+    """A by-time render of a path-traced scene carries the pilot's cost map (every cost
+    above the fixed part) and stops at the target like the count allocation."""
+    scene = _load("gray_room", res=16)
+    r = adaptive.render_adaptive(scene, 0.1, seed=3, by_time=True)
+    assert r.cost is not None and r.cost.shape == (16, 16) and np.all(r.cost > cost.FIXED_COST)
+    assert r.stopped == "target" and r.estimated_error <= 0.1 * (1 + adaptive.STOP_SLACK)
+    assert adaptive.render_adaptive(scene, 0.1, seed=3).cost is None

@@ -51,6 +51,10 @@ def add_parser(sub) -> None:
                         "the EXR (<out>.spp.exr, <out>.spp.png)")
     p.add_argument("--max-spp", type=int, default=None, metavar="N",
                    help="with --adaptive: at most N samples in any pixel")
+    p.add_argument("--by-time", action="store_true",
+                   help="with --target-error: an adaptive render allocates its samples for "
+                        "the least time (each pixel's cost from a probe of path lengths, "
+                        "docs/adaptive.md) instead of the fewest samples")
     p.add_argument("--full-pilot", action="store_true",
                    help="with --target-error: run every step of the planner's pilot even "
                         "where the render is predicted to cost less (see 'phonglab plan')")
@@ -72,6 +76,9 @@ def run(args) -> int:
     if args.full_pilot and (args.target_error is None or args.adaptive):
         raise PhonglabError("--full-pilot is about the planner's pilot: use it with "
                             "--target-error E (without --adaptive), or drop it")
+    if args.by_time and args.target_error is None:
+        raise PhonglabError("--by-time is about adaptive sampling: use it with --target-error E "
+                            "(with or without --adaptive), or drop it")
     if args.adaptive or args.max_spp is not None:
         return run_adaptive(args, path, out)
     if args.target_error is not None:
@@ -100,7 +107,7 @@ def run_planned(args, path: Path, out: Path) -> int:
                         straight=False if args.full_pilot else None,
                         max_seconds=args.max_seconds, params=dict(args.params))
     print(plan.summary())
-    done = execute.render_plan(plan, seed=args.seed, out=out, progress=True)
+    done = execute.render_plan(plan, seed=args.seed, out=out, progress=True, by_time=args.by_time)
     result, error = done.result, done.error
     if plan.uses_wavefront:
         print(f"rendered {path} with {plan.model}, {plan.sampling} sampling, max_depth "
@@ -157,7 +164,7 @@ def run_adaptive(args, path: Path, out: Path) -> int:
         result = adaptive.render_file_adaptive(
             path, out, args.target_error, variant=args.variant, seed=args.seed,
             max_seconds=args.max_seconds, max_spp=args.max_spp, max_depth=args.max_depth,
-            params=dict(args.params))
+            params=dict(args.params), by_time=args.by_time)
     meta = result.metadata
     why = {"target": "the estimated error meets the target",
            "max_spp": "pixels reached --max-spp", "max_seconds": "--max-seconds ran out"}

@@ -127,20 +127,27 @@ NEIGHBOURHOOD = 2
 #: A pass at most multiplies a pixel's sample count by this.
 GROWTH = 4
 #: After the pilot, Q is kept for the pixels whose position-free u is off the exact one by
-#: more than this factor (:meth:`Wavefront.select_exact`).
-EXACT_RATIO = 1.5
+#: more than this factor (:meth:`Wavefront.select_exact`) ...
+EXACT_RATIO = 3
 #: No pass is started for an estimate within this fraction above E: the pass that sizing
 #: aims at E lands on either side of it, and another pass for a 1 % miss costs a pass's
 #: fixed work for nothing measurable (the estimate's own noise is larger).
 STOP_SLACK = 0.01
+#: ... where the larger of the two is at least this share of the image's mean u (a pixel
+#: whose u hardly counts either way keeps the model).
+EXACT_FLOOR = 0.1
 #: Pass number whose seed the cost map's probe paths use (no pass reaches it).
 COST_SEED = 1 << 20
 #: Most samples one wavefront traces (larger passes are split into several launches).
 MAX_WAVEFRONT = 1 << 24
-#: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels, kept in the
-#: JIT backend's memory (host memory on LLVM), with temporaries (25 offsets for the gaussian
-#: filter: about 1 KiB a pixel, 1 GiB at 1024²).
-HOST_BYTES_PER_PIXEL_OFFSET = 40
+#: Bytes per pixel and filter offset: float32 filter sums of C + 1 channels and the pilot's
+#: squared-weight sums of 2C + 1, kept in the JIT backend's memory (host memory on LLVM),
+#: with temporaries (25 offsets for the gaussian filter: about 1.7 KiB a pixel, 1.7 GiB at
+#: 1024²).
+HOST_BYTES_PER_PIXEL_OFFSET = 68
+#: Source pixels per block of :meth:`Wavefront.exact_variances` (float64 host copies of
+#: their rows: ~90 MB a block for RGB and 25 offsets).
+EXACT_BLOCK = 1 << 15
 
 
 @dataclass
@@ -437,12 +444,11 @@ class Wavefront:
                      spread: float = EXACT_RATIO) -> None:
         """After the pilot (``u_q`` its exact u, :meth:`estimate`): keep Q only for the source
         pixels where the position-free model's u is off the exact one by more than ``spread``
-        either way, and their 3×3 neighbours (an edge the pilot only grazed); none: Q is
-        dropped."""
+        either way while the larger is at least :data:`EXACT_FLOOR` of the mean u, and their
+        3×3 neighbours (an edge the pilot only grazed); none: Q is dropped."""
         u_m = self.source_variance(image)
-        ok = (u_m > 0) & (u_q > 0)
-        ratio = np.where(ok, u_q / np.where(ok, u_m, 1.0), 1.0)
-        off = (ratio > spread) | (ratio < 1.0 / spread) | ((u_m > 0) != (u_q > 0))
+        big, small = np.maximum(u_q, u_m), np.minimum(u_q, u_m)
+        off = (big > spread * small) & (big > EXACT_FLOOR * float(np.mean(u_q)))
         off = separable_filter(np.ones(3), off.astype(np.float64)) > 0
         self.exact = off.reshape(self.pixels)
         if not self.exact.any():
@@ -469,28 +475,29 @@ class Wavefront:
         ``image`` is the last :meth:`image` (its weights W_p are reused)."""
         h, w, c, k = self.height, self.width, self.channels, len(self.offsets)
         var, u = np.zeros((self.pixels, c)), np.zeros(self.pixels)
-        q = np.flatnonzero(sources & (self.n > 1))
-        if len(q) == 0:
-            return var.reshape(h, w, c), u.reshape(h, w)
-        # the rows of T and Q of those pixels only, gathered on the device
-        rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
-            (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
-            dtype=np.float64).reshape(len(q), k, size)
-        T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
+        every = np.flatnonzero(sources & (self.n > 1))
         d = np.array(self.offsets)
-        py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
-        inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
-        p = np.where(inside, py * w + px, 0)                       # target p = q + d, (M, K)
-        x = image.reshape(-1, c)[p]                                 # (M, K, C)
-        wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
-        n = self.n[q].astype(np.float64)[:, None, None]
-        sz = T[..., :c] - x * T[..., c:]
-        sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
-        term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
-        term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
-        for ch in range(c):
-            var[:, ch] = np.bincount(p.ravel(), term[..., ch].ravel(), minlength=self.pixels)
-        u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
+        for start in range(0, len(every), EXACT_BLOCK):     # bounded host memory
+            q = every[start:start + EXACT_BLOCK]
+            # the rows of T and Q of those pixels only, gathered on the device
+            rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
+                (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
+                dtype=np.float64).reshape(len(q), k, size)
+            T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
+            py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
+            inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
+            p = np.where(inside, py * w + px, 0)                   # target p = q + d, (M, K)
+            x = image.reshape(-1, c)[p]                             # (M, K, C)
+            wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
+            n = self.n[q].astype(np.float64)[:, None, None]
+            sz = T[..., :c] - x * T[..., c:]
+            sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
+            term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
+            term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
+            for ch in range(c):
+                var[:, ch] += np.bincount(p.ravel(), term[..., ch].ravel(),
+                                          minlength=self.pixels)
+            u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
         return var.reshape(h, w, c), u.reshape(h, w)
 
 
@@ -600,7 +607,10 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     pixels below their allocation N_p* (module docstring), until the estimated error meets
     the target, no pixel needs more, a pixel would pass ``max_spp`` (those stop there), or
     ``max_seconds`` of wall time have passed (each pass after the pilot is sized to fit the
-    time left at the measured cost per sample: :func:`fit_time`).
+    time left at the measured cost per sample: :func:`fit_time`).  ``by_time``: allocate for
+    the least time instead of the fewest samples, with the pilot's cost map
+    (:meth:`Wavefront.cost_map`; only for a ``path`` integrator, else by count), kept in
+    :attr:`AdaptiveResult.cost`.
     """
     _check(target_error, max_seconds, max_spp, min_spp)
     cap = max_spp or MAX_SPP
@@ -661,6 +671,8 @@ class AdaptiveSampling:
     max_seconds: float | None = None
     max_spp: int | None = None
     min_spp: int = MIN_SPP
+    #: allocate by time (:func:`render_adaptive`'s ``by_time``)
+    by_time: bool = False
     #: Mitsuba's warnings are silenced while the scene loads
     quiet_load = True
 
@@ -681,7 +693,8 @@ class AdaptiveSampling:
         integrator, depth, filter)."""
         result = render_adaptive(sf.scene, self.target_error, seed=seed,
                                  max_seconds=self.max_seconds, max_spp=self.max_spp,
-                                 min_spp=self.min_spp, integrator=sf.integrator, path=sf.path)
+                                 min_spp=self.min_spp, integrator=sf.integrator,
+                                 by_time=self.by_time, path=sf.path)
         integ = sf.integrator or sf.scene.integrator()
         return result, {
             "adaptive": True, "target_error": self.target_error,
@@ -689,6 +702,7 @@ class AdaptiveSampling:
             "spp_mean": round(result.total_spp, 3), "spp_min": int(result.spp.min()),
             "spp_max": int(result.spp.max()), "min_spp": self.min_spp,
             "passes": len(result.passes), "seed": seed, "integrator": integ.class_name(),
+            "by_time": result.cost is not None,
             "max_depth": sf.max_depth if sf.max_depth is not None
             else sf.declared.get("max_depth"),
             "filter": "the film's, density-normalised (phonglab.engine.adaptive)"}
@@ -708,7 +722,8 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
                          max_seconds: float | None = None, max_spp: int | None = None,
                          max_depth: int | None = None, min_spp: int = MIN_SPP,
                          params: dict[str, Any] | None = None, integrator=None,
-                         extra_metadata: dict[str, Any] | None = None) -> AdaptiveResult:
+                         extra_metadata: dict[str, Any] | None = None,
+                         by_time: bool = False) -> AdaptiveResult:
     """Load ``scene``, render it adaptively and write ``out`` (+ .stderr.exr, .png, .spp.exr, .spp.png).
 
     :class:`AdaptiveSampling` through :func:`phonglab.engine.render.render_scene_file`, the one
@@ -719,7 +734,7 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
     scene's (the planner's models).  ``target_error`` is a noise target: see
     :mod:`phonglab.engine.metrics` for what it means against a converged reference.
     """
-    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp)
+    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp, by_time)
     sampling.check()
     return render_scene_file(scene, out, sampling, variant=variant, seed=seed,
                              max_depth=max_depth, params=params, integrator=integrator,

@@ -79,8 +79,10 @@ class PlannedRender:
         return self.result.image
 
 
-def sampling(plan: Plan, progress: bool = False) -> UniformPasses | AdaptiveSampling:
-    """How the plan's render samples (module docstring)."""
+def sampling(plan: Plan, progress: bool = False,
+             by_time: bool = False) -> UniformPasses | AdaptiveSampling:
+    """How the plan's render samples (module docstring); ``by_time``: an adaptive render
+    allocates by time (:func:`phonglab.engine.adaptive.render_adaptive`)."""
     if plan.reused is not None:   # combined with the pilot's renders: the spp chosen for that
         sampler = plan.sampler if plan.sampler != "independent" else None
         return UniformPasses(math.ceil(plan.chosen_spp), plan.chosen_passes, sampler, progress,
@@ -91,7 +93,7 @@ def sampling(plan: Plan, progress: bool = False) -> UniformPasses | AdaptiveSamp
     if plan.sampling == "uniform":
         spp = max(2, math.ceil(plan.chosen_spp))
         return AdaptiveSampling(plan.noise_target, min_spp=spp, max_spp=spp)
-    return AdaptiveSampling(plan.noise_target, min_spp=MIN_SPP)
+    return AdaptiveSampling(plan.noise_target, min_spp=MIN_SPP, by_time=by_time)
 
 
 def integrator(plan: Plan) -> dict | None:
@@ -172,7 +174,8 @@ def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
 
 
 def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
-                reference: Reference | None = None, progress: bool = False) -> PlannedRender:
+                reference: Reference | None = None, progress: bool = False,
+                by_time: bool = False) -> PlannedRender:
     """Render ``plan`` (module docstring) and report its error.
 
     With ``out`` the render writes its files as ``phonglab render`` does
@@ -190,7 +193,7 @@ def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
         _activate(plan)
         with quiet_mitsuba():
             result = render_scene_file(
-                plan.scene, out, sampling(plan, progress), variant=plan.variant, seed=seed,
+                plan.scene, out, sampling(plan, progress, by_time), variant=plan.variant, seed=seed,
                 max_depth=plan.max_depth, params=plan.params, integrator=integrator(plan),
                 extra_metadata=header(plan), loaded=plan.loaded, info=plan.info)
     return PlannedRender(plan, result, error_report(plan, result, reference))
