@@ -610,62 +610,19 @@ def render_adaptive(scene, target_error: float, *, seed: int = 0, max_seconds: f
     time left at the measured cost per sample: :func:`fit_time`).  ``by_time``: allocate for
     the least time instead of the fewest samples, with the pilot's cost map
     (:meth:`Wavefront.cost_map`; only for a ``path`` integrator, else by count), kept in
-    :attr:`AdaptiveResult.cost`.
+    :attr:`AdaptiveResult.cost`.  The arguments are checked once, by :class:`AdaptiveSampling`
+    (one sentence each); the passes are :meth:`AdaptiveSampling.run`.
     """
-    _check(target_error, max_seconds, max_spp, min_spp)
-    cap = max_spp or MAX_SPP
-    wf = Wavefront(scene, integrator, sensor, path)
-    shape = (wf.height, wf.width)
-    t0 = time.perf_counter()
-    passes = []
-    counts = np.full(wf.pixels, min_spp, dtype=np.int64)
-    stopped, k, costs = "target", 0, None
-    wf.squares = True          # the pilot's samples all enter Q
-    while True:
-        t = time.perf_counter()
-        traced = wf.trace(counts, pass_seed(seed, k))
-        image = wf.image()
-        var, u = wf.estimate(image)
-        err2 = relative_error_map(image, var)
-        if k == 0:
-            wf.select_exact(image, u)
-            if by_time:
-                costs = wf.cost_map(pass_seed(seed, COST_SEED))
-        estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
-        passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
-                       "seconds": time.perf_counter() - t, "estimated_error": estimate})
-        k += 1
-        if estimate <= target_error * (1.0 + STOP_SLACK) and np.all(np.isfinite(err2)):
-            break
-        # In floating point up to the cap + 1 before the cast: an unreachable target asks for
-        # more samples than int64 holds ("invalid value encountered in cast").
-        want = np.ceil(np.minimum(allocation(u, target_error, neighbourhood, costs),
-                                  cap + 1.0)).astype(np.int64).ravel()
-        # At least a quarter more samples per pass: re-estimates creep, launches cost.
-        step = np.maximum(want - wf.n, -(-wf.n // 4))
-        counts = np.where(want > wf.n, np.minimum(step, (GROWTH - 1) * wf.n), 0)
-        counts = np.clip(counts, 0, cap - wf.n)
-        if not counts.any():
-            stopped = "max_spp" if np.any(want > wf.n) else "target"
-            break
-        if max_seconds is not None:
-            counts = fit_time(counts, max_seconds - (time.perf_counter() - t0),
-                              passes[-1]["seconds"] / max(traced, 1))
-            if not counts.any():
-                stopped = "max_seconds"
-                break
-    seconds = time.perf_counter() - t0
-    stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
-    return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),
-                          wf.n.reshape(shape), seconds, float(target_error), estimate, stopped,
-                          u, costs, passes)
+    sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp, by_time)
+    return sampling.run(scene, seed=seed, integrator=integrator, sensor=sensor,
+                          neighbourhood=neighbourhood, path=path)
 
 
 @dataclass
 class AdaptiveSampling:
     """Adaptive sampling for :func:`phonglab.engine.render.render_scene_file`: :func:`render_adaptive`
-    to ``target_error`` (its arguments), the spp map written beside the image set
-    (:func:`spp_paths`)."""
+    to ``target_error`` (its arguments, checked on construction), the spp map written beside
+    the image set (:func:`spp_paths`)."""
 
     target_error: float
     max_seconds: float | None = None
@@ -685,16 +642,14 @@ class AdaptiveSampling:
         """The ``<default>`` entries this sampling sets (none: it chooses the spp itself)."""
         return {}
 
-    def check(self) -> None:
+    def __post_init__(self) -> None:
+        """The target and caps are checked here, where they enter (one sentence each)."""
         _check(self.target_error, self.max_seconds, self.max_spp, self.min_spp)
 
     def render(self, sf, seed: int) -> tuple[AdaptiveResult, dict[str, Any]]:
         """The render and its header fields (target, estimate, stop, spp, passes, seed,
         integrator, depth, filter)."""
-        result = render_adaptive(sf.scene, self.target_error, seed=seed,
-                                 max_seconds=self.max_seconds, max_spp=self.max_spp,
-                                 min_spp=self.min_spp, integrator=sf.integrator,
-                                 by_time=self.by_time, path=sf.path)
+        result = self.run(sf.scene, seed=seed, integrator=sf.integrator, path=sf.path)
         integ = sf.integrator or sf.scene.integrator()
         return result, {
             "adaptive": True, "target_error": self.target_error,
@@ -706,6 +661,58 @@ class AdaptiveSampling:
             "max_depth": sf.max_depth if sf.max_depth is not None
             else sf.declared.get("max_depth"),
             "filter": "the film's, density-normalised (phonglab.engine.adaptive)"}
+
+    def run(self, scene, *, seed: int = 0, integrator=None, sensor: int = 0,
+            neighbourhood: bool = True, path: str | Path = "the scene") -> AdaptiveResult:
+        """The passes of :func:`render_adaptive` over a loaded ``scene`` (its other
+        arguments), with this object's target and caps."""
+        cap = self.max_spp or MAX_SPP
+        wf = Wavefront(scene, integrator, sensor, path)
+        shape = (wf.height, wf.width)
+        t0 = time.perf_counter()
+        passes = []
+        counts = np.full(wf.pixels, self.min_spp, dtype=np.int64)
+        stopped, k, costs = "target", 0, None
+        wf.squares = True          # the pilot's samples all enter Q
+        while True:
+            t = time.perf_counter()
+            traced = wf.trace(counts, pass_seed(seed, k))
+            image = wf.image()
+            var, u = wf.estimate(image)
+            err2 = relative_error_map(image, var)
+            if k == 0:
+                wf.select_exact(image, u)
+                if self.by_time:
+                    costs = wf.cost_map(pass_seed(seed, COST_SEED))
+            estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
+            passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
+                           "seconds": time.perf_counter() - t, "estimated_error": estimate})
+            k += 1
+            if (estimate <= self.target_error * (1.0 + STOP_SLACK)
+                    and np.all(np.isfinite(err2))):
+                break
+            # In floating point up to the cap + 1 before the cast: an unreachable target asks for
+            # more samples than int64 holds ("invalid value encountered in cast").
+            want = np.ceil(np.minimum(allocation(u, self.target_error, neighbourhood, costs),
+                                      cap + 1.0)).astype(np.int64).ravel()
+            # At least a quarter more samples per pass: re-estimates creep, launches cost.
+            step = np.maximum(want - wf.n, -(-wf.n // 4))
+            counts = np.where(want > wf.n, np.minimum(step, (GROWTH - 1) * wf.n), 0)
+            counts = np.clip(counts, 0, cap - wf.n)
+            if not counts.any():
+                stopped = "max_spp" if np.any(want > wf.n) else "target"
+                break
+            if self.max_seconds is not None:
+                counts = fit_time(counts, self.max_seconds - (time.perf_counter() - t0),
+                                  passes[-1]["seconds"] / max(traced, 1))
+                if not counts.any():
+                    stopped = "max_seconds"
+                    break
+        seconds = time.perf_counter() - t0
+        stderr = np.sqrt(np.nan_to_num(var, posinf=0.0))
+        return AdaptiveResult(image.astype(np.float32), stderr.astype(np.float32),
+                              wf.n.reshape(shape), seconds, float(self.target_error), estimate,
+                              stopped, u, costs, passes)
 
     def extra_files(self, out: Path, result: AdaptiveResult):
         """The spp map, members of the render's file set: ``x.spp.exr`` (channel Y, the
@@ -735,7 +742,6 @@ def render_file_adaptive(scene: str | Path, out: str | Path, target_error: float
     :mod:`phonglab.engine.metrics` for what it means against a converged reference.
     """
     sampling = AdaptiveSampling(target_error, max_seconds, max_spp, min_spp, by_time)
-    sampling.check()
     return render_scene_file(scene, out, sampling, variant=variant, seed=seed,
                              max_depth=max_depth, params=params, integrator=integrator,
                              extra_metadata=extra_metadata)

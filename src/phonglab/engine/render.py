@@ -405,7 +405,8 @@ class UniformPasses:
         """The ``<default>`` entries this sampling sets when the scene declares them."""
         return {"spp": self.spp}
 
-    def check(self) -> None:
+    def __post_init__(self) -> None:
+        """``spp`` is checked here, where it enters (one sentence)."""
         if self.spp is not None:
             check_spp(self.spp)
 
@@ -470,12 +471,12 @@ def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
     """The one render of a scene file: check, load, render, write ``out`` with provenance.
 
     ``sampling`` is :class:`UniformPasses` (the default) or
-    :class:`phonglab.engine.adaptive.AdaptiveSampling`: its ``check()`` (arguments),
-    ``settings()`` (``<default>`` entries it sets), ``render(scene_file, seed) -> (result,
-    header fields)`` and ``extra_files(out, result)`` (members it adds to the file set: the
-    spp map).  Everything that can be checked is checked before the render starts: every
-    file of the set (:class:`phonglab.engine.outputs.RenderOutputs`), the arguments, the scene
-    (:func:`preflight`).  The scene is opened by :func:`open_scene_file` (``variant``,
+    :class:`phonglab.engine.adaptive.AdaptiveSampling`, whose arguments were checked when it
+    was made: its ``settings()`` (``<default>`` entries it sets), ``render(scene_file, seed)
+    -> (result, header fields)`` and ``extra_files(out, result)`` (members it adds to the file
+    set: the spp map).  Everything that can be checked is checked before the render starts:
+    the arguments (first, by the sampling), every file of the set
+    (:class:`phonglab.engine.outputs.RenderOutputs`), the scene (:func:`preflight`).  The scene is opened by :func:`open_scene_file` (``variant``,
     ``max_depth``, ``params``, ``integrator``, ``loaded``, ``info``).  ``extra_metadata`` is
     added to the EXR header (the planner records its plan there); with ``png`` a preview is
     written at the auto exposure (darken only).  The image, standard error, preview and spp
@@ -484,7 +485,6 @@ def render_scene_file(scene: str | Path, out: str | Path, sampling=None, *,
     sampling = sampling or UniformPasses()
     outputs = RenderOutputs.beside(out, png)
     outputs.check()
-    sampling.check()
     sf = open_scene_file(scene, variant=sampling.variant(variant), max_depth=max_depth,
                          params=params, settings=sampling.settings(), integrator=integrator,
                          loaded=loaded, info=info, quiet=sampling.quiet_load)
