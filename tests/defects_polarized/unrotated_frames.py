@@ -11,12 +11,12 @@ about the normal.
 It changes renders: the polarization it puts out has the wrong angle.  A 4×4 plane of it under
 a constant unit environment, seen from 60° off its normal (64×64, 32 spp, path depth 4, seed 0,
 the `stokes` integrator, llvm_ad_spectral_polarized), against the correct plugin at the same
-seed: S0 is the same to float32 round-off (M00 is right), S1 differs by 0.02 % and S2 by 11 % of the mean S0 per
-pixel (its sign flips: the s/p angle is read in the wrong frame).  With a linear polarizer at
-45° in front of the camera the *intensity* changes: the left half of the image 10.5 % darker,
-the right half 11.7 % brighter, up to 43 % in a pixel (11 % mean |ΔS0|/S0, against 3.3 % between
-two seeds of the correct plugin).  tests/test_validate_polarized.py renders this scene
-smaller."""
+seed: S0 is the same to float32 round-off (M00 is right), S1 differs by 0.02 % and S2 by 11 %
+of the mean S0 per pixel (its sign flips: the s/p angle is read in the wrong frame).  With a
+linear polarizer at 45° in front of the camera the *intensity* changes: the left half of the
+image 10.5 % darker, the right half 11.7 % brighter, up to 43 % in a pixel (11 % mean
+|ΔS0|/S0, against 3.3 % between two seeds of the correct plugin).
+tests/test_validate_polarized.py renders this scene smaller."""
 
 import drjit as dr
 import mitsuba as mi

@@ -60,7 +60,12 @@ value that was a Mitsuba object), is ``skipped`` with the reason.  Tolerance: RE
 
 ``mueller_identities`` -- the deterministic identities of :mod:`.identities` entry by entry:
 ``eval_pdf``'s matrix = eval's, and each non-delta sample's weight matrix = eval/pdf at its ω_o;
-and a delta lobe's sample matrix is continuous in ω_i (:func:`_continuity`).  Each matrix is
+a delta lobe's sample matrix is continuous in ω_i (:func:`_continuity`); and the Stokes-frame
+convention, checked from outside by rotating the input basis: an isotropic BSDF's matrix,
+re-expressed from Mitsuba's implicit frames in the s/p frames of the plane of incidence, is
+invariant under a rotation of ω_i and ω_o together about the normal (:func:`_isotropy`
+derives it; a matrix built in the s/p frames and returned without the rotation into
+``stokes_basis`` breaks it unless it has no linear polarization part).  Each matrix is
 divided by its own M00 first: these rows compare the *polarization part* M/M00 (entries in
 [−1, 1] for a physical matrix), and M00 itself stays the intensity topics' (``eval_pdf``,
 ``weight``, ``reciprocity``, with their box search of ill-conditioned lanes and their
