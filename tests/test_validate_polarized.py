@@ -100,6 +100,16 @@ def test_isotropy_row_skips_what_it_cannot_judge(polarized, spec, reason):
     assert row.status == "skipped" and reason in row.reason
 
 
+def test_isotropy_row_skips_a_tilted_shading_frame(polarized):
+    """bumpmap has no flag for its tilted frame; its M00 moves under the rotation: skipped."""
+    from phonglab.validate.bsdf import builtins
+    spec = next(c.spec for c in builtins.cases() if c.label == "bumpmap/roughconductor")
+    report = validate_bsdf(spec, quick=True, seed=0, variant=POLARIZED,
+                           topics=["mueller_identities"])
+    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    assert row.status == "skipped" and "M00 itself changes" in row.reason
+
+
 def test_isotropy_transform_is_rotation_covariant():
     """The s/p frames follow a rotation about n; a matrix built in them and rotated into
     stokes_basis frames comes back unchanged through to_sp, whatever ψ."""
