@@ -450,9 +450,8 @@ def _isotropy(bsdf, opts) -> Row:
     azimuth, the other on ω_i's), so that is invariant only when M₀ R(α)ᵀ and R(β) M₀ are for
     all α, β: columns and rows 1, 2 of M₀ vanish, M₀ = [[a, 0, 0, b], [0, 0, 0, 0],
     [0, 0, 0, 0], [e, 0, 0, f]] -- a depolarizer (diffuse) or a circular polarizer or
-    diattenuator.  Any linear part (M01, M02, M10, M20, the 2×2 block M11..M22) moves by up
-    to its own size.  An
-    unrotated matrix is still a realizable Mueller matrix with the right M00, so no other row
+    diattenuator.  Any entry in rows or columns 1, 2 (the linear part) moves by up to its
+    own size.  An unrotated matrix is still a realizable Mueller matrix with the right M00, so no other row
     sees it, but the renderer converts it to world frames as if it were in
     ``stokes_basis`` (``SurfaceInteraction::to_world_mueller``): the polarization it puts out
     has the wrong angle, which a polarizer or a second polarizing bounce turns into wrong
