@@ -29,11 +29,13 @@ POLAR_TOPICS = list(polarization.POLAR_TOPICS)
 PLANTED = {"over_polarizing": "mueller", "conjugating": "mueller",
            "dim_intensity": "intensity", "nan_offdiagonal": "mueller",
            "depolarized_sample": "mueller_identities",
-           "nonreciprocal_matrix": "mueller_reciprocity"}
+           "nonreciprocal_matrix": "mueller_reciprocity",
+           "unrotated_frames": "mueller_identities"}
 #: control file -> its registered name
 CONTROLS = {"depolarizing_lambert": "pol_depolarizing_lambert",
             "wrapped_conductor": "pol_wrapped_conductor",
-            "wrapped_roughconductor": "pol_wrapped_roughconductor"}
+            "wrapped_roughconductor": "pol_wrapped_roughconductor",
+            "diattenuating_lambert": "pol_diattenuating_lambert"}
 
 
 @pytest.fixture
@@ -70,6 +72,100 @@ def test_defect_rows_name_the_lane_and_the_violated_quantity(polarized):
     s_out = np.array(d["stokes_out"])
     assert s_out[0] < np.linalg.norm(s_out[1:])          # the image is not a Stokes vector
     assert row.measured == pytest.approx(1.53, abs=0.02)  # (1 − 1.5·… ) / max|M|: M10 = 1.5 M00
+
+
+def test_unrotated_frames_fails_the_isotropy_row_only(polarized):
+    """The s/p matrix returned without the rotation into Mitsuba's frames: only the isotropy row
+    sees it; the same plugin with the rotation (diattenuating_lambert.py) passes that row."""
+    report = validate_bsdf("defect_unrotated_frames", plugins=[DEFECTS / "unrotated_frames.py"],
+                           quick=True, seed=0, variant=POLARIZED, topics=["mueller_identities"])
+    (row,) = report.failing
+    assert row.name == polarization.ISOTROPY and row.measured > 100
+    assert row.details["max_difference"] > 0.1 and row.details["m00_moved"] == 0
+    assert {"psi", "rotated_wi", "rotated_wo", "worst_entry"} <= set(row.details)
+    report = validate_bsdf("pol_diattenuating_lambert",
+                           plugins=[DEFECTS / "diattenuating_lambert.py"], quick=True, seed=0,
+                           variant=POLARIZED, topics=["mueller_identities"])
+    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    assert row.status == "pass" and row.measured < 0.1
+
+
+@pytest.mark.parametrize("spec, reason", [
+    ({"type": "roughconductor", "alpha_u": 0.1, "alpha_v": 0.4}, "Anisotropic"),
+    ({"type": "conductor"}, "every lobe is a delta")])
+def test_isotropy_row_skips_what_it_cannot_judge(polarized, spec, reason):
+    report = validate_bsdf(spec, quick=True, seed=0, variant=POLARIZED,
+                           topics=["mueller_identities"])
+    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    assert row.status == "skipped" and reason in row.reason
+
+
+def test_isotropy_row_skips_a_tilted_shading_frame(polarized):
+    """bumpmap has no flag for its tilted frame; its M00 moves under the rotation: skipped."""
+    from phonglab.validate.bsdf import builtins
+    spec = next(c.spec for c in builtins.cases() if c.label == "bumpmap/roughconductor")
+    report = validate_bsdf(spec, quick=True, seed=0, variant=POLARIZED,
+                           topics=["mueller_identities"])
+    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    assert row.status == "skipped" and "M00 itself changes" in row.reason
+
+
+def test_isotropy_transform_is_rotation_covariant():
+    """The s/p frames follow a rotation about n; a matrix built in them and rotated into
+    stokes_basis frames comes back unchanged through to_sp, whatever ψ."""
+    rng = np.random.default_rng(6)
+    wi, wo = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    m0 = np.array([pol.jones_to_mueller(j) for j in _random_jones(rng, 50)])[:, None]
+    for psi in (0.0, 1.0, 4.0):
+        a, b = (polarization.rotate_z(v, np.full(50, psi)) for v in (wi, wo))
+        s_in, s_out = polarization.sp_frames(a, b)
+        r_in = pol.rotate_stokes_basis(-b, s_in, pol.stokes_basis(-b))
+        r_out = pol.rotate_stokes_basis(a, s_out, pol.stokes_basis(a))
+        mitsuba = r_out[:, None] @ m0 @ np.swapaxes(r_in, -1, -2)[:, None]
+        assert np.allclose(polarization.to_sp(mitsuba, a, b), m0, atol=1e-9)
+
+
+def _render_frames(bsdf, polarizer, spp=16, size=32):
+    """The scene of unrotated_frames.py's docstring: a plane under a constant environment seen
+    at 60° off its normal by the stokes integrator, a 45° polarizer in front if asked."""
+    import mitsuba as mi
+    look = mi.ScalarTransform4f().look_at
+    scene = {"type": "scene",
+             "integrator": {"type": "stokes", "integrator": {"type": "path", "max_depth": 4}},
+             "sensor": {"type": "perspective", "fov": 30,
+                        "to_world": look(origin=[0, -3.46, 2], target=[0, 0, 0], up=[0, 0, 1]),
+                        "film": {"type": "hdrfilm", "width": size, "height": size,
+                                 "pixel_format": "rgb"},
+                        "sampler": {"type": "independent", "sample_count": spp}},
+             "plane": {"type": "rectangle", "bsdf": {"type": bsdf},
+                       "to_world": mi.ScalarTransform4f().scale(2.0)},
+             "env": {"type": "constant", "radiance": 1.0}}
+    if polarizer:
+        scene["filter"] = {"type": "rectangle", "bsdf": {"type": "polarizer", "theta": 45.0},
+                           "to_world": look(origin=[0, -3.2, 1.85], target=[0, 0, 0],
+                                            up=[0, 0, 1]).scale(0.5)}
+    img = np.array(mi.render(mi.load_dict(scene), seed=0))
+    return {k: img[..., 3 * i + 3: 3 * i + 6].mean(axis=-1) for i, k in enumerate("0123")}
+
+
+def test_unrotated_frames_changes_a_render(polarized):
+    """The frame error is no convention detail: S2 flips sign, and behind a polarizer the
+    intensity of each half of the image moves by ~10 % (unrotated_frames.py's docstring)."""
+    import runpy
+    for name in ("diattenuating_lambert", "unrotated_frames"):
+        runpy.run_path(str(DEFECTS / f"{name}.py"))
+    good = _render_frames("pol_diattenuating_lambert", False)
+    bad = _render_frames("defect_unrotated_frames", False)
+    assert np.allclose(good["0"], bad["0"], rtol=1e-4, atol=1e-6)      # M00 is right
+    assert np.abs(bad["2"] - good["2"]).mean() > 0.05 * good["0"].mean()
+    good = _render_frames("pol_diattenuating_lambert", True)
+    bad = _render_frames("defect_unrotated_frames", True)
+    half = good["0"].shape[1] // 2
+    left = bad["0"][:, :half].mean() / good["0"][:, :half].mean()
+    right = bad["0"][:, half:].mean() / good["0"][:, half:].mean()
+    assert left < 0.95 and right > 1.05, (left, right)
 
 
 def test_dim_intensity_is_0_8_of_the_unpolarized_value(polarized):
