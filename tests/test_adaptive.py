@@ -18,7 +18,8 @@ from scipy import ndimage, signal
 
 from phonglab import cli, stats
 
-from phonglab.engine import adaptive, cost, exr, metrics, references, render, scenes, spp_map
+from phonglab.engine import (adaptive, cost, exr, metrics, references, render, scenes, spp_map,
+                             wavefront)
 from phonglab.bench import adaptive_sweeps
 from phonglab.bench import config as bench_config
 from phonglab.errors import PhonglabError
@@ -38,12 +39,12 @@ def test_separable_filter_is_scipy_convolve1d_twice(h, w, c, taps, seed):
     a, kernel = rng.random((h, w, c)), rng.random(2 * taps + 1)
     expected = ndimage.convolve1d(ndimage.convolve1d(a, kernel, axis=0, mode="constant"),
                                   kernel, axis=1, mode="constant")
-    np.testing.assert_allclose(adaptive.separable_filter(kernel, a), expected, rtol=1e-12,
+    np.testing.assert_allclose(wavefront.separable_filter(kernel, a), expected, rtol=1e-12,
                                atol=1e-12)
     v = a[..., 0]
     box = ndimage.uniform_filter(v, 2 * taps + 1, mode="constant")
     ones = ndimage.uniform_filter(np.ones_like(v), 2 * taps + 1, mode="constant")
-    np.testing.assert_allclose(adaptive.window_mean(v, taps), box / ones, rtol=1e-10)
+    np.testing.assert_allclose(wavefront.window_mean(v, taps), box / ones, rtol=1e-10)
 
 
 def test_spp_map_png_colours_each_pixel_by_its_count(tmp_path):
@@ -134,7 +135,7 @@ def _relmse_spread(err2: np.ndarray, rfilter) -> float:
     """Standard deviation of mean_i d_i²/(r_i² + ε) for Gaussian errors of relative variance
     err2_i: Var = 2 Σ_ij ρ_ij² e_i² e_j² / P², ρ the correlation the filter gives
     neighbouring pixels of white noise (autocorrelation of the filter's pixel table A)."""
-    a, _ = adaptive.filter_tables(rfilter)
+    a, _ = wavefront.filter_tables(rfilter)
     auto = signal.correlate2d(a, a)
     rho2 = (auto / auto.max()) ** 2
     e = err2.mean(axis=2) if err2.ndim == 3 else err2
@@ -333,7 +334,7 @@ def test_oracle_speedup_refuses_a_variance_map_that_is_not_finite():
 def test_exact_sums_split_the_image_error_over_source_pixels(variant_llvm_rgb):
     """Σ_p mean_c Var x_pc/(x_pc² + ε) from the exact squared-weight sums equals Σ_q u_q/N_q
     (the identity the allocation rests on), for any counts."""
-    wf = adaptive.Wavefront(_load("gray_room", res=16))
+    wf = wavefront.Wavefront(_load("gray_room", res=16))
     wf.squares = True
     wf.trace(np.random.default_rng(1).integers(4, 40, wf.pixels), 3)
     image = wf.image()
@@ -353,7 +354,7 @@ def test_exact_estimate_matches_the_true_error_where_the_model_overestimates(var
     scene = _load("gray_room", **params)
     z = stats.z_critical(stats.ALPHA, 2)
     for seed in range(2):
-        wf = adaptive.Wavefront(scene)
+        wf = wavefront.Wavefront(scene)
         wf.squares = True
         wf.trace(np.full(wf.pixels, 64), 10 + seed)
         image = wf.image()
@@ -373,9 +374,9 @@ def test_cost_map_counts_the_rays_of_paths_path_would_trace(variant_llvm_rgb):
     vertex), exactly; other integrators have no cost map."""
     info = scenes.inspect_scene("check_furnace_enclosure", res=8)
     scene = _load("check_furnace_enclosure", res=8)
-    wf = adaptive.Wavefront(scene, scenes.path_integrator(3, info))
+    wf = wavefront.Wavefront(scene, scenes.path_integrator(3, info))
     assert np.array_equal(wf.cost_map(seed=1), np.full((8, 8), cost.FIXED_COST + 5.0))
-    assert adaptive.Wavefront(scene, mi.load_dict({"type": "direct"})).cost_map(1) is None
+    assert wavefront.Wavefront(scene, mi.load_dict({"type": "direct"})).cost_map(1) is None
 
 
 @settings(max_examples=30, deadline=None)

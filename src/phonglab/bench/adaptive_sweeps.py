@@ -35,7 +35,7 @@ only for a box filter), beside the
 speed-up adaptive sampling achieves at the scene's planner target E (paired with uniform
 renders as above, wall time included).  Targets: achieved >= :data:`ORACLE_SHARE` of the
 cost-aware oracle mean(u)·mean(c)/mean(√(u c))² (c the cost map of
-:meth:`phonglab.engine.adaptive.Wavefront.cost_map`, issue 39) where it is >=
+:meth:`phonglab.engine.wavefront.Wavefront.cost_map`, issue 39) where it is >=
 :data:`ORACLE_MATTERS`, cost <= :data:`OVERHEAD_TARGET` of uniform where it is 1.
 
 Writes ``adaptive.json``, ``adaptive_error_time.png`` (one panel per scene, Pareto front
@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from .. import planner
-from ..engine import adaptive, metrics, references, render, scenes, spp_map
+from ..engine import adaptive, metrics, references, render, scenes, spp_map, wavefront
 from ..planner import execute
 from ..runtime import quiet_mitsuba, set_variant
 from .analysis import pareto_front
@@ -74,7 +74,7 @@ ORACLE_MAP_SPP = 256
 ORACLE_SHARE = 0.8
 #: ... wherever the oracle is at least this.
 ORACLE_MATTERS = 1.3
-#: Probe paths per pixel of the oracle rows' cost map (:meth:`adaptive.Wavefront.cost_map`).
+#: Probe paths per pixel of the oracle rows' cost map (:meth:`phonglab.engine.wavefront.Wavefront.cost_map`).
 ORACLE_COST_SPP = 16
 #: Reference spp of the oracle rows (the planner bench's at 128², cached: its noise is
 #: subtracted from every error, and is below E/3 there).
@@ -176,7 +176,7 @@ def oracle_row(name: str, target: float, params: dict, cfg: Config) -> dict[str,
     vmap = adaptive.render_adaptive(loaded, target, seed=70, min_spp=ORACLE_MAP_SPP,
                                     max_spp=ORACLE_MAP_SPP, integrator=integ)
     oracle = adaptive.neyman_gain(vmap.source_variance)
-    costs = adaptive.Wavefront(loaded, integ).cost_map(seed=71, spp=ORACLE_COST_SPP)
+    costs = wavefront.Wavefront(loaded, integ).cost_map(seed=71, spp=ORACLE_COST_SPP)
     oracle_time = adaptive.neyman_gain(vmap.source_variance, costs)
     render.render_scene(loaded, 4, seed=999, integrator=integ)                 # compile
     adaptive.render_adaptive(loaded, 0.2, seed=998, integrator=integ)
@@ -227,7 +227,7 @@ def guard_rows(name: str, cfg: Config, target: float) -> list[dict[str, Any]]:
             d = r.image.astype(np.float64) - ref.image
             z = np.abs(d) / np.sqrt(r.stderr.astype(np.float64) ** 2 + ref.stderr ** 2 + 1e-30)
             true_rel = np.sqrt(np.mean(d * d / (ref.image ** 2 + metrics.REL_EPS), axis=2))
-            est_rel = np.sqrt(adaptive.relative_error_map(r.image, r.stderr.astype(np.float64) ** 2))
+            est_rel = np.sqrt(wavefront.relative_error_map(r.image, r.stderr.astype(np.float64) ** 2))
             out.append({"scene": name, "neighbourhood": guard, "seed": seed, "target": target,
                         "error": _error(r.image, ref), "spp": r.total_spp,
                         "frac_z_above_3": float(np.mean(z > 3)),

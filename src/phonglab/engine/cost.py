@@ -16,7 +16,7 @@ plus one shadow ray where ``path`` samples an emitter (a smooth BSDF at a vertex
 continue).
 
 **The model.**  A sample of pixel q costs ``c_q = a + s_q`` ray units, s_q the mean rays per
-sample (:meth:`phonglab.engine.adaptive.Wavefront.cost_map`, from :data:`PROBE_SPP` probe samples per pixel, averaged over the
+sample (:meth:`phonglab.engine.wavefront.Wavefront.cost_map`, from :data:`PROBE_SPP` probe samples per pixel, averaged over the
 3×3 window) and a the cost of the rest of a sample (camera ray generation, the film's filter
 splats, the per-pass work) in ray units, :data:`FIXED_COST` (docs/adaptive.md: how it was
 fitted to timed passes over pixel groups, and how well it predicts them).

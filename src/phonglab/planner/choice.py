@@ -49,7 +49,8 @@ from dataclasses import dataclass
 import mitsuba as mi
 import numpy as np
 
-from ..engine.adaptive import MIN_SPP, window_mean
+from ..engine.adaptive import MIN_SPP, NEIGHBOURHOOD
+from ..engine.wavefront import window_mean
 from ..engine.scenes import SceneInfo, inspect_scene
 from .pilot import STRATIFIED_COST, Pilot
 
@@ -147,7 +148,7 @@ def model_dict(model: str, depth: int, scene, params: dict | None = None) -> dic
 
 def adaptive_spp(vmap: np.ndarray, budget2: float) -> float:
     """Mean samples per pixel the adaptive renderer's allocation predicts (module docstring)."""
-    v = np.maximum(vmap, window_mean(vmap))
+    v = np.maximum(vmap, window_mean(vmap, NEIGHBOURHOOD))
     root = np.sqrt(v)
     want = root * root.mean() / budget2
     return float(np.mean(np.maximum(np.ceil(want), MIN_SPP)))
