@@ -179,6 +179,14 @@ def to_vectors(a) -> mi.Vector3f:
     return _dr(mi.Vector3f, a[0])
 
 
+def _intensity(x):
+    """A polarized ``mi.Spectrum`` (a Mueller matrix) -> its unpolarized intensity (M00);
+    anything else as it is."""
+    if mi.is_polarized and isinstance(x, mi.Spectrum):
+        return mi.unpolarized_spectrum(x)
+    return x
+
+
 def to_numpy(x, n: int | None = None) -> np.ndarray:
     """A Dr.Jit value -> float64 numpy with the lanes first.
 
@@ -187,8 +195,7 @@ def to_numpy(x, n: int | None = None) -> np.ndarray:
     (N = 1).  With ``n``, a width-1 result (a Dr.Jit literal, e.g. a constant pdf) is
     broadcast to n lanes.
     """
-    if mi.is_polarized and isinstance(x, mi.Spectrum):
-        x = mi.unpolarized_spectrum(x)
+    x = _intensity(x)
     if not dr.is_jit_v(x):
         a = np.array(x, dtype=np.float64)
         a = a.reshape((1,) + a.shape)
@@ -260,6 +267,8 @@ def _probe(call, wi, **args) -> list[np.ndarray]:
     types = [t for t, _, _ in args.values()]
     if _is_jit():
         out = call(interaction(rows[0]), *(_dr(t, r) for t, r in zip(types, rows[1:])))
+        # a Mueller matrix's intensity taken before the kernel runs: it computes M00 alone
+        out = [_intensity(x) for x in out]
         dr.eval(*out)
         return [to_numpy(x, n) for x in out]
     lanes = [[to_numpy(x) for x in call(interaction(rows[0][i]),

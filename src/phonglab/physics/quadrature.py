@@ -95,11 +95,12 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     walpha = ha[..., None] * w
     keep = np.broadcast_to((ha > 0)[..., None], alpha.shape)
     al = alpha[keep]
-    wts = (fold * np.broadcast_to(wphi[:, None, None], alpha.shape)[keep] * walpha[keep]
-           * np.sin(al))
-    ph = np.broadcast_to(phi[:, None, None], alpha.shape)[keep]
     sa, ca = np.sin(al), np.cos(al)
-    dirs = (ca[:, None] * R + sa[:, None] * (np.cos(ph)[:, None] * T1 + np.sin(ph)[:, None] * T2))
+    wts = fold * np.broadcast_to(wphi[:, None, None], alpha.shape)[keep] * walpha[keep] * sa
+    # cos φ and sin φ once per φ node, then spread over its α nodes
+    cph = np.broadcast_to(np.cos(phi)[:, None, None], alpha.shape)[keep]
+    sph = np.broadcast_to(np.sin(phi)[:, None, None], alpha.shape)[keep]
+    dirs = (ca[:, None] * R + sa[:, None] * (cph[:, None] * T1 + sph[:, None] * T2))
     if azimuth != math.pi:                                 # rotate the centre about the normal
         cr, sr = math.cos(azimuth - math.pi), math.sin(azimuth - math.pi)
         dirs = np.column_stack([cr * dirs[:, 0] - sr * dirs[:, 1],

@@ -140,7 +140,8 @@ class ReferenceServer:
     def __init__(self, variant: str, plugins):
         self.variant = variant
         self.tmp = tempfile.TemporaryDirectory(prefix="phonglab-pol-")
-        self.log = open(Path(self.tmp.name) / "child.log", "w+")
+        # appending: the child writes at the end whatever this handle has read
+        self.log = open(Path(self.tmp.name) / "child.log", "a+")
         self.requests = 0
         env = dict(os.environ)
         src = str(Path(phonglab.__path__[0]).resolve().parent)   # where phonglab came from

@@ -72,6 +72,24 @@ def delta_mask(sampled_type: np.ndarray) -> np.ndarray:
     return (sampled_type & bits) != 0
 
 
+def every(mask: np.ndarray) -> np.ndarray:
+    """Per row of a boolean (N, k) array: all k entries true -- ``np.all(mask, axis=1)``,
+    column by column (numpy reduces a short row ~30x slower; these run on 10⁵-10⁶ samples)."""
+    out = np.ones(len(mask), dtype=bool)
+    for j in range(mask.shape[1]):
+        out &= mask[:, j]
+    return out
+
+
+def some(mask: np.ndarray) -> np.ndarray:
+    """Per row of a boolean (N, k) array: any entry true (``np.any(mask, axis=1)``, as
+    :func:`every`)."""
+    out = np.zeros(len(mask), dtype=bool)
+    for j in range(mask.shape[1]):
+        out |= mask[:, j]
+    return out
+
+
 def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarray:
     """The samples that carry a density (χ²'s histogram, the normalization count): not a delta
     lobe, finite (:func:`finite_sample`), and weight ≠ 0 in some channel (Mitsuba marks a
@@ -83,7 +101,7 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarra
     cell that is χ²'s drawn-direction rule; it also covers a cell black in part (pplastic
     in a polarized variant at cos θ_i = 1e-4: 89 % of its diffuse samples have eval 0 there).
     """
-    drawn = np.any(s.weight != 0, axis=1)
+    drawn = some(s.weight != 0)
     if black_at_wo is not None:
         drawn |= black_at_wo
     return drawn & ~delta_mask(s.sampled_type) & finite_sample(s)
@@ -92,7 +110,7 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarra
 def finite_sample(s: probe.Sample) -> np.ndarray:
     """Samples whose weight and wo are finite: a non-finite one is the ``finite`` topic's
     alone, and the other topics leave it out (of their counts and their totals)."""
-    return np.all(np.isfinite(s.weight), axis=1) & np.all(np.isfinite(s.wo), axis=1)
+    return every(np.isfinite(s.weight)) & every(np.isfinite(s.wo))
 
 
 def bsdf_has(bsdf, flags) -> bool:

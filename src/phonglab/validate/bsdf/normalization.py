@@ -70,8 +70,7 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     for theta, phi in cells:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
-        zero = (~np.any(s.weight != 0, axis=1) & (s.pdf > 0)
-                & np.all(np.isfinite(s.wo), axis=1))
+        zero = (~lanes.some(s.weight != 0) & (s.pdf > 0) & lanes.every(np.isfinite(s.wo)))
         black = np.zeros(n, dtype=bool)
         if zero.any():
             ev, pd = probe.eval(bsdf, wi, s.wo[zero]), probe.pdf(bsdf, wi, s.wo[zero])

@@ -66,13 +66,13 @@ def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
     it draws its directions from its density.  Delta samples never count (``pdf`` has no
     density for them), nor do non-finite directions (the ``finite`` topic's).
     """
-    finite = np.all(np.isfinite(s.wo), axis=1)
+    finite = lanes.every(np.isfinite(s.wo))
     if black:
         drawn = (s.pdf > 0) & finite
         if drawn.any():
             drawn[drawn] = probe.pdf(bsdf, wi, s.wo[drawn]) > 0
     else:
-        drawn = np.any(s.weight != 0, axis=1)
+        drawn = lanes.some(s.weight != 0)
     return drawn & finite & ~lanes.delta_mask(s.sampled_type)
 
 
@@ -84,7 +84,7 @@ def black_at(bsdf, wi: np.ndarray, opts) -> bool:
     wis = np.repeat(np.asarray(wi, dtype=np.float64)[None], n, axis=0)
     s = probe.sample(bsdf, wis, r.random(n), r.random((n, 2)))
     d = lanes.sphere(r, n)
-    ok = np.all(np.isfinite(s.wo), axis=1)
+    ok = lanes.every(np.isfinite(s.wo))
     return not (np.any(probe.eval(bsdf, wis[ok], s.wo[ok])) or np.any(probe.eval(bsdf, wis, d)))
 
 
@@ -250,7 +250,7 @@ def delta_directions(bsdf, opts) -> Row:
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
     wi = wi[wi[:, 2] > 0]
     s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["chi2"])
-    live = np.any(s.weight != 0, axis=1) & np.all(np.isfinite(s.wo), axis=1)
+    live = lanes.some(s.weight != 0) & lanes.every(np.isfinite(s.wo))
     wi, wo, eta = wi[live], s.wo[live], s.eta[live]
     reflect = wo[:, 2] * wi[:, 2] > 0
     expected = np.empty_like(wo)
