@@ -29,12 +29,16 @@ import numpy as np
 
 from ... import probe
 from ...physics.quadrature import lobe_quadrature
+from .. import sphere_bins
 from . import lanes
 
 #: Samples per cell that place the panels (only the layout depends on them).
 LAYOUT_SAMPLES = 2048
 #: Width of a lobe whose samples are too few to measure (a hemisphere-wide lobe).
 FALLBACK_WIDTH = 0.5
+
+#: Narrowest lobe width resolved: twice the float32 spacing 2^-24 of a unit vector's components.
+MIN_WIDTH = 2.0 ** -23
 
 #: Float32 floor of a quadrature's band: a value summed over ~10⁴ nodes is good to ~1e-5 relative.
 FLOOR = 1e-5
@@ -49,10 +53,11 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
     if len(wo) < 16:
         c, width = fallback, FALLBACK_WIDTH
     else:
+        wo = wo / np.linalg.norm(wo, axis=1, keepdims=True)
         top = wo[pdf >= np.quantile(pdf, 0.9)]
         c = top.mean(axis=0)
         c = c / np.linalg.norm(c) if np.linalg.norm(c) > 1e-6 else fallback
-        width = float(np.clip(np.quantile(np.arccos(np.clip(wo @ c, -1.0, 1.0)), 0.1), 1e-3, 1.0))
+        width = float(np.clip(np.quantile(sphere_bins.angle(wo, c), 0.1), MIN_WIDTH, 1.0))
     return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
 
 
