@@ -53,11 +53,11 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
     if len(wo) < 16:
         c, width = fallback, FALLBACK_WIDTH
     else:
-        wo = wo / np.linalg.norm(wo, axis=1, keepdims=True)
         top = wo[pdf >= np.quantile(pdf, 0.9)]
         c = top.mean(axis=0)
         c = c / np.linalg.norm(c) if np.linalg.norm(c) > 1e-6 else fallback
-        width = float(np.clip(np.quantile(sphere_bins.angle(wo, c), 0.1), MIN_WIDTH, 1.0))
+        unit = wo / np.linalg.norm(wo, axis=1, keepdims=True)
+        width = float(np.clip(np.quantile(sphere_bins.angle(unit, c), 0.1), MIN_WIDTH, 1.0))
     return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
 
 
