@@ -5,7 +5,7 @@ eta 0.99972, a transmission lobe about alpha |eta - 1| ~ 3e-6 rad wide.  The top
 at each theta_i must equal a fine polar quadrature of the same ``eval`` (the reproducer's,
 tests/repro/roughdielectric_index_matched_energy.py) within the row's own band (its
 |Q(n) - Q(n/2)| error estimate plus the float32 floor), widened only by the reference's own
-error (its value at the default grid against a grid twice as fine in each axis).
+error (its value at the default grid against one half as fine in each axis).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def test_energy_reads_an_index_matched_transmission_lobe(variant_llvm_rgb):
         def f(w):
             return ref.mitsuba_eval(bsdf, wi, w)
         fine = ref.albedo(f, wi, eta, nr=1500, npsi=256)
-        finer = ref.albedo(f, wi, eta, nr=3000, npsi=512)
+        coarse = ref.albedo(f, wi, eta, nr=750, npsi=128)
         assert d["band"][k] < 1e-3, (d["theta_deg"][k], d["band"][k])
-        assert abs(d["albedo"][k] - fine) <= d["band"][k] + abs(finer - fine), \
-            (d["theta_deg"][k], d["albedo"][k], fine, finer, d["band"][k])
+        assert abs(d["albedo"][k] - fine) <= d["band"][k] + abs(fine - coarse), \
+            (d["theta_deg"][k], d["albedo"][k], fine, coarse, d["band"][k])
