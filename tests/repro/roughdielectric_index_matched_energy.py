@@ -26,6 +26,8 @@ Beckmann G1; the model reproduces Mitsuba where it is well conditioned (GGX alph
 eta 1.5).
 
 Run: python tests/repro/roughdielectric_index_matched_energy.py  -> exit 1 while present.
+(tests/test_validate_energy.py imports albedo() and mitsuba_eval() as the fine reference of the
+energy topic's quadrature.)
 """
 import math
 import sys
@@ -115,22 +117,27 @@ def albedo(f, wi, eta, nr=1500, npsi=256):
     return total
 
 
-present = False
-for dist, alpha, int_ior, ext_ior, theta in (("ggx", 0.3, 1.5, AIR, 31.8),
-                                             ("beckmann", 1.0, 1.001, 1.0, 31.8),
-                                             ("beckmann", 0.1, 1.0, AIR, 31.8),
-                                             ("ggx", 0.01, 1.0, AIR, 60.0)):
-    eta = float(np.float32(int_ior) / np.float32(ext_ior))     # as the plugin stores it
-    bsdf = mi.load_dict({"type": "roughdielectric", "distribution": dist, "alpha": alpha,
-                         "int_ior": int_ior, "ext_ior": ext_ior})
-    wi = np.array([math.sin(math.radians(theta)), 0.0, math.cos(math.radians(theta))])
-    a_mi = albedo(lambda d: mitsuba_eval(bsdf, wi, d), wi, eta)
-    a_exact = albedo(lambda d: walter(dist, alpha, eta, wi, d), wi, eta)
-    line = (f"{dist:8s} alpha {alpha:<4g} eta {eta:.5f} theta_i {theta:4.1f} deg: albedo of "
-            f"Mitsuba's eval {a_mi:.6f}, float64 model {a_exact:.6f}")
-    if dist == "beckmann":
-        line += f" (with the approximate G1 {albedo(lambda d: walter(dist, alpha, eta, wi, d, False), wi, eta):.6f})"
-    print(line)
-    present |= abs(eta - 1) < 0.01 and a_mi > 1 + 1e-4 and a_exact <= 1 + 1e-5
-print("behaviour present: albedo above 1 near eta = 1" if present else "fixed")
-sys.exit(1 if present else 0)
+def main() -> int:
+    present = False
+    for dist, alpha, int_ior, ext_ior, theta in (("ggx", 0.3, 1.5, AIR, 31.8),
+                                                 ("beckmann", 1.0, 1.001, 1.0, 31.8),
+                                                 ("beckmann", 0.1, 1.0, AIR, 31.8),
+                                                 ("ggx", 0.01, 1.0, AIR, 60.0)):
+        eta = float(np.float32(int_ior) / np.float32(ext_ior))     # as the plugin stores it
+        bsdf = mi.load_dict({"type": "roughdielectric", "distribution": dist, "alpha": alpha,
+                             "int_ior": int_ior, "ext_ior": ext_ior})
+        wi = np.array([math.sin(math.radians(theta)), 0.0, math.cos(math.radians(theta))])
+        a_mi = albedo(lambda d: mitsuba_eval(bsdf, wi, d), wi, eta)
+        a_exact = albedo(lambda d: walter(dist, alpha, eta, wi, d), wi, eta)
+        line = (f"{dist:8s} alpha {alpha:<4g} eta {eta:.5f} theta_i {theta:4.1f} deg: albedo of "
+                f"Mitsuba's eval {a_mi:.6f}, float64 model {a_exact:.6f}")
+        if dist == "beckmann":
+            line += f" (with the approximate G1 {albedo(lambda d: walter(dist, alpha, eta, wi, d, False), wi, eta):.6f})"
+        print(line)
+        present |= abs(eta - 1) < 0.01 and a_mi > 1 + 1e-4 and a_exact <= 1 + 1e-5
+    print("behaviour present: albedo above 1 near eta = 1" if present else "fixed")
+    return 1 if present else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

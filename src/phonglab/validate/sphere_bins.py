@@ -163,8 +163,9 @@ PEAK_LEVELS = 30
 PEAK_NODES = 8
 
 
-def _angle(d: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Angle between each direction of ``d`` and ``c``, accurate for tiny angles."""
+def angle(d: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Angle between each unit direction of ``d`` (N, 3) and the unit ``c``, accurate for tiny
+    angles (2 asin(|d − c|/2); arccos(d·c) loses them below ~1e-4 rad to rounding)."""
     return 2.0 * np.arcsin(np.clip(np.linalg.norm(d - c, axis=1) / 2.0, 0.0, 1.0))
 
 

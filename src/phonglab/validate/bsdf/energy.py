@@ -10,7 +10,12 @@ Estimators (chosen so that a sampling defect does not leak into this topic):
   covers the whole circle around it; the BSDF's own samples only place the panels, the value
   is Σ w_k eval(ω_k), independent of ``sample``.
   Its error is estimated as |Q(n) − Q(n/2)| (Gauss-Legendre converges fast, so Q(n) is
-  far closer than that);
+  far closer than that).  A lobe a few float32 spacings of ω wide (below
+  :data:`.lobes.QUANTISED`; a rough dielectric between nearly equal indices, α|η − 1| down to
+  ~10⁻⁶ rad) sees every node at its float32 rounding, an error that Q(n/2) does not reveal:
+  such a cell is the mean of :data:`.lobes.COPIES` rules on shifted nodes
+  (:func:`.lobes.integrate_rounded`), its error the larger of |Q(n) − Q(n/2)| and t·s/√COPIES
+  (Student's t at the topic's level, COPIES − 1 degrees of freedom);
 * a delta lobe (mirror, glass) has no eval: its part is the mean of the delta samples'
   weights (times their indicator), whose standard error s gives the band z·s with z the
   Šidák critical value over the BSDF's statistical tests.  For a smooth ``dielectric`` this is
@@ -74,6 +79,7 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     z = stats.z_critical(stats.ALPHA, m_tests)
     a = np.zeros(len(thetas))
     qerr, se, nonfinite = np.zeros(len(thetas)), np.zeros(len(thetas)), 0
+    narrow = np.zeros(len(thetas), bool)
     if not only_delta:
         cells = np.column_stack([thetas, np.zeros_like(thetas)])
         layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["energy"],
@@ -87,6 +93,13 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
         a += np.array([v for v, _ in q])
         qerr = np.abs(a - np.array([v for v, _ in q_half]))
         nonfinite = sum(c for _, c in q)
+        narrow = np.array([lobes.quantised(r, t) for r, t in layout])
+        if narrow.any():
+            mean, err = lobes.integrate_rounded(albedo, cells[narrow],
+                                                [p for p, k in zip(layout, narrow) if k],
+                                                opts.energy_nodes, first=a[narrow])
+            t = stats.t_critical(lobes.COPIES - 1, stats.ALPHA, m_tests)
+            a[narrow], qerr[narrow] = mean, np.maximum(qerr[narrow], t * err)
     if has_delta:
         mean, se = _delta_part(bsdf, thetas, opts, ctx)
         a += mean
@@ -95,7 +108,11 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     k = int(np.argmax(a - band))
     method = ("mean delta-sample weight (R + T for a smooth dielectric)" if only_delta else
               f"Gauss-Legendre quadrature of eval ({opts.energy_nodes} nodes/panel, error "
-              f"|Q{opts.energy_nodes} − Q{opts.energy_nodes // 2}|)"
+              f"|Q{opts.energy_nodes} − Q{opts.energy_nodes // 2}|"
+              + (f"; a lobe narrower than {lobes.QUANTISED:.1e} rad at θ_i = "
+                 + ", ".join(f"{math.degrees(t):.1f}°" for t in thetas[narrow])
+                 + f": mean of {lobes.COPIES} rules on shifted nodes, error t·s/√"
+                 f"{lobes.COPIES} if larger" if narrow.any() else "") + ")"
               + (" + mean delta-sample weight" if has_delta else ""))
     lit = np.cos(thetas) >= 0.01
     loss = 1.0 - a[lit]

@@ -29,12 +29,22 @@ import numpy as np
 
 from ... import probe
 from ...physics.quadrature import lobe_quadrature
+from .. import sphere_bins
 from . import lanes
 
 #: Samples per cell that place the panels (only the layout depends on them).
 LAYOUT_SAMPLES = 2048
 #: Width of a lobe whose samples are too few to measure (a hemisphere-wide lobe).
 FALLBACK_WIDTH = 0.5
+
+#: Narrowest lobe width resolved: twice the float32 spacing 2^-24 of a unit vector's components.
+MIN_WIDTH = 2.0 ** -23
+
+#: A lobe narrower than this (rad) has its nodes moved by the float32 rounding of ω (spacing
+#: 2^-24 per component) by more than 1e-4 of its width: :func:`integrate_rounded` applies.
+QUANTISED = 2.0 ** -24 / 1e-4
+#: Rules :func:`integrate_rounded` averages: the α panels scaled by 2^(j/COPIES), j < COPIES.
+COPIES = 4
 
 #: Float32 floor of a quadrature's band: a value summed over ~10⁴ nodes is good to ~1e-5 relative.
 FLOOR = 1e-5
@@ -52,7 +62,8 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
         top = wo[pdf >= np.quantile(pdf, 0.9)]
         c = top.mean(axis=0)
         c = c / np.linalg.norm(c) if np.linalg.norm(c) > 1e-6 else fallback
-        width = float(np.clip(np.quantile(np.arccos(np.clip(wo @ c, -1.0, 1.0)), 0.1), 1e-3, 1.0))
+        unit = wo / np.linalg.norm(wo, axis=1, keepdims=True)
+        width = float(np.clip(np.quantile(sphere_bins.angle(unit, c), 0.1), MIN_WIDTH, 1.0))
     return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
 
 
@@ -135,3 +146,33 @@ def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int,
         coarse = np.array([v for v, _ in integrate(fn, cells, lobes, m, memo)])
         err = np.maximum(err, np.abs(value - coarse))
     return value, err, sum(c for _, c in q)
+
+
+def quantised(lobe_r: Lobe, lobe_t: Lobe | None) -> bool:
+    """Whether a cell's narrower lobe is below :data:`QUANTISED` (see :func:`integrate_rounded`)."""
+    return min(lobe_r[2], lobe_t[2] if lobe_t is not None else math.inf) < QUANTISED
+
+
+def integrate_rounded(fn, cells: np.ndarray, lobes: list, n: int,
+                      first: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(mean, its standard error) per cell of :data:`COPIES` rules of n nodes per panel whose
+    α panels are scaled by 2^(j/COPIES), j = 0 .. COPIES − 1.
+
+    For a lobe a few float32 spacings of ω wide (as narrow as α|η − 1| ~ 10⁻⁶ rad: a rough
+    dielectric between nearly equal indices) ``fn`` sees each node at its float32 rounding, a
+    shift of up to 2^-25 per component, i.e. a few % of the lobe's width: Q(n) then carries an
+    error like a random sum over the nodes in the lobe, which |Q(n) − Q(n/2)| need not reveal
+    (the coarser rule's rounding errors are as large and independent).  Scaled panels put the
+    nodes elsewhere on the float32 grid, so the rules' values scatter about the integral by
+    that error: their mean and its standard error s/√COPIES estimate it, the caller turns the
+    latter into a band with Student's t (COPIES − 1 degrees of freedom).
+    ``first``: Q_0 (the rule of ``lobes`` itself) when already computed.
+    """
+    q = [np.array([v for v, _ in integrate(fn, cells, lobes, n)]) if first is None else first]
+    for j in range(1, COPIES):
+        s = 2.0 ** (j / COPIES)
+        scaled = [((r[0], r[1], r[2] * s), None if t is None else (t[0], t[1], t[2] * s))
+                  for r, t in lobes]
+        q.append(np.array([v for v, _ in integrate(fn, cells, scaled, n)]))
+    q = np.array(q)
+    return q.mean(axis=0), q.std(axis=0, ddof=1) / math.sqrt(COPIES)
