@@ -8,7 +8,10 @@ composite Gauss-Legendre in a frame centred on the lobe, with the horizon a pane
 Placement.  :func:`layout` finds each incidence cell's reflected lobe (and transmitted one, for
 a transmitting BSDF) from the BSDF's own samples: the centre is the mean direction of the 10 %
 most probable samples -- the lobe's peak, wherever a normal map or a rotated anisotropy puts
-it -- and the width the 10 % quantile of the samples' angles to it.  Each rule covers the whole
+it -- and the width the 10 % quantile of the samples' angles to it (by the chord of the
+float64-normalised samples, :func:`phonglab.validate.sphere_bins.angle`: arccos of a float32
+direction's dot product cannot tell angles below ~3e-4 rad, while a rough dielectric between
+nearly equal indices has a lobe α|η − 1| ~ 10⁻⁶ rad wide; floored at :data:`MIN_WIDTH`).  Each rule covers the whole
 circle around its centre (``symmetric=False``), so anisotropy and azimuth φ_i ≠ 0 are covered.
 Only the panels depend on the samples: the value is Σ_k w_k g(ω_k), independent of ``sample``.
 
@@ -18,6 +21,8 @@ Error.  :func:`integrate` returns Q(n) per cell; ``energy`` estimates the error 
 nodes per panel: one pair can agree by accident where neither has converged -- for
 ``roughconductor`` (GGX, α_u = 0.05, α_v = 0.4) at cos θ_i = 0.05, φ_i = 2.1 the quick rules
 gave Q(5) = 0.992441 and Q(10) = 0.992460, while Q(8) = 0.982707 and Q(40) = 0.987551.
+A lobe narrower than :data:`QUANTISED` has an error neither difference reveals, the float32
+rounding of its nodes: :func:`integrate_rounded` averages rules on shifted nodes.
 """
 
 from __future__ import annotations

@@ -35,7 +35,10 @@ wi and draws directions whatever wi's rounding, while a pdf such as cos^p α wit
 cos α = ω_o · reflect(ω_i) scales by |ω_i|^p: phonglab's ``phong`` at p = 10⁴ integrates to
 0.99979 at cos θ_i = 0.05 (every sample valid), the 1e-8 by which float32 ω_i misses unit
 length raised to the 10⁴; an 8u move changes Q by ~1 % there, by 3e-5 at p = 30, and not
-at all for a pdf that does not depend on ω_i's length (Lambert).
+at all for a pdf that does not depend on ω_i's length (Lambert).  A cell whose lobe is a few
+float32 spacings of ω wide (below :data:`.lobes.QUANTISED`) is the mean of
+:data:`.lobes.COPIES` rules on shifted nodes, its error also t·s/√COPIES
+(:func:`.lobes.integrate_rounded`, as in ``energy``).
 P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
 Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
 (k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
@@ -120,6 +123,13 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     memo: dict = {}                 # the rules' nodes, built once for both
     integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes, memo)
     qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2), memo))
+    narrow = np.array([lobes.quantised(r, t) for r, t in layout])
+    if narrow.any():
+        mean, err = lobes.integrate_rounded(density, cells[narrow],
+                                            [p for p, k in zip(layout, narrow) if k], nodes,
+                                            first=integral[narrow])
+        t = stats.t_critical(lobes.COPIES - 1, stats.ALPHA, m_tests)
+        integral[narrow], qerr[narrow] = mean, np.maximum(qerr[narrow], t * err)
     n = opts.normalization_samples
     k, n_f, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
@@ -134,7 +144,11 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     where = ", ".join(f"θ_i = {theta_deg[i]:.1f}° φ = {cells[i, 1]:.2f} (∫pdf {integral[i]:.5g}"
                       f" vs {p_hat[i]:.5g})" for i in np.flatnonzero(bad))
     reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({nodes} nodes/panel, "
-              f"error max |Q{nodes} − Q{nodes // 2}|, |Q{nodes} − Q{3 * nodes // 4}|) against "
+              f"error max |Q{nodes} − Q{nodes // 2}|, |Q{nodes} − Q{3 * nodes // 4}|"
+              + (f"; {int(narrow.sum())} cells with a lobe narrower than "
+                 f"{lobes.QUANTISED:.1e} rad: mean of {lobes.COPIES} rules on shifted nodes, "
+                 f"error t·s/√{lobes.COPIES} if larger" if narrow.any() else "")
+              + ") against "
               f"the fraction of {n} samples with weight ≠ 0 (or 0 where eval is 0) and not "
               f"delta; band z·σ + "
               f"quadrature error, σ binomial (Agresti–Coull), z = {z:.3f} (Šidák over "
