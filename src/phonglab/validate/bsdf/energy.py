@@ -93,13 +93,8 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
         a += np.array([v for v, _ in q])
         qerr = np.abs(a - np.array([v for v, _ in q_half]))
         nonfinite = sum(c for _, c in q)
-        narrow = np.array([lobes.quantised(r, t) for r, t in layout])
-        if narrow.any():
-            mean, err = lobes.integrate_rounded(albedo, cells[narrow],
-                                                [p for p, k in zip(layout, narrow) if k],
-                                                opts.energy_nodes, first=a[narrow])
-            t = stats.t_critical(lobes.COPIES - 1, stats.ALPHA, m_tests)
-            a[narrow], qerr[narrow] = mean, np.maximum(qerr[narrow], t * err)
+        a, qerr, narrow = lobes.with_rounding(albedo, cells, layout, opts.energy_nodes, a, qerr,
+                                              m_tests)
     if has_delta:
         mean, se = _delta_part(bsdf, thetas, opts, ctx)
         a += mean

@@ -32,7 +32,7 @@ import math
 import mitsuba as mi
 import numpy as np
 
-from ... import probe
+from ... import probe, stats
 from ...physics.quadrature import lobe_quadrature
 from .. import sphere_bins
 from . import lanes
@@ -181,3 +181,19 @@ def integrate_rounded(fn, cells: np.ndarray, lobes: list, n: int,
         q.append(np.array([v for v, _ in integrate(fn, cells, scaled, n)]))
     q = np.array(q)
     return q.mean(axis=0), q.std(axis=0, ddof=1) / math.sqrt(COPIES)
+
+
+def with_rounding(fn, cells: np.ndarray, layout: list, n: int, value: np.ndarray,
+                  err: np.ndarray, m_tests: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(value, error, narrow) per cell: Q(n) and its error where the cell's lobe is wider than
+    :data:`QUANTISED`; where it is narrower (``narrow``), the mean of :func:`integrate_rounded`
+    and the larger of the given error and t·s/√COPIES (Student's t at the Šidák level of
+    ``m_tests`` tests, COPIES − 1 degrees of freedom).  ``value``: Q(n) of ``layout``."""
+    narrow = np.array([quantised(r, t) for r, t in layout], dtype=bool)
+    value, err = np.array(value, dtype=np.float64), np.array(err, dtype=np.float64)
+    if narrow.any():
+        mean, se = integrate_rounded(fn, cells[narrow], [p for p, k in zip(layout, narrow) if k],
+                                     n, first=value[narrow])
+        t = stats.t_critical(COPIES - 1, stats.ALPHA, m_tests)
+        value[narrow], err[narrow] = mean, np.maximum(err[narrow], t * se)
+    return value, err, narrow

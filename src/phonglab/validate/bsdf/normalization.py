@@ -123,13 +123,8 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     memo: dict = {}                 # the rules' nodes, built once for both
     integral, qerr, nonfinite = lobes.integrate_with_error(density, cells, layout, nodes, memo)
     qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2), memo))
-    narrow = np.array([lobes.quantised(r, t) for r, t in layout])
-    if narrow.any():
-        mean, err = lobes.integrate_rounded(density, cells[narrow],
-                                            [p for p, k in zip(layout, narrow) if k], nodes,
-                                            first=integral[narrow])
-        t = stats.t_critical(lobes.COPIES - 1, stats.ALPHA, m_tests)
-        integral[narrow], qerr[narrow] = mean, np.maximum(qerr[narrow], t * err)
+    integral, qerr, narrow = lobes.with_rounding(density, cells, layout, nodes, integral, qerr,
+                                                 m_tests)
     n = opts.normalization_samples
     k, n_f, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
