@@ -19,7 +19,7 @@ import pytest
 
 import phonglab
 from phonglab.validate import TOPICS, validate_bsdf
-from phonglab.validate.bsdf import mueller as pol, polarization
+from phonglab.validate.bsdf import mueller as pol, polarization, stokes_frames
 
 DEFECTS = Path(__file__).parent / "defects_polarized"
 POLARIZED = "llvm_ad_spectral_polarized"
@@ -80,13 +80,13 @@ def test_unrotated_frames_fails_the_isotropy_row_only(polarized):
     report = validate_bsdf("defect_unrotated_frames", plugins=[DEFECTS / "unrotated_frames.py"],
                            quick=True, seed=0, variant=POLARIZED, topics=["mueller_identities"])
     (row,) = report.failing
-    assert row.name == polarization.ISOTROPY and row.measured > 100
+    assert row.name == stokes_frames.ISOTROPY and row.measured > 100
     assert row.details["max_difference"] > 0.1 and row.details["m00_moved"] == 0
     assert {"psi", "rotated_wi", "rotated_wo", "worst_entry"} <= set(row.details)
     report = validate_bsdf("pol_diattenuating_lambert",
                            plugins=[DEFECTS / "diattenuating_lambert.py"], quick=True, seed=0,
                            variant=POLARIZED, topics=["mueller_identities"])
-    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    row = next(r for r in report.rows if r.name == stokes_frames.ISOTROPY)
     assert row.status == "pass" and row.measured < 0.1
 
 
@@ -96,7 +96,7 @@ def test_unrotated_frames_fails_the_isotropy_row_only(polarized):
 def test_isotropy_row_skips_what_it_cannot_judge(polarized, spec, reason):
     report = validate_bsdf(spec, quick=True, seed=0, variant=POLARIZED,
                            topics=["mueller_identities"])
-    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    row = next(r for r in report.rows if r.name == stokes_frames.ISOTROPY)
     assert row.status == "skipped" and reason in row.reason
 
 
@@ -106,7 +106,7 @@ def test_isotropy_row_skips_a_tilted_shading_frame(polarized):
     spec = next(c.spec for c in builtins.cases() if c.label == "bumpmap/roughconductor")
     report = validate_bsdf(spec, quick=True, seed=0, variant=POLARIZED,
                            topics=["mueller_identities"])
-    row = next(r for r in report.rows if r.name == polarization.ISOTROPY)
+    row = next(r for r in report.rows if r.name == stokes_frames.ISOTROPY)
     assert row.status == "skipped" and "M00 itself changes" in row.reason
 
 
@@ -119,12 +119,12 @@ def test_isotropy_transform_is_rotation_covariant():
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
     m0 = np.array([pol.jones_to_mueller(j) for j in _random_jones(rng, 50)])[:, None]
     for psi in (0.0, 1.0, 4.0):
-        a, b = (polarization.rotate_z(v, np.full(50, psi)) for v in (wi, wo))
-        s_in, s_out = polarization.sp_frames(a, b)
+        a, b = (stokes_frames.rotate_z(v, np.full(50, psi)) for v in (wi, wo))
+        s_in, s_out = stokes_frames.sp_frames(a, b)
         r_in = pol.rotate_stokes_basis(-b, s_in, pol.stokes_basis(-b))
         r_out = pol.rotate_stokes_basis(a, s_out, pol.stokes_basis(a))
         mitsuba = r_out[:, None] @ m0 @ np.swapaxes(r_in, -1, -2)[:, None]
-        assert np.allclose(polarization.to_sp(mitsuba, a, b), m0, atol=1e-9)
+        assert np.allclose(stokes_frames.to_sp(mitsuba, a, b), m0, atol=1e-9)
 
 
 def _render_frames(bsdf, polarizer, spp=16, size=32):

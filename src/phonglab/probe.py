@@ -32,7 +32,9 @@ Conventions (Mitsuba's):
   component are (N,) int64.
 * Polarized variants return Mueller matrices; the probe reports their unpolarized
   intensity (``mi.unpolarized_spectrum``, the [0, 0] entry), which is what an
-  unpolarized light and sensor would see.
+  unpolarized light and sensor would see; :func:`mueller_eval`, :func:`mueller_eval_pdf`
+  and :func:`mueller_sample` read the matrices back whole, (N, C, 4, 4), entry [i, j] = row
+  i, column j.
 
 Variants: in JIT variants (``llvm_ad_*``, ``cuda_ad_*``) all N lanes are one Dr.Jit
 array and every call is traced and evaluated in a single kernel launch (``dr.eval`` of all
@@ -61,8 +63,9 @@ import mitsuba as mi
 import numpy as np
 
 __all__ = ["Sample", "context", "default_wavelengths", "direction", "eval",
-           "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction", "pdf",
-           "sample", "sample_random", "to_numpy", "to_vectors"]
+           "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction",
+           "mueller_eval", "mueller_eval_pdf", "mueller_sample", "pdf", "sample",
+           "sample_random", "to_numpy", "to_vectors"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,11 +258,35 @@ def context(mode=None, component: int | None = None, type_mask=None) -> mi.BSDFC
     return mi.BSDFContext(mode, type_mask, component)
 
 
-def _probe(call, wi, **args) -> list[np.ndarray]:
+def _mueller(x, n: int) -> np.ndarray:
+    """A polarized ``mi.Spectrum`` -> (n, C, 4, 4) float64 (entry [i, j] = row i, column j)."""
+    c = dr.size_v(mi.UnpolarizedSpectrum)
+    if not dr.is_jit_v(mi.Float):
+        a = np.array(x, dtype=np.float64).reshape(4, 4, c)
+        return np.broadcast_to(a.transpose(2, 0, 1)[None], (n, c, 4, 4)).copy()
+    out = np.empty((n, c, 4, 4))
+    for i in range(4):
+        for j in range(4):
+            e = x[i][j]
+            for k in range(c):
+                out[:, k, i, j] = np.broadcast_to(np.array(e[k], dtype=np.float64), (n,))
+    return out
+
+
+def _read(x, n: int | None, matrices: bool) -> np.ndarray:
+    """One output as numpy: a Mueller matrix whole (``matrices``) or as its intensity."""
+    if matrices and mi.is_polarized and isinstance(x, mi.Spectrum):
+        return _mueller(x, 1 if n is None else n)
+    return to_numpy(x, n)
+
+
+def _probe(call, wi, matrices: bool = False, **args) -> list[np.ndarray]:
     """Run ``call(si, *dr_args)`` (returning a tuple of Dr.Jit values) over the broadcast lanes.
 
     ``args`` maps a name to (Dr.Jit type, array, item width) -- width 0 for scalars.
     JIT: one traced call, all outputs evaluated together.  Scalar: a loop over lanes.
+    ``matrices``: a polarized variant's Mueller matrices are read back whole, (N, C, 4, 4),
+    instead of as their intensity.
     """
     arrays = {"wi": _rows(wi, 3, "wi")}
     arrays.update({k: _rows(a, w, k) for k, (_, a, w) in args.items()})
@@ -267,12 +294,13 @@ def _probe(call, wi, **args) -> list[np.ndarray]:
     types = [t for t, _, _ in args.values()]
     if _is_jit():
         out = call(interaction(rows[0]), *(_dr(t, r) for t, r in zip(types, rows[1:])))
-        # a Mueller matrix's intensity taken before the kernel runs: it computes M00 alone
-        out = [_intensity(x) for x in out]
+        if not matrices:
+            # a Mueller matrix's intensity taken before the kernel runs: it computes M00 alone
+            out = [_intensity(x) for x in out]
         dr.eval(*out)
-        return [to_numpy(x, n) for x in out]
-    lanes = [[to_numpy(x) for x in call(interaction(rows[0][i]),
-                                        *(_dr(t, r[i]) for t, r in zip(types, rows[1:])))]
+        return [_read(x, n, matrices) for x in out]
+    lanes = [[_read(x, None, matrices) for x in call(interaction(rows[0][i]),
+                                                     *(_dr(t, r[i]) for t, r in zip(types, rows[1:])))]
              for i in range(n)]
     return [np.concatenate(column) for column in zip(*lanes)]
 
@@ -339,3 +367,34 @@ def sample_random(bsdf, wi, n: int, seed: int = 0, ctx=None) -> Sample:
     u1 = rng.random(n)
     u2 = rng.random((n, 2))
     return sample(bsdf, wi, u1, u2, ctx)
+
+
+# ----------------------------------------------------------------------------- Mueller matrices
+def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
+    """:func:`eval` in a polarized variant, the Mueller matrices whole: (N, C, 4, 4)."""
+    ctx = context() if ctx is None else ctx
+    (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, matrices=True,
+                      wo=(mi.Vector3f, wo, 3))
+    return value
+
+
+def mueller_eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`eval_pdf` with the matrices whole: ((N, C, 4, 4), (N,))."""
+    ctx = context() if ctx is None else ctx
+    value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, matrices=True,
+                      wo=(mi.Vector3f, wo, 3))
+    return value, p
+
+
+def mueller_sample(bsdf, wi, sample1, sample2, ctx=None):
+    """:func:`sample` with the weight's matrices whole: (wo (N, 3), weight (N, C, 4, 4),
+    pdf (N,), sampled_type (N,) int64)."""
+    ctx = context() if ctx is None else ctx
+
+    def call(si, u1, u2):
+        bs, weight = bsdf.sample(ctx, si, u1, u2)
+        return bs.wo, weight, bs.pdf, bs.sampled_type
+
+    wo, weight, p, stype = _probe(call, wi, matrices=True, sample1=(mi.Float, sample1, 0),
+                                  sample2=(mi.Point2f, sample2, 2))
+    return wo, weight, p, stype.astype(np.int64)

@@ -256,6 +256,12 @@ def _alarm(seconds: float | None):
         signal.signal(signal.SIGALRM, previous)
 
 
+def within_topic_limit():
+    """:func:`_alarm` at the limit :func:`topic_timeout` set (none: no limit), for a call that
+    runs a plugin's Python code outside a topic (the return-type check of :mod:`.returns`)."""
+    return _alarm(_TIMEOUT)
+
+
 def _guarded(topic: str, runner) -> list[Row]:
     """The topic's rows; an exception (from the plugin or the validator) is one failing row of
     that topic with the traceback in details, so the other topics still report; so is a topic

@@ -65,7 +65,7 @@ def _call(method, *args):
     from . import core          # the topics' time limit, if one is set (core.topic_timeout)
 
     try:
-        with core._alarm(core._TIMEOUT):
+        with core.within_topic_limit():
             return True, method(*args)
     except (Exception, core.TopicTimeout):
         return False, None

@@ -24,9 +24,10 @@ import mitsuba as mi
 import numpy as np
 
 import phonglab
+from ... import probe
 from . import lanes
 from ..roundoff import ABS_FLOOR, REL_TOL
-from .polarization import eval_lanes, mueller_eval, mueller_sample, sizes, skipped, wavelengths
+from .polarization import eval_lanes, sizes, skipped, wavelengths
 from .rows import ROUND_OFF, bounded_row, max_finite
 from .topics import Row
 
@@ -284,7 +285,7 @@ def intensity(bsdf, opts) -> list[Row]:
     except ReferenceUnavailable as exc:
         return [Row("intensity", "M00 = the unpolarized variant's value", None, None, None,
                     None, "skipped", str(exc), {"spec": spec, "plugins": files})]
-    ev = mueller_eval(bsdf, wi, wo)[..., 0, 0]
+    ev = probe.mueller_eval(bsdf, wi, wo)[..., 0, 0]
     lam = wavelengths()
 
     def rel_of(a, b):
@@ -298,7 +299,7 @@ def intensity(bsdf, opts) -> list[Row]:
                         f"max relative |M00 − unpolarized eval| per lane and wavelength over "
                         f"random, mirror, straight-through and normal wo; {ROUND_OFF}",
                         details, lanes=(rel, {"wi": wi, "wo": wo}))]
-    swo, w, spdf, _ = mueller_sample(bsdf, swi, u1, u2)
+    swo, w, spdf, _ = probe.mueller_sample(bsdf, swi, u1, u2)
     w00 = w[..., 0, 0]
     same_wo = np.all(np.abs(swo - ref["wo"]) <= 1e-5, axis=1) | (
         ~np.any(w00 != 0, axis=1) & ~np.any(ref["weight"] != 0, axis=1))

@@ -20,7 +20,10 @@ from ..directions import ONE_MINUS, sphere  # noqa: F401  (the lanes every topic
 SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
                 "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19,
                 "normalization": 20, "eval_null_transmission": 21,
-                "eval_diffuse_reflectance": 22}
+                "eval_diffuse_reflectance": 22,
+                # the polarized topics (:mod:`.polarization`)
+                "mueller": 31, "intensity": 32, "mueller_identities": 33,
+                "mueller_reciprocity": 34}
 
 
 def rng(seed: int, topic: str) -> np.random.Generator:

@@ -3,12 +3,16 @@ criteria are derived): the Stokes-cone margin of a matrix (:func:`stokes_margin`
 s0' − |s'| over the unit Poincaré sphere), Cloude's coherency matrix and its smallest eigenvalue
 (:func:`cloude_min_eig`), the Jones-to-Mueller map, and Mitsuba's implicit Stokes frames
 (:func:`stokes_basis`, :func:`rotate_stokes_basis`) with the reversed path's matrix of a
-reflection (:func:`reversed_matrix`).  numpy only.
+reflection (:func:`reversed_matrix`); the difference of two matrices' polarization parts
+M/M00 (:func:`polarization_diff`) and its sensitivity to round-off in the directions
+(:func:`sensitivity`).  numpy only.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ..roundoff import perturb
 
 
 # ----------------------------------------------------------------------------- criteria
@@ -195,3 +199,33 @@ STARTS = 3
 #: The chordal covering radius of the :data:`GRID`-point Fibonacci grid, rounded up: every unit
 #: vector lies this close to a grid point (:func:`stokes_margin` derives its use).
 COVER = 0.1206
+
+
+# ----------------------------------------------------------------------------- comparisons
+#: Below this |M00| a matrix has no polarization state to compare (its intensity is 0).
+TINY = 1e-30
+
+
+def polarization_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per lane: max over wavelengths and entries of |a/a00 − b/b00|, the matrices' polarization
+    parts (|M_ij/M00| ≤ 1 for a physical matrix).  M00 itself is the intensity topics'
+    (``eval_pdf``, ``weight``, ``reciprocity``, with their conditioning and box search): a
+    defect of the intensity fails there, not in a polarized topic too.  Both M00 = 0: 0; one of them 0, or a non-finite
+    entry: NaN (not compared; counted in the rows' ``not_compared``)."""
+    a00, b00 = np.abs(a[..., 0, 0]), np.abs(b[..., 0, 0])
+    both = (a00 > TINY) & (b00 > TINY)
+    na = a / np.where(both, a[..., 0, 0], 1.0)[..., None, None]
+    nb = b / np.where(both, b[..., 0, 0], 1.0)[..., None, None]
+    d = np.abs(na - nb).max(axis=(-1, -2))
+    d = np.where(both, d, np.where((a00 <= TINY) & (b00 <= TINY), 0.0, np.nan))
+    finite = np.all(np.isfinite(a), axis=(-1, -2)) & np.all(np.isfinite(b), axis=(-1, -2))
+    return np.where(finite, d, np.nan).max(axis=-1)
+
+
+def sensitivity(fn, wi, wo, value, r) -> np.ndarray:
+    """Per lane: the largest change of fn's polarization part (:func:`polarization_diff`) over 4
+    8-ulp moves of both directions."""
+    n = len(wi)
+    moved = fn(perturb(np.tile(wi, (4, 1)), r), perturb(np.tile(wo, (4, 1)), r))
+    d = polarization_diff(np.tile(value, (4, 1, 1, 1)), moved)
+    return np.nan_to_num(d, nan=0.0).reshape(4, n).max(axis=0)

@@ -3,7 +3,7 @@ r"""The polarized topics ``mueller``, ``intensity`` (:mod:`.intensity`), ``muell
 
 In a ``*_polarized`` variant every BSDF query returns a 4×4 Mueller matrix per wavelength;
 the other topics see its intensity M00 only (:mod:`phonglab.probe`).  These topics read the
-whole matrix back (:func:`mueller_eval`, :func:`mueller_sample`: (N, C, 4, 4) float64) and
+whole matrix back (:func:`phonglab.probe.mueller_eval`, :func:`~phonglab.probe.mueller_sample`: (N, C, 4, 4) float64) and
 check it in numpy.  In a variant that is not polarized each topic makes one ``skipped`` row
 ("not a polarized variant"), the way other topics report what does not apply.
 
@@ -63,7 +63,7 @@ value that was a Mitsuba object), is ``skipped`` with the reason.  Tolerance: RE
 a delta lobe's sample matrix is continuous in ω_i (:func:`_continuity`); and the Stokes-frame
 convention, checked from outside by rotating the input basis: an isotropic BSDF's matrix,
 re-expressed from Mitsuba's implicit frames in the s/p frames of the plane of incidence, is
-invariant under a rotation of ω_i and ω_o together about the normal (:func:`_isotropy`
+invariant under a rotation of ω_i and ω_o together about the normal (:func:`.stokes_frames.isotropy`
 derives it; a matrix built in the s/p frames and returned without the rotation into
 ``stokes_basis`` breaks it unless it has no linear polarization part).  Each matrix is
 divided by its own M00 first: these rows compare the *polarization part* M/M00 (entries in
@@ -123,96 +123,24 @@ from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
 from ..roundoff import REL_TOL, perturb
-from .mueller import cloude_min_eig, reversed_matrix, rotate_stokes_basis, stokes_basis, stokes_margin
-from .rows import ROUND_OFF, bounded_row, max_finite
+from .mueller import (cloude_min_eig, polarization_diff, reversed_matrix, rotate_stokes_basis,
+                     sensitivity, stokes_basis, stokes_margin)
+from .rows import ROUND_OFF, bounded_row, max_finite, worst_entry
+from .stokes_frames import isotropy
 from .topics import Row
 
 #: The topics of this module, in table order.
 POLAR_TOPICS = ("mueller", "intensity", "mueller_identities", "mueller_reciprocity")
-#: Per-topic seed offsets (lanes.SEED_OFFSETS holds the unpolarized topics').
-SEED_OFFSETS = {"mueller": 31, "intensity": 32, "mueller_identities": 33,
-                "mueller_reciprocity": 34}
 #: Why a topic is skipped in a variant that is not polarized.
 NOT_POLARIZED = "not a polarized variant: {} returns intensities, not Mueller matrices"
 #: The reason text of the entry-wise comparisons.
 ENTRYWISE = ("max over entries of |A_ij/A00 − B_ij/B00| (the polarization part; M00 is the "
              "intensity topics'); " + ROUND_OFF)
 
-def _rng(seed: int, topic: str) -> np.random.Generator:
-    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
-
-
 def skipped(topic: str) -> list[Row]:
     """The one row of a polarized topic outside a polarized variant."""
     return [Row(topic, f"{topic}: Mueller matrices", None, None, None, None, "skipped",
                 NOT_POLARIZED.format(mi.variant()), {NOT_APPLICABLE: True})]
-
-
-# ----------------------------------------------------------------------------- probing
-def _channels() -> int:
-    return dr.size_v(mi.UnpolarizedSpectrum)
-
-
-def _mueller_numpy(x, n: int) -> np.ndarray:
-    """A polarized ``mi.Spectrum`` -> (n, C, 4, 4) float64 (entry [i, j] = row i, column j)."""
-    c = _channels()
-    if not dr.is_jit_v(mi.Float):
-        a = np.array(x, dtype=np.float64).reshape(4, 4, c)
-        return np.broadcast_to(a.transpose(2, 0, 1)[None], (n, c, 4, 4)).copy()
-    out = np.empty((n, c, 4, 4))
-    for i in range(4):
-        for j in range(4):
-            e = x[i][j]
-            for k in range(c):
-                out[:, k, i, j] = np.broadcast_to(np.array(e[k], dtype=np.float64), (n,))
-    return out
-
-
-def _call(call, wi, **args) -> list:
-    """:func:`phonglab.probe._probe` with Mueller matrices read back whole."""
-    arrays = {"wi": probe._rows(wi, 3, "wi")}
-    arrays.update({k: probe._rows(a, w, k) for k, (_, a, w) in args.items()})
-    n, rows = probe._broadcast(arrays)
-    types = [t for t, _, _ in args.values()]
-
-    def convert(x, m):
-        if isinstance(x, mi.Spectrum):
-            return _mueller_numpy(x, m)
-        return probe.to_numpy(x, m)
-
-    if probe._is_jit():
-        out = call(probe.interaction(rows[0]), *(probe._dr(t, r) for t, r in zip(types, rows[1:])))
-        dr.eval(*out)
-        return [convert(x, n) for x in out]
-    per = [[convert(x, 1) for x in call(probe.interaction(rows[0][i]),
-                                         *(probe._dr(t, r[i]) for t, r in zip(types, rows[1:])))]
-           for i in range(n)]
-    return [np.concatenate(col) for col in zip(*per)]
-
-
-def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
-    """eval's Mueller matrices, (N, C, 4, 4)."""
-    ctx = probe.context() if ctx is None else ctx
-    (v,) = _call(lambda si, w: (bsdf.eval(ctx, si, w),), wi, wo=(mi.Vector3f, wo, 3))
-    return v
-
-
-def mueller_eval_pdf(bsdf, wi, wo, ctx=None):
-    ctx = probe.context() if ctx is None else ctx
-    v, p = _call(lambda si, w: tuple(bsdf.eval_pdf(ctx, si, w)), wi, wo=(mi.Vector3f, wo, 3))
-    return v, p
-
-
-def mueller_sample(bsdf, wi, u1, u2, ctx=None):
-    """(wo (N, 3), weight (N, C, 4, 4), pdf (N,), sampled_type (N,))."""
-    ctx = probe.context() if ctx is None else ctx
-
-    def call(si, a, b):
-        bs, w = bsdf.sample(ctx, si, a, b)
-        return bs.wo, w, bs.pdf, bs.sampled_type
-
-    wo, w, p, t = _call(call, wi, sample1=(mi.Float, u1, 0), sample2=(mi.Point2f, u2, 2))
-    return wo, w, p, t.astype(np.int64)
 
 
 def sizes(opts) -> tuple[int, int]:
@@ -223,7 +151,7 @@ def sizes(opts) -> tuple[int, int]:
 # ----------------------------------------------------------------------------- mueller
 def eval_lanes(opts, topic):
     n_eval, _ = sizes(opts)
-    r = _rng(opts.seed, topic)
+    r = lanes.rng(opts.seed, topic)
     wi, _ = lanes.incident(opts.cells(), n_eval)
     wo = np.concatenate([lanes.sphere(r, len(wi)), *lanes.special_wo(wi)[:4]])
     return np.concatenate([wi] * (len(wo) // len(wi))), wo, r
@@ -281,85 +209,39 @@ def mueller(bsdf, opts) -> list[Row]:
         return skipped("mueller")
     wi, wo, r = eval_lanes(opts, "mueller")
     lam = wavelengths()
-    rows = _realizable_rows("eval", mueller_eval(bsdf, wi, wo), wi, wo, lam)
+    rows = _realizable_rows("eval", probe.mueller_eval(bsdf, wi, wo), wi, wo, lam)
     _, n_s = sizes(opts)
     wis, _ = lanes.incident(opts.cells(), n_s)
     u1, u2 = lanes.sample_values(r, len(wis))
-    swo, w, _, _ = mueller_sample(bsdf, wis, u1, u2)
+    swo, w, _, _ = probe.mueller_sample(bsdf, wis, u1, u2)
     rows += _realizable_rows("sample weight", w, wis, swo, lam)
     return rows
 
 
 def wavelengths() -> np.ndarray:
-    return probe.default_wavelengths() if mi.is_spectral else np.zeros(_channels())
+    return (probe.default_wavelengths() if mi.is_spectral
+            else np.zeros(dr.size_v(mi.UnpolarizedSpectrum)))
 
 
 # ----------------------------------------------------------------------------- identities
-#: Below this |M00| a matrix has no polarization state to compare (its intensity is 0).
-TINY = 1e-30
-
-
-def _entry_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Per lane: max over wavelengths and entries of |a/a00 − b/b00|, the matrices' polarization
-    parts (|M_ij/M00| ≤ 1 for a physical matrix).  M00 itself is the intensity topics'
-    (``eval_pdf``, ``weight``, ``reciprocity``, with their conditioning and box search): a
-    defect of the intensity fails there, not here too.  Both M00 = 0: 0; one of them 0, or a non-finite
-    entry: NaN (not compared; counted in the rows' ``not_compared``)."""
-    a00, b00 = np.abs(a[..., 0, 0]), np.abs(b[..., 0, 0])
-    both = (a00 > TINY) & (b00 > TINY)
-    na = a / np.where(both, a[..., 0, 0], 1.0)[..., None, None]
-    nb = b / np.where(both, b[..., 0, 0], 1.0)[..., None, None]
-    d = np.abs(na - nb).max(axis=(-1, -2))
-    d = np.where(both, d, np.where((a00 <= TINY) & (b00 <= TINY), 0.0, np.nan))
-    finite = np.all(np.isfinite(a), axis=(-1, -2)) & np.all(np.isfinite(b), axis=(-1, -2))
-    return np.where(finite, d, np.nan).max(axis=-1)
-
-
-def _sens(fn, wi, wo, value, r) -> np.ndarray:
-    """Per lane: the largest change of fn's polarization part (:func:`_entry_diff`) over 4
-    8-ulp moves of both directions."""
-    n = len(wi)
-    moved = fn(perturb(np.tile(wi, (4, 1)), r), perturb(np.tile(wo, (4, 1)), r))
-    d = _entry_diff(np.tile(value, (4, 1, 1, 1)), moved)
-    return np.nan_to_num(d, nan=0.0).reshape(4, n).max(axis=0)
-
-
-def _worst(ex, wi, wo, a, b, names) -> dict:
-    finite = np.isfinite(ex)
-    d = {"lanes": int(ex.size), "not_compared": int((~finite).sum())}
-    if finite.any() and ex.size:
-        k = int(np.nanargmax(np.where(finite, ex, -1.0)))
-        d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
-        # the wavelength and entry (i, j) of M/M00 that differ most in that lane
-        with np.errstate(divide="ignore", invalid="ignore"):
-            na = a[k] / a[k][:, :1, :1]
-            nb = b[k] / b[k][:, :1, :1]
-        diff = np.nan_to_num(np.abs(na - nb), nan=-1.0)
-        c, i, j = np.unravel_index(int(np.argmax(diff)), diff.shape)
-        d.update(worst_entry=f"M{i}{j}", worst_channel=int(c),
-                 **{names[0]: np.round(a[k, c], 6).tolist(),
-                    names[1]: np.round(b[k, c], 6).tolist()})
-    return d
-
-
 def mueller_identities(bsdf, opts) -> list[Row]:
     if not mi.is_polarized:
         return skipped("mueller_identities")
-    r = _rng(opts.seed, "mueller_identities")
+    r = lanes.rng(opts.seed, "mueller_identities")
     n_eval, n_s = sizes(opts)
     wi, _ = lanes.incident(opts.cells(), n_eval)
     wo = lanes.sphere(r, len(wi))
-    ev = mueller_eval(bsdf, wi, wo)
-    ev2, _ = mueller_eval_pdf(bsdf, wi, wo)
-    rel = _entry_diff(ev2, ev)
+    ev = probe.mueller_eval(bsdf, wi, wo)
+    ev2, _ = probe.mueller_eval_pdf(bsdf, wi, wo)
+    rel = polarization_diff(ev2, ev)
     rows = [bounded_row("mueller_identities", "eval_pdf matrix = eval matrix", max_finite(rel),
                         REL_TOL, f"{ENTRYWISE}; random wo",
-                        _worst(rel, wi, wo, ev2, ev, ("eval_pdf", "eval")),
+                        worst_entry(rel, wi, wo, ev2, ev, ("eval_pdf", "eval")),
                         lanes=(rel, {"wi": wi, "wo": wo}))]
-    rows.append(_isotropy(bsdf, opts))
+    rows.append(isotropy(bsdf, opts, sizes(opts)[0]))
     wis, _ = lanes.incident(opts.cells(), n_s)
     u1, u2 = r.random(len(wis)), r.random((len(wis), 2))
-    swo, w, spdf, stype = mueller_sample(bsdf, wis, u1, u2)
+    swo, w, spdf, stype = probe.mueller_sample(bsdf, wis, u1, u2)
     rows.append(_continuity(bsdf, wis, u1, u2, swo, w, stype, r))
     live = ((spdf > 0) & ~lanes.delta_mask(stype) & np.all(np.isfinite(swo), axis=1)
             & np.any(w != 0, axis=(1, 2, 3)))
@@ -372,150 +254,22 @@ def mueller_identities(bsdf, opts) -> list[Row]:
     wis, swo, w = wis[live], swo[live], w[live]
 
     def ratio_of(a, b):
-        e, p = mueller_eval_pdf(bsdf, a, b)
+        e, p = probe.mueller_eval_pdf(bsdf, a, b)
         return np.where(p[:, None, None, None] > 0,
                         e / np.where(p > 0, p, 1.0)[:, None, None, None], 0.0)
 
     ratio = ratio_of(wis, swo)
-    rel = _entry_diff(w, ratio)
-    ex = rel / (REL_TOL + _sens(ratio_of, wis, swo, ratio, r))
+    rel = polarization_diff(w, ratio)
+    ex = rel / (REL_TOL + sensitivity(ratio_of, wis, swo, ratio, r))
     rows.append(bounded_row("mueller_identities", "weight matrix = eval/pdf per sample",
                             max_finite(ex), 1.0,
                             f"max over entries of |weight_ij/weight_00 − "
                             f"(eval/pdf)_ij/(eval/pdf)_00| "
                             f"per non-delta sample, over (2^-10 + the lane's sensitivity to an "
                             f"8-ulp move of wi, wo); must be ≤ 1; {int(live.sum())} samples",
-                            _worst(ex, wis, swo, w, ratio, ("weight", "eval_over_pdf")),
+                            worst_entry(ex, wis, swo, w, ratio, ("weight", "eval_over_pdf")),
                             lanes=(ex, {"wi": wis, "wo": swo})))
     return rows
-
-
-#: The isotropy row's name.
-ISOTROPY = "isotropy in Mitsuba's Stokes frames (rotation about n, s/p frames)"
-#: Below this |sin θ| a direction's s/p frame (n × d) is not defined well enough to compare.
-MIN_SIN = 1e-4
-#: A lane whose M00 changes by more than this (relative) under the rotation is not isotropic in
-#: intensity; when more than :data:`ANISO_SHARE` of the lanes are, the row is skipped.
-M00_CHANGE, ANISO_SHARE = 1e-2, 0.1
-
-
-def sp_frames(wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The s vectors (N, 3) of the s/p frames of a reflection or refraction at the normal
-    n = (0, 0, 1): n × (−ω_o) for the beam arriving along −ω_o, n × ω_i for the one leaving
-    along ω_i (the frames conductor.cpp:283-291 builds its matrix in), normalized."""
-    n = np.array([0.0, 0.0, 1.0])
-    s_in, s_out = np.cross(n, -wo), np.cross(n, wi)
-    return (s_in / np.linalg.norm(s_in, axis=1, keepdims=True),
-            s_out / np.linalg.norm(s_out, axis=1, keepdims=True))
-
-
-def to_sp(m: np.ndarray, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
-    """eval's matrices (N, C, 4, 4), from Mitsuba's implicit frames stokes_basis(−ω_o) →
-    stokes_basis(ω_i) re-expressed in the s/p frames of :func:`sp_frames`:
-    R_out M R_inᵀ (``rotate_mueller_basis``, mueller.h:361)."""
-    s_in, s_out = sp_frames(wi, wo)
-    r_in = rotate_stokes_basis(-wo, stokes_basis(-wo), s_in)
-    r_out = rotate_stokes_basis(wi, stokes_basis(wi), s_out)
-    return r_out[:, None] @ m @ np.swapaxes(r_in, -1, -2)[:, None]
-
-
-def rotate_z(v: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    """Each row of v (N, 3) rotated by its own angle ψ (N,) about n = (0, 0, 1)."""
-    c, s = np.cos(psi), np.sin(psi)
-    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1], v[:, 2]], axis=1)
-
-
-def _isotropy(bsdf, opts) -> Row:
-    r"""The Stokes-frame convention, checked from outside by rotating the input basis.
-
-    Statement.  For a BSDF whose flags lack ``Anisotropic``, the matrix of its non-delta
-    lobes expressed in the s/p frames of :func:`sp_frames` is invariant under a rotation R_ψ
-    of both directions about the normal:
-
-        M_sp(R_ψ ω_i, R_ψ ω_o) = M_sp(ω_i, ω_o)   for every ψ.
-
-    Derivation.  An isotropic surface is unchanged by a rotation about its normal, so the
-    rotated scattering configuration is the same physical event seen from a rotated
-    observer: its matrix, in reference frames carried along by the rotation, is the same
-    matrix.  The s/p frames are carried along: R_ψ n = n gives R_ψ (n × d) = n × (R_ψ d), and
-    the y vectors (forward × x, Mitsuba's right-handed frames) follow.  Mitsuba's implicit
-    frames are not: ``stokes_basis(d)`` is a fixed function of d (Duff et al.'s
-    ``coordinate_system``), so eval's matrix itself changes with ψ and is rotated to the s/p
-    frames first (:func:`to_sp`, the rotations of ``rotate_stokes_basis``).  A plugin that
-    builds its matrix M₀ in the s/p frames and returns it *without* the rotation into
-    ``stokes_basis(−ω_o)``, ``stokes_basis(ω_i)`` (the step conductor.cpp:296-299 takes)
-    returns M = M₀, so this check reads R_out(ψ) M₀ R_in(ψ)ᵀ, where R(ψ) are the rotators by
-    the angles between ``stokes_basis`` and the s/p vectors -- angles that change with ψ.
-    The angles of R_in and R_out move independently as ψ varies (one depends on ω_o's
-    azimuth, the other on ω_i's), so that is invariant only when M₀ R(α)ᵀ and R(β) M₀ are for
-    all α, β: columns and rows 1, 2 of M₀ vanish, M₀ = [[a, 0, 0, b], [0, 0, 0, 0],
-    [0, 0, 0, 0], [e, 0, 0, f]] -- a depolarizer (diffuse) or a circular polarizer or
-    diattenuator.  Any entry in rows or columns 1, 2 (the linear part) moves by up to its
-    own size.  An unrotated matrix is still a realizable Mueller matrix with the right M00, so no other row
-    sees it, but the renderer converts it to world frames as if it were in
-    ``stokes_basis`` (``SurfaceInteraction::to_world_mueller``): the polarization it puts out
-    has the wrong angle, which a polarizer or a second polarizing bounce turns into wrong
-    intensity (tests/defects_polarized/unrotated_frames.py).
-
-    Lanes: ω_i at the incidence cells, ω_o uniform on the sphere (reflection and
-    transmission), ψ uniform per lane; lanes with |sin θ| < :data:`MIN_SIN` for either
-    direction are left out (the s/p frame is undefined at the normal, where a BSDF picks an
-    arbitrary axis).  Compared as the other rows: the polarization parts M/M00 entry by entry
-    (:func:`_entry_diff`), tolerance REL_TOL plus both sides' sensitivity to an 8-ulp move of
-    both directions (the rotated directions are rounded to float32, and the s/p frames'
-    conditioning ∝ 1/sin θ enters there).  M00's own invariance is an intensity property:
-    where it fails at more than :data:`ANISO_SHARE` of the lanes by more than
-    :data:`M00_CHANGE` the BSDF is not isotropic about the geometric normal although its flags
-    say so (a ``bumpmap`` or ``normalmap`` tilts the shading frame at the probe's uv, and
-    Mitsuba 3.9.1 has no flag for that), and the row is skipped saying so.  Skipped too for
-    ``Anisotropic`` flags and for BSDFs whose lobes are all deltas (eval is 0)."""
-    flags = int(bsdf.flags())
-    if flags & int(mi.BSDFFlags.Anisotropic):
-        return Row("mueller_identities", ISOTROPY, None, None, None, None, "skipped",
-                   "the BSDF's flags include Anisotropic: a rotation about the normal is no "
-                   "symmetry of it", {NOT_APPLICABLE: True})
-    if lanes.delta_only(bsdf):
-        return Row("mueller_identities", ISOTROPY, None, None, None, None, "skipped",
-                   "every lobe is a delta: eval is 0, nothing to compare", {NOT_APPLICABLE: True})
-    r = np.random.default_rng([opts.seed, SEED_OFFSETS["mueller_identities"], 1])
-    n_eval, _ = sizes(opts)
-    wi, _ = lanes.incident(opts.cells(), n_eval)
-    wo = lanes.sphere(r, len(wi))
-    keep = ((np.hypot(wi[:, 0], wi[:, 1]) >= MIN_SIN) & (np.hypot(wo[:, 0], wo[:, 1]) >= MIN_SIN))
-    wi, wo = wi[keep], wo[keep]
-    psi = r.uniform(0.0, 2.0 * np.pi, len(wi))
-    wi2, wo2 = rotate_z(wi, psi), rotate_z(wo, psi)
-
-    def sp_of(a, b):
-        return to_sp(mueller_eval(bsdf, a, b), a, b)
-
-    m1, m2 = sp_of(wi, wo), sp_of(wi2, wo2)
-    a00, b00 = m1[..., 0, 0], m2[..., 0, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        change = np.abs(a00 - b00) / np.maximum(np.abs(a00), np.abs(b00))
-    moved = np.nan_to_num(change, nan=0.0).max(axis=1) > M00_CHANGE
-    if moved.sum() > ANISO_SHARE * len(wi):
-        return Row("mueller_identities", ISOTROPY, None, None, None, None, "skipped",
-                   f"M00 itself changes by more than {M00_CHANGE:g} under the rotation at "
-                   f"{int(moved.sum())} of {len(wi)} lanes: not isotropic about the geometric "
-                   f"normal though its flags lack Anisotropic (a tilted shading frame, e.g. "
-                   f"bumpmap or normalmap)", {NOT_APPLICABLE: True, "m00_moved": int(moved.sum())})
-    sens = _sens(sp_of, wi, wo, m1, r) + _sens(sp_of, wi2, wo2, m2, r)
-    ex = _entry_diff(m2, m1) / (REL_TOL + sens)
-    ex = np.where(moved, np.nan, ex)
-    details = _worst(ex, wi, wo, m1, m2, ("sp_matrix", "sp_matrix_rotated"))
-    details["m00_moved"] = int(moved.sum())
-    details["max_difference"] = float(max_finite(np.where(moved, np.nan, _entry_diff(m2, m1))))
-    if details.get("worst_wi") is not None:
-        k = int(np.nanargmax(np.where(np.isfinite(ex), ex, -1.0)))
-        details.update(psi=float(psi[k]), rotated_wi=wi2[k].tolist(), rotated_wo=wo2[k].tolist())
-    return bounded_row("mueller_identities", ISOTROPY, max_finite(ex), 1.0,
-                       "max over entries of |M_sp(Rψ wi, Rψ wo)/M00 − M_sp(wi, wo)/M00|, M_sp "
-                       "eval's matrix rotated from Mitsuba's stokes_basis frames to the s/p "
-                       "frames (n × d), ψ random per lane, over (2^-10 + both sides' "
-                       "sensitivity to an 8-ulp move); must be ≤ 1 (an isotropic BSDF's s/p "
-                       f"matrix is rotation-invariant); {len(wi)} lanes",
-                       details, lanes=(ex, {"wi": wi, "wo": wo}))
 
 
 #: A delta lobe's matrix may move by at most this much (entry-wise, of M/M00) when wi
@@ -535,7 +289,7 @@ def _continuity(bsdf, wis, u1, u2, wo1, w1, t1, r) -> Row:
     wi.y = 0 exactly, so the move crosses that plane -- where mitsuba3#1963 puts the
     retarder's jump."""
     wi2 = perturb(wis, r)
-    wo2, w2, _, t2 = mueller_sample(bsdf, wi2, u1, u2)
+    wo2, w2, _, t2 = probe.mueller_sample(bsdf, wi2, u1, u2)
     keep = (lanes.delta_mask(t1) & (t1 == t2) & np.all(np.isfinite(wo1), axis=1)
             & np.all(np.isfinite(wo2), axis=1) & (np.abs(wo1 - wo2).max(axis=1) < 1e-4)
             & np.any(w1 != 0, axis=(1, 2, 3)) & (np.abs(wis[:, 2]) >= 1e-3))
@@ -549,14 +303,14 @@ def _continuity(bsdf, wis, u1, u2, wo1, w1, t1, r) -> Row:
     r_in = rotate_stokes_basis(-o2, stokes_basis(-o2), stokes_basis(-o1))
     r_out = rotate_stokes_basis(b, stokes_basis(b), stokes_basis(a))
     m2 = r_out[:, None] @ m2 @ np.swapaxes(r_in, -1, -2)[:, None]
-    d = _entry_diff(m2, m1)
+    d = polarization_diff(m2, m1)
     return bounded_row("mueller_identities", name, max_finite(d), JUMP_TOL,
                        f"max over entries of |M(wi')/M00(wi') − M(wi)/M00(wi)| for delta-lobe "
                        f"samples, wi' "
                        f"wi moved by 8 ulps per component, the same sample values, lobe and wo, "
                        f"M(wi') rotated into M(wi)'s Stokes frames; ≤ {JUMP_TOL:g} (a "
                        f"continuous matrix moves by ~1e-6); {int(keep.sum())} samples",
-                       _worst(d, a, o1, m1, m2, ("matrix", "matrix_moved")),
+                       worst_entry(d, a, o1, m1, m2, ("matrix", "matrix_moved")),
                        lanes=(d, {"wi": a, "wo": o1}))
 
 
@@ -577,19 +331,19 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
                     None, None, "skipped", "every lobe is a delta: eval is 0, nothing to compare "
                     "(a sample-based reciprocity of delta lobes is not checked)",
                     {NOT_APPLICABLE: True})]
-    r = _rng(opts.seed, "mueller_reciprocity")
+    r = lanes.rng(opts.seed, "mueller_reciprocity")
     wi, wo = _pairs(opts, r, True)
 
     def fwd_of(a, b):
-        return reversed_matrix(mueller_eval(bsdf, a, b) / np.abs(b[:, 2])[:, None, None, None],
+        return reversed_matrix(probe.mueller_eval(bsdf, a, b) / np.abs(b[:, 2])[:, None, None, None],
                                a, b)
 
     def bwd_of(a, b):
-        return mueller_eval(bsdf, b, a) / np.abs(a[:, 2])[:, None, None, None]
+        return probe.mueller_eval(bsdf, b, a) / np.abs(a[:, 2])[:, None, None, None]
 
     fwd, bwd = fwd_of(wi, wo), bwd_of(wi, wo)
-    sens = _sens(fwd_of, wi, wo, fwd, r) + _sens(bwd_of, wi, wo, bwd, r)
-    ex = _entry_diff(fwd, bwd) / (REL_TOL + sens)
+    sens = sensitivity(fwd_of, wi, wo, fwd, r) + sensitivity(bwd_of, wi, wo, bwd, r)
+    ex = polarization_diff(fwd, bwd) / (REL_TOL + sens)
     rows = [bounded_row("mueller_reciprocity",
                         "f(wo, wi) = R_out Q f(wi, wo)ᵀ Q R_inᵀ, reflection",
                         max_finite(ex), 1.0,
@@ -597,7 +351,7 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
                         "grid reflection pairs, over (2^-10 + both sides' sensitivity to an "
                         "8-ulp move); Q = diag(1, 1, −1, 1), R the Stokes-frame rotations "
                         "(module docstring); must be ≤ 1",
-                        _worst(ex, wi, wo, fwd, bwd, ("predicted_f_wo_wi", "f_wo_wi")),
+                        worst_entry(ex, wi, wo, fwd, bwd, ("predicted_f_wo_wi", "f_wo_wi")),
                         lanes=(ex, {"wi": wi, "wo": wo}))]
     imp = probe.context(mode=mi.TransportMode.Importance)
     wi2, wo2 = _pairs(opts, r, False)
@@ -605,14 +359,14 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
     b = np.concatenate([wo, wo2])
 
     def rad_of(x, y):
-        return mueller_eval(bsdf, x, y) / np.abs(y[:, 2])[:, None, None, None]
+        return probe.mueller_eval(bsdf, x, y) / np.abs(y[:, 2])[:, None, None, None]
 
     def imp_of(x, y):
-        return mueller_eval(bsdf, y, x, imp) / np.abs(x[:, 2])[:, None, None, None]
+        return probe.mueller_eval(bsdf, y, x, imp) / np.abs(x[:, 2])[:, None, None, None]
 
     rad, adj = rad_of(a, b), imp_of(a, b)
-    sens = _sens(rad_of, a, b, rad, r) + _sens(imp_of, a, b, adj, r)
-    ex = _entry_diff(rad, adj) / (REL_TOL + sens)
+    sens = sensitivity(rad_of, a, b, rad, r) + sensitivity(imp_of, a, b, adj, r)
+    ex = polarization_diff(rad, adj) / (REL_TOL + sens)
     rows.append(bounded_row("mueller_reciprocity",
                             "f_Radiance(wi, wo) = f_Importance(wo, wi) (same light path)",
                             max_finite(ex), 1.0,
@@ -620,7 +374,7 @@ def mueller_reciprocity(bsdf, opts) -> list[Row]:
                             "and transmission pairs, over (2^-10 + both sides' sensitivity); "
                             "the same path in the same Stokes frames (conductor.cpp:275); "
                             "must be ≤ 1",
-                            _worst(ex, a, b, rad, adj, ("f_radiance", "f_importance")),
+                            worst_entry(ex, a, b, rad, adj, ("f_radiance", "f_importance")),
                             lanes=(ex, {"wi": a, "wo": b})))
     return rows
 

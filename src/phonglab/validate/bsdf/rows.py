@@ -59,3 +59,24 @@ def max_finite(rel: np.ndarray) -> float:
     """The largest finite lane value (0 when none is finite)."""
     finite = rel[np.isfinite(rel)]
     return float(finite.max()) if finite.size else 0.0
+
+
+def worst_entry(ex, wi, wo, a, b, names) -> dict:
+    """details of a comparison of Mueller matrices a, b (N, C, 4, 4): lanes compared and not
+    compared, the worst lane's directions, its wavelength channel and entry (i, j) of M/M00
+    that differ most, and both matrices there (named by ``names``)."""
+    finite = np.isfinite(ex)
+    d = {"lanes": int(ex.size), "not_compared": int((~finite).sum())}
+    if finite.any() and ex.size:
+        k = int(np.nanargmax(np.where(finite, ex, -1.0)))
+        d.update(worst_wi=wi[k].tolist(), worst_wo=wo[k].tolist())
+        # the wavelength and entry (i, j) of M/M00 that differ most in that lane
+        with np.errstate(divide="ignore", invalid="ignore"):
+            na = a[k] / a[k][:, :1, :1]
+            nb = b[k] / b[k][:, :1, :1]
+        diff = np.nan_to_num(np.abs(na - nb), nan=-1.0)
+        c, i, j = np.unravel_index(int(np.argmax(diff)), diff.shape)
+        d.update(worst_entry=f"M{i}{j}", worst_channel=int(c),
+                 **{names[0]: np.round(a[k, c], 6).tolist(),
+                    names[1]: np.round(b[k, c], 6).tolist()})
+    return d
