@@ -241,3 +241,71 @@ def test_an_emitters_sweep_extent_is_no_limit_on_set(variant_llvm_rgb):
     20 W/sr point light is validated, not refused."""
     assert main(["validate", "point", "--set", "intensity=20", "--no-sweep", "--only",
                  "finite"]) == 0
+
+
+def test_a_count_is_swept_over_whole_numbers_up_to_its_sweep_extent():
+    """An integrator's rr_depth is valid from 1 up (unbounded): the sweep tries whole numbers,
+    the ends and the middle of [1, 64], and --set is held to [1, ∞)."""
+    from phonglab.validate.integrator.ranges import BUILTIN as INTEGRATORS
+    rr = INTEGRATORS["path"]["rr_depth"]
+    assert rr.values() == (1, 32, 64) and all(type(v) is int for v in rr.values())
+    assert rr.values(quick=True) == (1, 64)
+    assert rr.lo == 1 and rr.hi == float("inf")
+    corners = points([_P("rr_depth", 5, rr), _P("emitter_samples", 1, Range(1, 9, integer=True,
+                                                                            sweep_hi=4))])
+    assert Point({"rr_depth": 64, "emitter_samples": 4}) in corners
+
+
+def test_an_integrators_estimator_controls_are_swept_and_direct_is_pinned(variant_llvm_rgb):
+    """#35: the sweep is every kind's.  direct's emitter_samples and bsdf_samples run 1..4;
+    at emitter_samples 4 the plane under a point light reads 4x the exact value (Mitsuba
+    3.9.1's direct.cpp:180 sums a delta light's emitter samples; mitsuba3 #1861): KNOWN by the
+    table's finding there, a pass at the given point and wherever emitter_samples is 1."""
+    from phonglab.validate import validate_integrator
+    from phonglab.validate.registry import by_name
+
+    known = by_name("integrator").part("known_for")("direct", None)
+    report = validate_integrator("direct", quick=True, topics=["bias"], known=known,
+                                 sweep=True)
+    sw = report.meta["sweep"]
+    assert [(p["name"], p["lo"], p["hi"], p["source"]) for p in sw["parameters"]] == \
+        [("emitter_samples", 1, 4, "mitsuba"), ("bsdf_samples", 1, 4, "mitsuba")]
+    plane = {tuple(sorted(r.point.items())): r for r in report.rows
+             if r.name == "plane under a point light"}
+    assert plane[()].status == "pass" and plane[(("emitter_samples", 1),)].status == "pass"
+    four = plane[(("emitter_samples", 4),)]
+    assert four.status == "KNOWN", four.reason
+    assert four.details["known_by"] == ["direct-delta-emitter-samples"]
+    assert four.measured == pytest.approx(4 * plane[()].expected, rel=0.01)
+    assert report.passed
+
+
+def test_hg_is_swept_over_g_and_an_undeclared_python_phase_function_is_not_probed(
+        variant_llvm_rgb):
+    """hg's g runs over [-0.99, 0.99] (±0.99 at --quick) and passes; a Python phase function
+    with a plain-float g and no PARAMETER_RANGES is checked at its given point, and the report
+    says how to sweep it (a probe would load g = 10, where no formula is a density)."""
+    from phonglab.validate import validate_phase
+
+    report = validate_phase("hg", quick=True, topics=["finite", "chi2", "normalization"],
+                            sweep=True)
+    assert {tuple(sorted(r.point.items())) for r in report.rows} == \
+        {(), (("g", -0.99),), (("g", 0.99),)}
+    assert report.passed, report.table(report.failing)
+    mine = validate_phase("defect_hg_control", quick=True, topics=["finite"], sweep=True,
+                          plugins=[Path(__file__).parent / "defects_phase" / "hg_control.py"])
+    assert mine.meta["sweep"]["points"] == 1 and mine.meta["sweep"]["parameters"] == []
+    assert "declare PARAMETER_RANGES" in mine.meta["sweep"]["note"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["point", "--set", "intensity=-1"], "outside the range [0, inf] of point's intensity"),
+    (["direct", "--set", "emitter_samples=0"],
+     "outside the range [1, inf] of direct's emitter_samples"),
+    (["hg", "--set", "g=-0.995"], "outside the range [-0.99, 0.99] of hg's g"),
+])
+def test_a_set_outside_the_domain_is_bad_input_for_every_kind(variant_llvm_rgb, capsys, args,
+                                                               message):
+    assert main(["validate", *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "phonglab.validate." in err and "Traceback" not in err

@@ -41,11 +41,18 @@ from ..settings import PluginError, load_plugin
 
 @dataclass(frozen=True)
 class Range:
-    """A parameter's valid interval and the edge values where formulas break."""
+    """A parameter's valid interval and the edge values where formulas break.
+
+    ``integer``: the parameter is a count (an integrator's ``rr_depth``): every value a sweep
+    tries is an ``int``.  ``sweep_hi``: where a sweep stops when the domain is unbounded above
+    (an emitter's intensity is valid up to ∞; the sweep tries 0..10); None: at ``hi``.
+    """
 
     lo: float
     hi: float
     edges: tuple[float, ...] = ()
+    integer: bool = False
+    sweep_hi: float | None = None
 
     @classmethod
     def of(cls, spec) -> "Range":
@@ -55,15 +62,24 @@ class Range:
         lo, hi, *rest = spec
         return cls(float(lo), float(hi), tuple(float(e) for e in (rest[0] if rest else ())))
 
+    @property
+    def top(self) -> float:
+        """The largest value a sweep tries (``sweep_hi`` or ``hi``)."""
+        return self.hi if self.sweep_hi is None else self.sweep_hi
+
     def values(self, quick: bool = False) -> tuple[float, ...]:
         """The values a sweep tries: the ends (and, unless ``quick``, the middle and the
-        edges, with 1e-4 above a range that starts at 0)."""
-        out = [self.lo, self.hi]
+        edges, with 1e-4 above a range that starts at 0 -- not for a count)."""
+        hi = self.top
+        out = [self.lo, hi]
         if not quick:
-            out.insert(1, 0.5 * (self.lo + self.hi))
-            if self.lo == 0.0 and self.hi > 1e-4:
+            mid = 0.5 * (self.lo + hi)
+            out.insert(1, round(mid) if self.integer else mid)
+            if self.lo == 0.0 and hi > 1e-4 and not self.integer:
                 out.append(1e-4)
-            out += [e for e in self.edges if self.lo <= e <= self.hi]
+            out += [e for e in self.edges if self.lo <= e <= hi]
+        if self.integer:
+            out = [int(v) for v in out]
         return tuple(dict.fromkeys(out))
 
 

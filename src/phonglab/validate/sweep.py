@@ -72,8 +72,9 @@ def points(parameters, quick: bool = False) -> list[Point]:
             if p.value is None or v != p.value:
                 out.append(Point({p.name: v}))
     if len(parameters) >= 2:
-        out.append(Point({p.name: p.range.lo for p in parameters}))
-        out.append(Point({p.name: p.range.hi for p in parameters}))
+        ends = {p.name: p.range.values(quick=True) for p in parameters}
+        out.append(Point({name: v[0] for name, v in ends.items()}))
+        out.append(Point({name: v[-1] for name, v in ends.items()}))
     seen, unique = set(), []
     for pt in out:
         key = tuple(sorted(pt.params.items()))
@@ -165,9 +166,14 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
     meta.update(seconds=round(time.perf_counter() - t0, 3),
         sweep={"points": len(runnable), "refused": len(refused),
                "parameters": [{"name": p.name, "given": p.value, "lo": p.range.lo,
-                               "hi": p.range.hi, "edges": list(p.range.edges),
+                               "hi": p.range.top, "edges": list(p.range.edges),
                                "source": p.source} for p in swept],
                "pinned": sorted(pinned), "runs": records + refused, "advice": advice})
+    if not swept:
+        meta["sweep"]["note"] = (
+            f"no parameter swept: this {kind.word} declares no PARAMETER_RANGES, and no range "
+            f"of it is documented or found by probing; declare PARAMETER_RANGES = "
+            f"{{'name': (lo, hi)}} on its class to sweep it")
     meta.pop("topic_seconds", None)
     meta["not_covered"] = core.not_covered(kind, topics, rows)
     return Report(meta, rows)
@@ -175,7 +181,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
 
 SOURCES = {"declared": "declared by the plugin class's PARAMETER_RANGES",
            "mitsuba": "that phonglab validates it over (from Mitsuba 3.9.1's plugin reference: "
-                      "phonglab.validate.bsdf.ranges.BUILTIN)"}
+                      "phonglab.validate.{kind}.ranges.BUILTIN)"}
 
 
 def check_set(kind: Kind, target, spec, params) -> None:
@@ -196,7 +202,7 @@ def check_set(kind: Kind, target, spec, params) -> None:
             raise ValidateError(
                 f"{name}={bad[0]:g} is outside the range [{rng.lo:g}, {rng.hi:g}] of "
                 f"{spec if isinstance(spec, str) else spec['type']}'s {name} "
-                f"{SOURCES[source]}; give a value in it")
+                f"{SOURCES[source].format(kind=kind.name)}; give a value in it")
 
 
 def outside(point: dict, swept) -> list[str]:

@@ -52,8 +52,7 @@ EMITTER = KIND
 
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.
 parameters = ranges.parameters
-# no ``domain`` part: the emitted quantities' [0, 10] is the sweep's extent, not a documented
-# limit (a 20 W/sr point light is a light), so --set is not held to it
+domain = ranges.domain
 values = ranges.values
 
 

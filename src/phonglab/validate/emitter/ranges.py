@@ -5,10 +5,11 @@ probed ranges, the points, the edges).
 Mitsuba 3.9.1's built-in emitters are swept over their emitted quantity, the one parameter
 every one of them scales (the plugin reference: ``intensity`` of ``point`` and ``spot`` in
 W/sr, ``radiance`` of ``area`` and ``constant``, ``irradiance`` of ``directional``, ``scale``
-of ``envmap``), from 0 (a light that emits nothing: every ratio of the identity topics is
-0/0 there) to 10; ``spot`` also over its ``cutoff_angle`` in degrees, from a narrow cone to
-the hemisphere (its ``beam_width`` is pinned to its default, 3/4 of the cutoff, whatever the
-cutoff).  An emitter's position and transform are where it sits, not its physics: not swept.
+of ``envmap``), valid from 0 (a light that emits nothing: every ratio of the identity topics
+is 0/0 there) to ∞ and swept from 0 to 10; ``spot`` also over its ``cutoff_angle`` in degrees,
+valid in (0, 180] and swept from a narrow cone (1°) to the hemisphere (90°; its ``beam_width``
+is pinned to its default, 3/4 of the cutoff, whatever the cutoff).  A ``--set`` outside the
+valid range (a negative intensity) is refused before any work.  An emitter's position and transform are where it sits, not its physics: not swept.
 """
 
 from __future__ import annotations
@@ -17,11 +18,11 @@ import mitsuba as mi
 
 from ..ranges import Range, domain as _domain, parameters as _parameters, traversed
 
-_EMITTED = Range(0.0, 10.0)
+_EMITTED = Range(0.0, float("inf"), sweep_hi=10.0)
 #: Mitsuba 3.9.1's built-in emitters: load-time parameter -> its documented range.
 BUILTIN: dict[str, dict[str, Range]] = {
     "point": {"intensity": _EMITTED},
-    "spot": {"intensity": _EMITTED, "cutoff_angle": Range(1.0, 90.0)},
+    "spot": {"intensity": _EMITTED, "cutoff_angle": Range(1.0, 180.0, sweep_hi=90.0)},
     "area": {"radiance": _EMITTED},
     "constant": {"radiance": _EMITTED},
     "directional": {"irradiance": _EMITTED},

@@ -54,6 +54,23 @@ FINDINGS: tuple[Finding, ...] = (
             "enclosure): 9.674 ± 0.035 at rr_depth 1, 9.999 ± 0.002 with roulette off",
             "Le (1 - rho^D)/(1 - rho) = 10", "tests/repro/volpathmis_rr_mis.py",
             rows=("enclosure ρ=0.8 D=64",)),
+    Finding("direct-delta-emitter-samples", "bias", ("direct",),
+            "src/integrators/direct.cpp:180",
+            "the emitter strategy's weight is dr::select(ds.delta, 1, mis_weight(...) * "
+            "m_weight_lum) (lines 180-181): the 1/emitter_samples factor m_weight_lum (line "
+            "109) multiplies the MIS weight of area lights only, so a delta light (point, "
+            "spot, directional) adds its whole contribution once per emitter sample: the "
+            "image is emitter_samples times the exact one (mitsuba3 issue #1861, fix "
+            "proposed in PR #1863)",
+            "1.700 at emitter_samples 4 (4.000 x 0.4249)", "0.424923 (rho I Omega/(pi A))",
+            "tests/repro/direct_delta_emitter_samples.py", rows=(_PLANE,),
+            at=(("emitter_samples", (2, 1e9)),)),
+    Finding("direct-delta-emitter-samples-convergence", "convergence", ("direct",),
+            "src/integrators/direct.cpp:180",
+            "the same: the plane's image converges to emitter_samples times the exact value, "
+            "so its error against the exact pixels stops falling (slope 0)",
+            "slope 0", "-1/2", "tests/repro/direct_delta_emitter_samples.py", rows=_SLOPES,
+            at=(("emitter_samples", (2, 1e9)),)),
     Finding("prbvolpath-depth-limit", "bias", ("prbvolpath",),
             "src/python/python/ad/integrators/prbvolpath.py:192",
             "`active &= depth < self.max_depth` (line 192) masks `active` and the medium "

@@ -18,7 +18,7 @@ from . import KIND
 from . import agreement as agreement_
 from . import analytic
 from . import gradient as gradient_
-from . import setup as setup_
+from . import ranges, setup as setup_
 from ..returns import check_integrator
 from .config import options
 from .cost import cost
@@ -56,6 +56,12 @@ def runners(target, opts, topics, m: int) -> dict:
 
 #: The integrator kind (declared by the package, whose parts this module holds).
 INTEGRATOR = KIND
+
+#: The sweep's parameters, the ranges a ``--set`` must lie in and the values a documented
+#: cause's ``at`` is held against.
+parameters = ranges.parameters
+domain = ranges.domain
+values = ranges.values
 
 
 def load(spec, params, hint) -> Loaded:

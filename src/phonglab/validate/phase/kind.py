@@ -16,7 +16,7 @@ import numpy as np
 from ...settings import Loaded
 from .. import core
 from ..conformance import known_of
-from . import KIND, lanes
+from . import KIND, lanes, ranges
 from ..returns import check_phase as returns   # noqa: F401 (the kind's part "returns")
 from .config import options
 from .cost import cost
@@ -61,6 +61,10 @@ def values(phase) -> dict:
 #: plugin is the ``mi.PhaseFunction`` itself; every topic builds its own MediumInteraction3f
 #: (:mod:`.lanes`).
 PHASE = KIND
+
+#: The sweep's parameters and the ranges a ``--set`` must lie in.
+parameters = ranges.parameters
+domain = ranges.domain
 
 
 def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
