@@ -96,6 +96,13 @@ SLOW_TIER: dict[str, str] = {
         "4 s; test_checks' rows keep the reflection scene",
     "test_validate_chi2.py::test_narrow_lobes_pass_chi2_at_default_size":
         "default sizes; the quick narrow-lobe tests stay",
+    "test_adaptive.py::test_bench_part_writes_chart_speedups_and_report":
+        "the adaptive bench part at test size (21 s, the default tier's longest test); `make "
+        "bench` runs it in full and test_bench's CLI test keeps the bench's plumbing",
+    "test_validate_emitter.py::test_builtin_emitters_pass_quick[area (sphere, flip_normals)]":
+        "an inward sphere light (6 s); test_sphere_inside_finding keeps flip_normals",
+    "test_validate.py::test_cli_pass_json_and_html":
+        "a passing CLI run with JSON and HTML (3.5 s); the failing CLI run with its figure stays",
 }
 
 

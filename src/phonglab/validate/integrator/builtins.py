@@ -71,6 +71,15 @@ FINDINGS: tuple[Finding, ...] = (
             "so its error against the exact pixels stops falling (slope 0)",
             "slope 0", "-1/2", "tests/repro/direct_delta_emitter_samples.py", rows=_SLOPES,
             at=(("emitter_samples", (2, 1e9)),)),
+    Finding("volpathmis-roulette-mis-shallow", "bias", ("volpathmis",),
+            "src/integrators/volpathmis.cpp:240",
+            "the same roulette MIS weight (volpathmis-roulette-mis): with rr_depth 1 roulette "
+            "runs from the second iteration (depth > rr_depth, line 238), so the emitter hits "
+            "of the third vertex are under-weighted and a depth-3 scene shows it; at the "
+            "default rr_depth 5 no iteration of a depth-3 path runs roulette and the row passes",
+            "3.372 for 3.5 (enclosure rho 0.5, D 3, rr_depth 1, --quick sizes)",
+            "Le (1 - rho^D)/(1 - rho) = 3.5", "tests/repro/volpathmis_rr_mis.py",
+            rows=("enclosure ρ=0.5 D=3",), at=(("rr_depth", (1, 2)),)),
     Finding("prbvolpath-depth-limit", "bias", ("prbvolpath",),
             "src/python/python/ad/integrators/prbvolpath.py:192",
             "`active &= depth < self.max_depth` (line 192) masks `active` and the medium "
