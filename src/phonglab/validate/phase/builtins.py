@@ -116,6 +116,8 @@ def catalogue_cases() -> list[KindCase]:
         (1e-5, "nearly isotropic, above the fallback threshold 2^-24"))]
     out = [KindCase("isotropic", {"type": "isotropic"}, None, {}, "uniform sphere")]
     out += [KindCase(label, spec, None, {}, note) for label, spec, note in hg]
+    out.append(KindCase("hg (g swept)", {"type": "hg"}, None, {},
+                        "its default g = 0.8, and through the sweep g over [-0.99, 0.99]"))
     out += [
         KindCase("rayleigh", {"type": "rayleigh"}, None, {}, "Rayleigh (1 + cos² θ)"),
         KindCase("tabphase", {"type": "tabphase", "values": "0.2, 0.5, 1.0, 2.0, 4.0"}, None,
