@@ -244,13 +244,13 @@ def render_markdown(data: dict, cat: Catalogue | None = None) -> str:
         "it is still reported, never hidden by a wider tolerance.", "",
     ]
     if swept:
-        lines[-1:-1] = [
+        lines += [
             "Each case runs through its parameter sweep (docs/validate.md, \"The parameter "
             "sweep\"): the given point, each swept parameter alone at its range's values, and "
             "the two corners; `points` counts the points run, a cell is the worst over them, "
             "and each row below names its point.", ""]
     else:
-        lines[-1:-1] = [
+        lines += [
             "Each case is run at its given point only (not through the parameter sweep).", ""]
     lines += _table(data, cat) + ["", "## Rows that do not pass", ""]
     for report in data["reports"]:
