@@ -13,8 +13,8 @@ their χ² outcomes coincide.
 With ``--sweep`` each run is a parameter sweep (issues #29, #36), over every kind: BSDFs
 ``diffuse``, ``lambert``, ``phong``, GGX ``roughconductor`` and GGX ``roughplastic`` (the
 Beckmann pdfs are a Mitsuba finding) across their parameters, emitters ``point`` and ``area``
-across theirs, integrators ``path`` and ``direct`` at their given point (integrators have no
-swept parameters), and two author-written plugins that declare no parameter ranges
+across theirs, integrators ``path`` (over ``rr_depth``) and ``direct`` (over its emitter and
+BSDF sample counts), the phase function ``hg`` (over g), and two author-written plugins that declare no parameter ranges
 (``tests/authors/my_lambert.py``, ``tests/defects_emitter/area_control.py``).  A built-in runs
 with every documented cause of its conformance table (the kind's ``known_for``: each explains
 only its own signature), as ``phonglab validate`` does; the Šidák family is the points, so
@@ -78,6 +78,7 @@ SWEPT = {
     "area": ("emitter", "area", {}, ()),
     "path": ("integrator", "path", {}, ()),
     "direct": ("integrator", "direct", {}, ()),
+    "hg": ("phase", "hg", {}, ()),
     "my_lambert (author)": ("bsdf", "my_lambert", {}, (AUTHORS / "my_lambert.py",)),
     "area_control (author)": ("emitter", "defect_area_control", {},
                               (ROOT / "tests" / "defects_emitter" / "area_control.py",)),

@@ -16,12 +16,14 @@ The range of each, in this order of precedence:
 1. declared by the plugin: a class attribute ``PARAMETER_RANGES = {"name": (lo, hi)}`` or
    ``{"name": (lo, hi, (edge, ...))}`` on the Python class (phonglab's ``lambert`` and
    ``phong`` declare theirs);
-2. Mitsuba 3.9.1's documented ranges of its built-ins (each kind's table:
-   :data:`phonglab.validate.bsdf.ranges.BUILTIN`, :data:`phonglab.validate.emitter.ranges.BUILTIN`);
+2. Mitsuba 3.9.1's documented ranges of its built-ins (each kind's ``ranges.BUILTIN`` table:
+   the BSDF, emitter, integrator and phase-function folders each hold one);
 3. otherwise probed: the candidates 0, 10⁻⁴, d/10, d, 10d, 1, 10 and 10⁴ around the loaded
    value d, each loaded once; a value the plugin refuses at load time is outside the range,
    not a failure, and the range is [smallest accepted, largest accepted] (a parameter that
-   accepts only its default is not swept).
+   accepts only its default is not swept).  Integrators and phase functions are not probed
+   (``probe=False``: their parameters are counts and shape factors whose valid values loading
+   cannot reveal): without 1. or 2. they are checked at their given point.
 
 Edges.  Besides the ends and the middle of its range a parameter is tried at the values where
 formulas break: 0 and the tiniest positive value where the range starts at 0 (1e-4: a cos^p
