@@ -99,6 +99,63 @@ def test_sphere_reproducer_exits_1_while_present():
     assert "ds.pdf != pdf_direction" in proc.stdout
 
 
+SUN_RIM_ROWS = {"weight x ds.pdf = eval_direction(ds)": "sunsky-sun-rim-weight",
+                "weight x ds.pdf = eval at the traced point": "sunsky-sun-rim-weight",
+                "ds.pdf = pdf_direction(ds)": "sunsky-sun-rim-pdf"}
+
+
+def test_sunsky_equator_rows_are_known_by_the_sun_rim_and_a_lane_off_it_stays_a_fail(
+        variant_llvm_rgb):
+    """At latitude 0, sun samples drawn on the sun cone's rim round 1-2 float32 steps outside
+    hit_sun's test (sunsky.h:430/946): the three rows they fail are KNOWN by the finding, each
+    failing lane inside its signature; a lane planted 5 steps outside (or inside the cone)
+    keeps the row a fail."""
+    import numpy as np
+
+    from phonglab.validate import validate_emitter
+    from phonglab.validate.core import mark_known
+    from phonglab.validate.emitter import builtins
+
+    case = next(c for c in builtins.catalogue_cases() if c.label == "sunsky (equator)")
+    report = validate_emitter(case.spec, known=case.known, quick=True, topics=["weight", "pdf"])
+    assert report.passed, report.table(report.rows)
+    rows = {r.name: r for r in report.rows}
+    for name, key in SUN_RIM_ROWS.items():
+        row = rows[name]
+        assert row.status == "KNOWN" and row.details["known_by"] == [key], name
+        steps = row.failing_lanes["sun_rim_ulps"]
+        assert len(steps) and np.all((steps < 0) & (steps >= -2)), (name, steps)
+    for planted in (-5.0, 3.0):
+        row = rows["ds.pdf = pdf_direction(ds)"]
+        row.status = "fail"
+        row.failing_lanes = {k: np.append(v, v[:1], axis=0) for k, v in row.failing_lanes.items()}
+        row.failing_lanes["sun_rim_ulps"][-1] = planted
+        mark_known([row], case.known)
+        assert row.status == "fail" and row.details["outside_signature"]["lanes"] == 1, planted
+        row.failing_lanes = {k: v[:-1] for k, v in row.failing_lanes.items()}
+
+
+def test_sun_rim_signature_covers_a_few_steps_outside_the_cone_only():
+    import numpy as np
+
+    from phonglab.validate.emitter.signatures import SunConeRim
+    from phonglab.validate.emitter.topics import Row
+
+    row = Row("pdf", "ds.pdf = pdf_direction(ds)", 1.0, 0.0, None, 1.0, "fail", "", {})
+    row.failing_lanes = {"sun_rim_ulps": np.array([-1.0, -4.0, -5.0, 0.0, 2.0])}
+    assert SunConeRim().covers(row).tolist() == [True, True, False, False, False]
+    row.failing_lanes = {"u": np.zeros((2, 2))}                   # no sun recorded: no claim
+    assert SunConeRim().covers(row) is None
+
+
+def test_sunsky_sun_rim_reproducer_exits_1_while_present():
+    proc = subprocess.run([sys.executable, str(REPRO / "sunsky_sun_rim_pdf.py")],
+                          capture_output=True, text=True, env={"PYTHONPATH": str(SRC),
+                                                               "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "behaviour present" in proc.stdout
+
+
 def test_cli_detects_an_emitter(tmp_path):
     out = tmp_path / "point.json"
     proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point", "--quick",

@@ -19,6 +19,13 @@ eval_direction lacks the frustum mask of sample_direction (line 212), so a refer
 behind the projector gets a negative intensity (reproducer
 tests/repro/projector_eval_direction_unmasked.py).
 
+Findings ``sunsky-sun-rim-pdf`` and ``sunsky-sun-rim-weight``
+(include/mitsuba/render/sunsky.h:430, 946): sample_direction counts every sun sample as a sun
+hit while pdf_direction and eval test dot(sun, d) ≥ cos θ_sun in float32, which samples on
+the cone's rim fail by 1-3 steps of 2⁻²⁴: ds.pdf and the weight carry the sun there,
+pdf_direction and eval_direction the sky alone (145 of 65536 samples at latitude 0; reproducer
+tests/repro/sunsky_sun_rim_pdf.py).
+
 :data:`CATALOGUE` is the emitter conformance table (docs/conformance-emitters.md, ``make
 conformance``): :func:`catalogue_cases` (every 3.9.1 emitter that loads standalone),
 :data:`FINDINGS`, :data:`LEFT_OUT`; :func:`cases` is the older label -> (spec, shape, known)
@@ -28,7 +35,7 @@ view of the first eleven the tests use.
 from __future__ import annotations
 
 from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
-from .signatures import InvalidSample, NegativeOnly, SphereSurfaceBand
+from .signatures import InvalidSample, NegativeOnly, SphereSurfaceBand, SunConeRim
 from .topics import TOPICS
 
 _SPHERES = ("area (sphere)", "area (sphere, flip_normals)")
@@ -42,6 +49,29 @@ _SPHERE_CAUSE = (
     "(docs/checks.md)")
 _SPHERE_MEASURED = ("ds.pdf 0.2658 against pdf_direction 1/2π = 0.1592 (flip_normals); 15 % of "
                     "float32 intersection points from the centre fall between the thresholds")
+
+_SUN_RIM_LABELS = ("sunsky (equator)",)
+_SUN_RIM_CAUSE = (
+    "sample_direction counts every direction it drew from the sun's cone as a sun hit "
+    "(`sun_hit = !pick_sky || hit_sun(...)`, line 430) while pdf_direction (line 451) and eval "
+    "(lines 319-321) test hit_sun, dot(sun, normalize(to_world⁻¹ d)) ≥ cos θ_sun (line 946), "
+    "in float32: the sun's half aperture is 0.268 deg (1 − cos θ_sun = 1.09e-5, 183 float32 "
+    "steps below 1), and a direction sample_sun draws at the cone's rim "
+    "(warp::square_to_uniform_cone at the disk's edge then Frame3f::to_world, line 903) can "
+    "round 1-3 steps outside the test: there ds.pdf holds the sun's cone pdf and the weight "
+    "its radiance, pdf_direction and eval the sky's alone.  Which samples round outside "
+    "depends on the sun's direction (none of 65536 at the default place, Tokyo).  A render's "
+    "next-event estimation counts the sun along those directions, BSDF sampling (and MIS "
+    "weights from pdf_direction) does not.  timed_sunsky shares the code (the same lanes: 20 "
+    "and 45 of 65536 at its default day, in Tokyo and at latitude 0), but its rows pass: "
+    "their per-lane sensitivity to an 8u move of the ray absorbs them (0.999), and its sun, "
+    "which moves with the time, is not exposed to compute the signature from")
+_SUN_RIM_MEASURED = (
+    "latitude 0 (2010-07-10 15:00): 145 of 65536 samples from the origin (0.22 %, all of them "
+    "sun samples) have ds.pdf = 8959.3 against pdf_direction 0.10, each 1 or 2 float32 steps "
+    "outside the cone by hit_sun's test; latitude -20: 230 (1-3 steps), 10: 3, 35.69 "
+    "(default): 0; quick validation at latitude 0: 1-4 failing lanes per row, all 1-2 steps "
+    "outside")
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the emitter table.
 FINDINGS: tuple[Finding, ...] = (
@@ -100,6 +130,24 @@ FINDINGS: tuple[Finding, ...] = (
             "eval_direction = 0 (no light) outside the frustum",
             "tests/repro/projector_eval_direction_unmasked.py",
             rows=("eval_direction at the sampled ds",), region=InvalidSample()),
+    Finding("sunsky-sun-rim-pdf", "pdf", _SUN_RIM_LABELS, "include/mitsuba/render/sunsky.h:430",
+            _SUN_RIM_CAUSE, _SUN_RIM_MEASURED,
+            "ds.pdf = pdf_direction(ds) on every lane (one test of the sun's cone for both)",
+            "tests/repro/sunsky_sun_rim_pdf.py", rows=("ds.pdf = pdf_direction(ds)",),
+            region=SunConeRim()),
+    Finding("sunsky-sun-rim-weight", "weight", _SUN_RIM_LABELS,
+            "include/mitsuba/render/sunsky.h:430",
+            "the same sun samples (finding sunsky-sun-rim-pdf): sample_direction's weight "
+            "carries the sun's radiance (eval with that sun_hit, line 436) while eval and "
+            "eval_direction (through eval, lines 319-321) re-test hit_sun (line 946) and "
+            "return the sky's alone",
+            "weight·ds.pdf = sky + sun radiance against eval_direction = sky only on the lanes "
+            "of sunsky-sun-rim-pdf (rel_diff ≈ 1, 1024 times 2^-10)",
+            "weight·ds.pdf = eval_direction(ds) = eval along ds.d",
+            "tests/repro/sunsky_sun_rim_pdf.py",
+            rows=("weight x ds.pdf = eval_direction(ds)",
+                  "weight x ds.pdf = eval at the traced point"),
+            region=SunConeRim()),
 )
 
 SPHERE_INSIDE = FINDINGS[0].known()
@@ -228,6 +276,9 @@ def catalogue_cases() -> list[KindCase]:
                  None, {}, "textured projector, 40 deg"),
         KindCase("sunsky", {"type": "sunsky"}, None, {},
                  "sun and sky at its default date and place (Tokyo, 2010-07-10 15:00)"),
+        KindCase("sunsky (equator)", {"type": "sunsky", "latitude": 0.0}, None, {},
+                 "the same date and time at latitude 0: sun samples on the sun cone's rim "
+                 "round outside it (finding sunsky-sun-rim-pdf)"),
         KindCase("timed_sunsky", {"type": "timed_sunsky"}, None, {},
                  "sun and sky averaged over a day (defaults)"),
         KindCase("directionalarea", {"type": "directionalarea", "radiance": 2.0}, None, {},

@@ -40,7 +40,7 @@ from ... import probe
 from ..roundoff import REL_TOL, invalid, rel_diff, sensitivity
 from . import lanes as lanes_
 from .config import rng
-from .setup import Setup, float_, point2, sphere_dirs
+from .setup import Setup, float_, point2, sphere_dirs, sun_rim_ulps
 from .topics import Row
 
 ROUND_OFF = "float32 round-off tolerance 2^-10 relative (roundoff.REL_TOL)"
@@ -65,13 +65,17 @@ def bounded(topic, name, values, tol, reason, details, inputs=None) -> Row:
 
 
 def lane_inputs(setup: Setup, s, mask) -> dict:
-    """The per-lane inputs a failing row records: reference point, sample value, group, and
-    for a sphere |p − c|/r − 1 (where the reference point lies relative to its surface)."""
+    """The per-lane inputs a failing row records: reference point, sample value, group, for a
+    sphere |p − c|/r − 1 (where the reference point lies relative to its surface), and for
+    Mitsuba's sunsky how far ds.d lies inside its sun's cone by sunsky.h's own float32 test
+    (``sun_rim_ulps``, :func:`.setup.sun_rim_ulps`: negative outside)."""
     out = {"ref": s.p[mask], "u": s.u[mask], "group": s.group[mask]}
     sph = setup.sphere
     if sph is not None:
         c, r = sph
         out["rel_radius"] = np.linalg.norm(s.p[mask] - c, axis=1) / r - 1.0
+    if setup.sun is not None:
+        out["sun_rim_ulps"] = sun_rim_ulps(setup.sun, s.d[mask])
     return out
 
 
@@ -160,7 +164,8 @@ def weight(setup: Setup, opts) -> list[Row]:
     # where the two differ, the radiance's own conditioning at ds.d: a direction sampled on
     # the edge of a sun's cone (sunsky.h:903, square_to_uniform_cone at u -> 1) is a sun
     # direction to sample_direction, which takes the hit for granted (sunsky.h:430), and may
-    # round outside it in eval's dot(sun, d) >= cos(aperture) (sunsky.h:946)
+    # round outside it in eval's dot(sun, d) >= cos(aperture) (sunsky.h:946); a lane whose
+    # moves all stay outside keeps failing (finding sunsky-sun-rim-weight, builtins.py)
     sens = np.zeros(s.n)
     check = np.flatnonzero(rel > REL_TOL)
     if check.size:

@@ -30,6 +30,7 @@ a directional light points inside and outside the scene's bounding sphere.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import drjit as dr
@@ -78,6 +79,9 @@ class Setup:
     bsphere_radius: float | None = None  #: the radius Mitsuba's set_scene gives the emitter
     axis: np.ndarray | None = None      #: a spot's axis (to_world · +z)
     cutoff_deg: float | None = None
+    #: Mitsuba's sunsky: (to_world⁻¹, the local sun direction, cos of the sun's half aperture),
+    #: float32 as sunsky.h's hit_sun takes them (:func:`sun_cone`)
+    sun: tuple | None = None
 
     @property
     def delta(self) -> bool:
@@ -125,9 +129,40 @@ def build(emitter, shape_spec: dict | None = None) -> Setup:
         setup.center, setup.radius = np.array(bs.center, np.float64).ravel(), float(bs.radius)
         if not python:
             setup.bsphere_radius = max(RAY_EPSILON, setup.radius * (1.0 + RAY_EPSILON))
+            setup.sun = sun_cone(emitter)
     else:
         _locate(setup)
     return setup
+
+
+def sun_cone(emitter) -> tuple | None:
+    """(to_world⁻¹, sun direction, cos θ_sun) of Mitsuba's ``sunsky`` (None for any other
+    emitter, timed_sunsky included: its sun moves with the time and no parameter exposes it),
+    in float32 as include/mitsuba/render/sunsky.h (v3.9.1) tests a direction against the sun:
+    ``hit_sun`` (line 946) is dot(sph_to_dir(m_sun_angles), normalize(to_world⁻¹ d)) ≥
+    cos(m_sun_half_aperture), m_sun_angles = dir_to_sph(to_world⁻¹ sun_direction)
+    (src/emitters/sunsky.cpp:257), m_sun_half_aperture = deg_to_rad(sun_aperture / 2)
+    (sunsky.h:205; the aperture read back from the plugin's description)."""
+    if emitter.class_name() != "SunskyEmitter":
+        return None
+    params = mi.traverse(emitter)
+    if "sun_direction" not in params.keys() or "to_world" not in params.keys():
+        return None
+    found = re.search(r"Sun aperture = ([0-9.eE+-]+)", str(emitter))
+    aperture = float(found.group(1)) if found else 0.5358
+    inv = params["to_world"].inverse()
+    angles = mi.dir_to_sph(inv @ params["sun_direction"])
+    cos_half = dr.cos(dr.deg2rad(mi.Float(0.5) * mi.Float(aperture)))
+    return inv, mi.sph_to_dir(angles.x, angles.y), cos_half
+
+
+def sun_rim_ulps(sun: tuple, d: np.ndarray) -> np.ndarray:
+    """Per direction d (N, 3): dot(sun, normalize(to_world⁻¹ d)) − cos θ_sun in float32, in
+    steps of 2⁻²⁴ (the float32 spacing just below 1): ≥ 0 inside the sun's cone by sunsky.h's
+    own test, < 0 outside."""
+    inv, sun_dir, cos_half = sun
+    local = dr.normalize(inv @ probe.to_vectors(d))
+    return probe.to_numpy(dr.dot(sun_dir, local) - cos_half, len(d)) / 2.0 ** -24
 
 
 def _attach(setup: Setup, shape_spec) -> None:

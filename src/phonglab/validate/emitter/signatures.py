@@ -53,3 +53,22 @@ class NegativeOnly:
         if "negative_only" not in lanes:
             return None
         return np.asarray(lanes["negative_only"], bool)
+
+
+class SunConeRim:
+    """Lanes whose ds.d lies just outside a sunsky's sun cone by sunsky.h's own float32
+    test (hit_sun, line 946): dot(sun, d) − cos θ_sun in [−:attr:`limit`, 0) steps of 2⁻²⁴
+    (``sun_rim_ulps``), where sample_direction's sun samples on the cone's rim land
+    (warp::square_to_uniform_cone at the disk's edge, line 903) and which it counts as sun
+    hits without the test (line 430)."""
+
+    limit = 4
+    text = ("ds.d outside the sun's cone by at most 4 float32 steps of sunsky.h's own test "
+            "(−4·2^-24 ≤ dot(sun, d) − cos θ_sun < 0)")
+
+    def covers(self, row):
+        lanes = row.failing_lanes or {}
+        if "sun_rim_ulps" not in lanes:
+            return None
+        m = np.asarray(lanes["sun_rim_ulps"], np.float64)
+        return (m >= -self.limit) & (m < 0.0)
