@@ -156,6 +156,25 @@ def test_sunsky_sun_rim_reproducer_exits_1_while_present():
     assert "behaviour present" in proc.stdout
 
 
+def test_sunsky_without_sky_fails_chi2_by_the_suns_float32_cone_only_there(variant_llvm_rgb):
+    """With the sky off the sun holds every sample, and its pdf_direction integrates to
+    1.0052 (sunsky.h:946's float32 cone test): χ² rejects it at 10⁶ samples, KNOWN by
+    sunsky-sun-pdf-normalization; the same finding explains nothing with the sky on (its
+    ``at``: sky_scale ≤ 1e-3), and without the finding the row is a plain fail."""
+    from phonglab.validate import validate_emitter
+    from phonglab.validate.emitter.kind import known_for
+
+    known = known_for("sunsky", {})
+    dark = validate_emitter("sunsky", params={"sky_scale": 0.0}, topics=["chi2"], known=known)
+    (row,) = dark.rows
+    assert row.status == "KNOWN" and row.details["known_by"] == ["sunsky-sun-pdf-normalization"]
+    plain = validate_emitter("sunsky", params={"sky_scale": 0.0}, topics=["chi2"])
+    assert [r.status for r in plain.rows] == ["fail"]
+    (finding,) = [k for k in known["chi2"] if getattr(k, "key", "") ==
+                  "sunsky-sun-pdf-normalization"]
+    assert finding.holds_at({"sky_scale": 0.0}) and not finding.holds_at({"sky_scale": 1.0})
+
+
 def test_cli_detects_an_emitter(tmp_path):
     out = tmp_path / "point.json"
     proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point", "--quick",
