@@ -219,3 +219,62 @@ def test_roughdielectric_index_matched_energy_explains_its_signature_only(varian
     glass = validate_bsdf("roughdielectric", params={"alpha": 0.1, "int_ior": 1.5},
                           topics=["energy"], known=known, quick=True)
     assert [r.status for r in glass.rows] == ["pass"]
+
+
+def test_roughdielectric_index_matched_normalization_explains_its_signature_only(
+        variant_llvm_rgb):
+    """#36: roughdielectric's normalization row fails near eta = 1 for GGX too (int_ior 1
+    against air: eta 0.99972; the float32 product wo * eta in pdf()'s half vector); the
+    finding explains that row at eta in [0.999, 1.001] and incidence |cos θ_i| ≥ 0.03 only
+    (the energy grid's 0.05 is in, 0.01 is out): not at eta 0.998 or 1.5, not a failing
+    grazing cell (cos θ_i 0.01, where the product's effect is ≤ 3e-5), not another topic's
+    row at eta 0.99972."""
+    from phonglab.validate.bsdf.builtins import known_for_plugin
+    from phonglab.validate.bsdf.findings import NORM_ROW
+    from phonglab.validate.bsdf.signatures import IncidenceFrom
+
+    key = "roughdielectric-index-matched-normalization"
+    cause = {f.key: f.known() for f in FINDINGS}[key]
+    assert cause.rows == (NORM_ROW,) and cause.region == IncidenceFrom(0.03)
+    for eta in (0.999, 0.99972, 0.99982, 1.0003, 1.001):      # 0.99982: int_ior 1.0001
+        assert cause.holds_at({"eta": eta}), eta
+    for eta in (0.998, 1.002, 1.5):
+        assert not cause.holds_at({"eta": eta}), eta
+    assert not cause.holds_at({})
+    ggx = known_for_plugin("roughdielectric", {"distribution": "ggx"})
+    assert cause in ggx["normalization"]
+    assert cause in known_for_plugin("roughdielectric")["normalization"]   # Beckmann as well
+
+    def failing(topic, name, cos_theta):
+        row = Row(topic, name, 1.0004, 1.0, None, 3e-4, "fail", "why", {})
+        s = np.sqrt(1 - cos_theta ** 2)
+        row.failing_lanes = {"wi": np.array([[s, 0.0, cos_theta]])}
+        return row
+
+    rows = [failing("normalization", NORM_ROW, 0.7), failing("normalization", NORM_ROW, 0.05),
+            failing("normalization", NORM_ROW, 0.01),
+            failing("weight", "sample weight = eval / pdf", 0.7)]
+    mark_known(rows, ggx, {"eta": 0.99972, "alpha": 0.1})
+    assert [r.status for r in rows] == ["KNOWN", "KNOWN", "fail", "fail"]
+    assert rows[0].details["known_by"] == [key]
+    for eta in (1.5, 0.998):
+        row = failing("normalization", NORM_ROW, 0.7)
+        mark_known([row], ggx, {"eta": eta, "alpha": 0.1})
+        assert row.status == "fail", eta
+
+    # the real rows of `validate roughdielectric --set distribution=ggx --quick` at int_ior 1
+    # (alpha 0.1 at 45.6 deg, alpha 0.01 at 72.5 deg), on those cells only (0.7 s each); the
+    # same cells at int_ior 1.5 pass
+    for params, cos, where in (({"int_ior": 1.0}, (1.0, 0.7), "45.6°"),
+                               ({"alpha": 0.01, "int_ior": 1.0}, (0.3,), "72.5°"),
+                               ({"int_ior": 1.5}, (1.0, 0.7), None)):
+        report = validate_bsdf("roughdielectric", params={"distribution": "ggx", **params},
+                               topics=["normalization"], known=ggx, quick=True,
+                               sizes={"energy_cos": cos})
+        (row,) = report.rows
+        if where is None:
+            assert row.status == "pass", params
+            continue
+        assert row.status == "KNOWN", params
+        assert row.details["known_by"] == [key]
+        assert f"NOT NORMALIZED at θ_i = {where}" in row.reason

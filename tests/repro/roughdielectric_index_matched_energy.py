@@ -9,12 +9,15 @@ of D |wi.m| is cos theta_i / G1_exact) and no loss is left to hide an error in i
 * Beckmann: smith_g1() is Walter et al.'s rational approximation, 1 for a >= 1.6
   (include/mitsuba/render/microfacet.h:346-352), above the exact Smith G1 there: the albedo
   is G1_approx^2 / G1_exact > 1 (alpha 1, 31.8 deg: 1 / 0.9984 = 1.0016);
-* any distribution: the half vector normalize(wi + eta wo) (src/bsdfs/roughdielectric.cpp:381)
-  and the denominator (wi.m + eta wo.m)^2 (line 425) are differences of nearly equal float32
-  numbers when wo ~ -wi, so eval on the narrow lobe is off by float32 rounding (up to 1.6 %
-  pointwise for GGX alpha 0.01 at eta 0.99972) and its integral lands above or below the
-  model's by up to ~1e-3 (Beckmann alpha 0.1, 31.8 deg: 1.00056; GGX alpha 0.01, 60 deg:
-  1.00076; the float64 model: 1.00000 and 0.99992).
+* any distribution: the half vector normalize(wi + wo * eta) (src/bsdfs/roughdielectric.cpp:381)
+  rounds the product wo * eta to float32; for wo ~ -wi the sum then cancels (exactly) and
+  leaves that rounding divided by |eta - 1|, nearly the same across the narrow lobe, so eval
+  there is off (up to 1.6 % pointwise for GGX alpha 0.01 at eta 0.99972) and its integral
+  lands above or below the model's by up to ~1e-3 (Beckmann alpha 0.1, 31.8 deg: 1.00056;
+  GGX alpha 0.01, 60 deg: 1.00076; the float64 model: 1.00000 and 0.99992).  The float64
+  model with only wo * eta rounded to float32 (``round_product``) gives Mitsuba's albedo; the
+  float32 denominator (wi.m + eta wo.m)^2 (line 425) adds nothing measurable.  pdf() has the
+  same product (line 458): tests/repro/roughdielectric_index_matched_normalization.py.
 
 The plugin refuses int_ior == ext_ior exactly (roughdielectric.cpp:178) but not int_ior 1
 against its default ext_ior, air (1.000277): eta = 0.99972, a corner of phonglab's sweep.
@@ -56,11 +59,15 @@ def mitsuba_eval(bsdf, wi, wo):
     return np.array(value, np.float64).mean(axis=0)
 
 
-def walter(dist, alpha, eta, wi, wo, exact_g1=True):
-    """f cos theta_o of a rough dielectric in float64 (Walter et al. 2007), Importance mode."""
+def walter(dist, alpha, eta, wi, wo, exact_g1=True, round_product=False):
+    """f cos theta_o of a rough dielectric in float64 (Walter et al. 2007), Importance mode;
+    ``round_product``: the half vector's product wo * eta rounded to float32, as Mitsuba's."""
     wi = np.broadcast_to(wi, wo.shape)
     refl = wo[:, 2] > 0
-    m = wi + wo * np.where(refl, 1.0, eta)[:, None]
+    ew = wo * np.where(refl, 1.0, eta)[:, None]
+    if round_product:
+        ew = np.where(refl[:, None], ew, ew.astype(np.float32).astype(np.float64))
+    m = wi + ew
     m /= np.linalg.norm(m, axis=1)[:, None]
     m *= np.sign(m[:, 2])[:, None]
     cos2 = m[:, 2] ** 2
@@ -89,7 +96,8 @@ def walter(dist, alpha, eta, wi, wo, exact_g1=True):
     G = g1(wi) * g1(wo)
     fr = F * D * G / (4 * wi[:, 2])
     ft = np.abs((1 - F) * D * G * eta ** 2 * wim * wom / (wi[:, 2] * (wim + eta * wom) ** 2))
-    return np.where(refl, fr, ft)
+    out = np.where(refl, fr, ft)
+    return np.where(np.isfinite(out), out, 0.0) if round_product else out
 
 
 def albedo(f, wi, eta, nr=1500, npsi=256):
@@ -133,6 +141,10 @@ def main() -> int:
                 f"Mitsuba's eval {a_mi:.6f}, float64 model {a_exact:.6f}")
         if dist == "beckmann":
             line += f" (with the approximate G1 {albedo(lambda d: walter(dist, alpha, eta, wi, d, False), wi, eta):.6f})"
+        if abs(eta - 1) < 0.001:         # the float32 product wo * eta alone (line 381)
+            product = albedo(lambda d: walter(dist, alpha, eta, wi, d, dist == "ggx", True),
+                             wi, eta)
+            line += f"; float64 model with float32(wo * eta) {product:.6f}"
         print(line)
         present |= abs(eta - 1) < 0.01 and a_mi > 1 + 1e-4 and a_exact <= 1 + 1e-5
     print("behaviour present: albedo above 1 near eta = 1" if present else "fixed")

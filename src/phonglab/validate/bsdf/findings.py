@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from ..conformance import Finding
 from .signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe, Chi2Excess,
-                         ComponentOutOfRange, Grazing, GrazingIncidence, IncidencePlaneY0,
-                         MaskedReflection, ParameterAt, SampleEdgeAtNormalIncidence, SamplePoint,
-                         Union)
+                         ComponentOutOfRange, Grazing, GrazingIncidence, IncidenceFrom,
+                         IncidencePlaneY0, MaskedReflection, ParameterAt,
+                         SampleEdgeAtNormalIncidence, SamplePoint, Union)
 
 #: Cases whose sample() returns NaN directions/pdfs from microfacet sampling (measured over
 #: sample values {0, 1e-7, 0.5, 1 - 2^-24}^3 and incidence angles including below the horizon).
@@ -222,27 +222,67 @@ FINDINGS: tuple[Finding, ...] = (
             "int_ior 1 against the default ext_ior, air 1.000277, is eta 0.99972) the "
             "transmission lobe narrows to about alpha |eta - 1| and Fresnel reflection "
             "vanishes, so the albedo tends to G1(wi)^2 / G1_exact(wi) with no loss left to "
-            "absorb an error, and two errors lift it above 1: the half vector "
-            "normalize(wi + eta wo) (line 381) and the denominator (wi.m + eta wo.m)^2 "
-            "(line 425) cancel in float32 for wo near -wi (eval up to 1.6 % off pointwise on "
-            "the lobe of GGX alpha 0.01 at eta 0.99972), and Beckmann's smith_g1() is a "
-            "rational approximation, 1 for a >= 1.6 (include/mitsuba/render/microfacet.h:"
-            "346-352), above the exact Smith G1 there",
-            "albedo of eval by a fine polar quadrature (reproducer), against Walter et al.'s "
-            "model in float64: Beckmann alpha 1, eta 1.001, 31.8 deg 1.001615 (model 0.998240 "
-            "with the exact G1, 1.001616 with the approximate one); Beckmann alpha 0.1, eta "
-            "0.99972, 31.8 deg 1.000561 (model 0.999998); GGX alpha 0.01, eta 0.99972, 60 deg "
-            "1.000758 (model 0.999919).  The energy row (default sizes, seed 0) fails for "
-            "Beckmann at eta 0.998-1.015 (alpha 1), 0.999-1.005 (0.5), 0.999-1.003 (0.3), "
-            "0.9995-1.001 (0.1), at scattered points for alpha 0.01-0.05, for GGX alpha 0.01 "
-            "at 0.9992-1.0007 (0.99972, 60 deg: 1.000763, band 1.7e-4) and alpha 0.05 at "
-            "0.9997-1.0002 (0.99972, 45.6 deg: 1.000268; the fine integral 1.000264); every "
-            "alpha passes at 0.995 and 1.02, GGX alpha >= 0.1 everywhere.  The topic reads "
-            "such a lobe (1e-6 rad wide) as the mean of rules on shifted nodes "
-            "(lobes.integrate_rounded) and agrees with the fine integral within its band",
+            "absorb an error, and two errors lift it above 1: the float32 product wo * eta in "
+            "the half vector normalize(wi + wo * eta) (line 381) -- for wo near -wi the sum "
+            "cancels exactly and leaves the product's rounding divided by |eta - 1|, nearly "
+            "the same across the lobe (the roughdielectric-index-matched-normalization "
+            "cause; eval up to 1.6 % off pointwise on the lobe of GGX alpha 0.01 at eta "
+            "0.99972) -- and Beckmann's smith_g1() is a rational approximation, 1 for "
+            "a >= 1.6 (include/mitsuba/render/microfacet.h:346-352), above the exact Smith G1 "
+            "there",
+            "albedo of eval by a fine polar quadrature (reproducer), against Walter et al.'s model "
+            "in float64: Beckmann alpha 1, eta 1.001, 31.8 deg 1.001615 (model 0.998240 with the "
+            "exact G1, 1.001616 with the approximate one); Beckmann alpha 0.1, eta 0.99972, 31.8 "
+            "deg 1.000561 (model 0.999998); GGX alpha 0.01, eta 0.99972, 60 deg 1.000758 (model "
+            "0.999919); the float64 model with only wo * eta rounded to float32 gives Mitsuba's "
+            "albedo (reproducer: Beckmann alpha 0.1 1.000560 against 1.000561, GGX alpha 0.01 "
+            "1.000752 against 1.000757), so the float32 denominator (wi.m + eta wo.m)^2 (line 425) "
+            "adds nothing measurable.  The energy row (default sizes, seed 0) fails for Beckmann "
+            "at eta 0.998-1.015 (alpha 1), 0.999-1.005 (0.5), 0.999-1.003 (0.3), 0.9995-1.001 "
+            "(0.1), at scattered points for alpha 0.01-0.05, for GGX alpha 0.01 at 0.9992-1.0007 "
+            "(0.99972, 60 deg: 1.000763, band 1.7e-4) and alpha 0.05 at 0.9997-1.0002 (0.99972, "
+            "45.6 deg: 1.000268; the fine integral 1.000264); every alpha passes at 0.995 and "
+            "1.02, GGX alpha >= 0.1 everywhere.  The topic reads such a lobe (1e-6 rad wide) as "
+            "the mean of rules on shifted nodes (lobes.integrate_rounded) and agrees with the fine "
+            "integral within its band",
             "albedo <= 1 (the float64 model with the exact G1 stays below 1)",
             "tests/repro/roughdielectric_index_matched_energy.py", rows=(ENERGY_ROW,),
             at=(("eta", (0.998, 1.015)),)),
+    Finding("roughdielectric-index-matched-normalization", "normalization",
+            ("roughdielectric/beckmann-a0.1", "roughdielectric/ggx-a0.3",
+             "roughdielectric/ggx-aniso-inverted", "roughdielectric/polarized"),
+            "src/bsdfs/roughdielectric.cpp:458",
+            "pdf() forms the transmission half vector as normalize(wi + wo * eta) (line 458; "
+            "eval() alike at line 381): near index matching (int_ior 1 against the default "
+            "ext_ior, air 1.000277, is eta 0.99972; the plugin refuses only int_ior == "
+            "ext_ior, line 178) wo ~ -wi, so the sum cancels -- exactly, in float32 -- and "
+            "leaves the float32 rounding of the product wo * eta (up to 2^-25 per component) "
+            "divided by |wi + eta wo| ~ |eta - 1|: m is off by ~2e-4 rad at eta 0.99972, by "
+            "nearly the same amount across the whole lobe (alpha |eta - 1| wide), since the "
+            "product's rounding error drifts by only |eta - 1| of a float32 spacing per "
+            "spacing of wo; pdf then integrates to 1 +- up to ~1e-3 while every sample is "
+            "valid",
+            "int pdf by stratified polar grids about the lobes (reproducer, s.e. 1e-5 to 3e-5) at "
+            "eta 0.99972, phonglab's cells: GGX alpha 0.1, 45.6 deg: Mitsuba 1.000468 (phi 0), "
+            "1.000404 (phi 2.1), the float64 pdf 1.000011, 0.999981, the float64 pdf with only wo "
+            "* eta rounded to float32 1.000469, 1.000406; GGX alpha 0.01, 72.5 deg, phi 2.1: "
+            "0.999536, 0.999964, 0.999535; 60 deg: 1.000822, 0.999985, 1.000822; samples counted "
+            "0.99999 to 1; Beckmann alpha 0.1, 45.6 deg (the same product): 1.000617, 1.000050, "
+            "1.000618.  The row (--quick) reads 1.0004 against 0.99998 (GGX alpha 0.1, 45.6 deg) "
+            "and 0.9996 against 0.99999 (alpha 0.01, 72.5 deg).  The product's effect on int pdf "
+            "(GGX, the largest over cos theta_i 0.05 to 0.95): alpha 0.01 6.5e-4 to 4.8e-3 at eta "
+            "0.999 to 1.001, 6e-5 and 7e-5 at 0.998 and 1.002, <= 4e-6 from 0.995 and 1.005 out; "
+            "alpha 0.1 4.6e-4 at 0.99972, 1e-4 at 0.9995 and 1.0005, 2e-6 at 0.999 and 1.001; at "
+            "cos theta_i 0.05 up to 2.3e-4 (alpha 0.01, eta 0.99972), at <= 0.01 (alpha 0.01, 0.1) "
+            "<= 3e-5, below every band (the signature: |cos theta_i| >= 0.03); at normal incidence "
+            "it is not 0 for a wide lobe: GGX alpha 1, eta 1.0003 (reproducer) 0.999795, 0.999896, "
+            "0.999794, samples counted 0.99989 (the --quick row of the topic alone there: 0.99979 "
+            "against 0.99992, band 1.3e-4)",
+            "int pdf = the share of counted samples, 1: the float64 pdf gives 1.000011, "
+            "0.999981, 0.999964, 0.999985 at those cells, and so does the sum wi + wo * eta "
+            "rounded once to float32 (a fused multiply-add, the fix): the same to 1e-6",
+            "tests/repro/roughdielectric_index_matched_normalization.py", rows=(NORM_ROW,),
+            region=IncidenceFrom(0.03), at=(("eta", (0.999, 1.001)),)),
     Finding("mask-diffuse-reflectance-opacity", "eval_diffuse_reflectance",
             ("mask/diffuse-0.5",),
             "src/bsdfs/mask.cpp:229",

@@ -73,6 +73,23 @@ class GrazingIncidence(Region):
 
 
 @dataclass(frozen=True)
+class IncidenceFrom(Region):
+    """Incidence at least ``cos_min`` away from grazing, |cos θ_i| ≥ ``cos_min``: a cause whose
+    effect on a per-incidence row (``normalization``, ``energy``) is measured to vanish below
+    it leaves that row's grazing cells to other causes."""
+
+    cos_min: float
+
+    def covers(self, row):
+        got = _lanes(row, "wi")
+        return None if got is None else np.abs(got[0][:, 2]) >= self.cos_min
+
+    @property
+    def text(self):
+        return f"incidence |cos θ_i| ≥ {self.cos_min:g}"
+
+
+@dataclass(frozen=True)
 class BelowHorizon(Region):
     """Incidence at or below the horizon, cos θ_i ≤ 0."""
 
