@@ -4,7 +4,8 @@ A :class:`~phonglab.validate.conformance.Finding` pins a row that fails in Mitsu
 line (``file:line`` at tag v3.9.1, commit
 :data:`~phonglab.validate.conformance.MITSUBA_COMMIT`), one sentence of cause, what the probe
 measures, what a correct plugin gives and a reproducer in ``tests/repro/`` that exits 1 while
-the behaviour is present; :func:`phonglab.validate.conformance.known_causes` turns
+the behaviour is present (the polarized topics' findings are :mod:`.polarized_findings`);
+:func:`phonglab.validate.conformance.known_causes` turns
 :data:`FINDINGS` into the ``known`` entries of the catalogue's cases (their rows are reported as
 KNOWN).  The rows traced to the validator itself are :mod:`.validator_issues`.
 """
@@ -12,6 +13,7 @@ KNOWN).  The rows traced to the validator itself are :mod:`.validator_issues`.
 from __future__ import annotations
 
 from ..conformance import Finding
+from .polarized_findings import POLARIZED_FINDINGS
 from .signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe, Chi2Excess,
                          ComponentOutOfRange, Grazing, GrazingIncidence, IncidenceFrom,
                          IncidencePlaneY0, MaskedReflection, ParameterAt,
@@ -53,7 +55,7 @@ SPEC_TRANS_ON = (("spec_trans", (1e-4, 1.0)),)
 _PLASTIC = ("plastic/default", "plastic/nonlinear-ior1.9")
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
-FINDINGS: tuple[Finding, ...] = (
+FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
     Finding("roughplastic-pdf-below-horizon", "chi2",
             ("roughplastic/beckmann-a0.1", "roughplastic/beckmann-a0.25",
              "roughplastic/ggx-a0.25", "roughplastic/ggx-a0.5-nonlinear"),
@@ -561,58 +563,6 @@ FINDINGS: tuple[Finding, ...] = (
             "f(a, b) = f(b, a) to float32 precision",
             "tests/repro/pplastic_polarized_grazing.py",
             rows=(REFLECTION_ROW,), region=Grazing(0.01)),
-    Finding("pplastic-polarized-grazing-mueller", "mueller_reciprocity",
-            ("pplastic/default", "pplastic/rough-ggx"), "src/bsdfs/pplastic.cpp:377",
-            "the same cause as pplastic-polarized-grazing, seen in the whole Mueller matrix: the "
-            "polarized diffuse term's second Fresnel transmission is evaluated from the "
-            "internally refracted direction, at the critical angle for grazing directions, "
-            "where float32 cancels (lines 375-377), so f(wo, wi) and the reversed f(wi, wo) "
-            "differ there",
-            "M/M00 of f(wo, wi) against R_out Q f(wi, wo)^T Q R_in^T differs by 17x its "
-            "tolerance (M22, rough-ggx) at cos theta_o = 3.2e-4",
-            "the reversed path's matrix to float32 precision",
-            "tests/repro/pplastic_polarized_grazing.py",
-            rows=("f(wo, wi) = R_out Q f(wi, wo)ᵀ Q R_inᵀ, reflection",), region=Grazing(0.01)),
-    Finding("pplastic-polarized-grazing-intensity", "intensity",
-            ("pplastic/default", "pplastic/rough-ggx"), "src/bsdfs/pplastic.cpp:377",
-            "the same cause as pplastic-polarized-grazing: at cos_theta_i = 1e-4 the internally "
-            "refracted direction (line 375) lies at the critical angle, where "
-            "specular_transmission(|cos|, 1/eta) (line 376) rounds to 0 in float32, so the "
-            "polarized diffuse term is 0 where the unpolarized branch's (1 - R(cos_theta_i)) "
-            "(lines 429-432) is not",
-            "M00 = 0 against the unpolarized 3.1e-5 (pplastic/default; rough-ggx: 2.5 % low) "
-            "at cos_theta_i = 1e-4; every lane at cos_theta_i >= 0.2 agrees to 2.4e-7",
-            "M00 of the polarized eval = the unpolarized eval to float32 precision",
-            "tests/repro/pplastic_polarized_grazing_intensity.py",
-            rows=("eval M00 = eval in llvm_ad_spectral",
-                  "sample: wo, pdf, weight M00 = llvm_ad_spectral's"), region=Grazing(0.01)),
-    Finding("dielectric-polarized-grazing-transmission", "intensity", ("dielectric/polarized",),
-            "src/bsdfs/dielectric.cpp:305",
-            "in polarized variants sample() evaluates the transmission Mueller matrix at the "
-            "refracted direction (cos_theta_o_hat, line 305) but divides it by bs.pdf, the "
-            "transmission probability computed from the incident side (line 266); for grazing "
-            "wi the refracted direction lies at the critical angle, where "
-            "cos = sqrt(1 - eta^2 sin^2) cancels in float32, so the two disagree there (the "
-            "unpolarized branch divides t_i by t_i)",
-            "weight M00 1.788 against the unpolarized 0.4447 (= 1/eta^2) at cos_theta_i = 1e-4, "
-            "int_ior 1.5; every sample at cos_theta_i >= 0.01 agrees",
-            "weight M00 = the unpolarized weight to float32 precision",
-            "tests/repro/dielectric_polarized_grazing.py",
-            rows=("sample: wo, pdf, weight M00 = llvm_ad_spectral's",), region=Grazing(0.01)),
-    Finding("retarder-jump-y0", "mueller_identities", ("retarder/quarter", "retarder/half"),
-            "src/bsdfs/retarder.cpp:129",
-            "sample() re-expresses the element's Mueller matrix from the fixed axis (1, 0, 0) to "
-            "stokes_basis(forward) with rotate_mueller_basis_collinear (lines 129-131) without "
-            "projecting that axis onto the plane normal to forward (polarizer.cpp:134-136 "
-            "does); rotate_stokes_basis takes the angle's sign from dot(forward, cross(x, b)), "
-            "which changes sign with forward.y, so the matrix jumps across wi.y = 0 "
-            "(mitsuba3#1963, open)",
-            "at wi = (0.5, +-1e-5, 0.8) (quarter wave, theta = 30 deg): M11 = 0.9963 against "
-            "0.4754, M13 = 0.068 against -0.8054",
-            "a Mueller matrix continuous in wi",
-            "tests/repro/retarder_jump_y0.py",
-            rows=("delta-lobe matrices continuous in wi (8-ulp move, common frames)",),
-            region=IncidencePlaneY0(1e-5)),
     Finding("shading-normal-reciprocity", "reciprocity",
             ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
              "bumpmap/roughconductor"),
