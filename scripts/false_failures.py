@@ -85,6 +85,11 @@ SWEPT = {
 }
 
 
+#: A planted defect's plugin name where its file registers another than ``defect_<stem>``
+#: (plain_lambert.py registers the correct author_lambert beside the defective one).
+DEFECT_PLUGINS = {"plain_lambert": "author_lambert_gain"}
+
+
 def run(spec, params, seeds, quick, plugins=(), sweep=False, kind="bsdf") -> list[dict]:
     """One record per seed: the failing topics."""
     known_for = registry.by_name(kind).part("known_for")
@@ -143,7 +148,8 @@ def main() -> int:
                   f"{runs * stats.ALPHA:.2f} at ALPHA = {stats.ALPHA}; "
                   f"P(≥ {failures} | ALPHA) = {tail_p(failures, runs):.3f}", flush=True)
         for path in defects:
-            recs = run(f"defect_{path.stem}", None, args.defect_seeds, quick, [path],
+            recs = run(DEFECT_PLUGINS.get(path.stem, f"defect_{path.stem}"), None,
+                       args.defect_seeds, quick, [path],
                        sweep=args.sweep)
             result["defects"].setdefault(path.stem, {})[size] = recs
             missed = [r["seed"] for r in recs if not r["failing"]]
