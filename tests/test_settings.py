@@ -42,6 +42,16 @@ def test_later_setting_wins_and_nested_keys():
         "alpha": 0.2, "bsdf": {"type": "diffuse"}}
 
 
+def test_integer_ior_is_read_as_a_float_that_mitsuba_loads(variant_llvm_rgb):
+    import mitsuba as mi
+    # include/mitsuba/render/ior.h:79-94: an integer int_ior is read as a material name
+    sets = parse_sets(["int_ior=3", "bsdf.ext_ior=1", "max_depth=3"])
+    assert sets == {"int_ior": 3.0, "bsdf": {"ext_ior": 1.0}, "max_depth": 3}
+    assert isinstance(sets["int_ior"], float) and isinstance(sets["max_depth"], int)
+    loaded = load_plugin("dielectric", {"int_ior": sets["int_ior"]}, kind=mi.BSDF, word="BSDF")
+    assert "eta = 2.999" in str(loaded.plugin)   # 3 / air's 1.000277
+
+
 def test_split_keeps_text():
     assert split("res=256") == ("res", "256")
     assert split("title=a=b") == ("title", "a=b")

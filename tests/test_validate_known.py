@@ -278,3 +278,26 @@ def test_roughdielectric_index_matched_normalization_explains_its_signature_only
         assert row.status == "KNOWN", params
         assert row.details["known_by"] == [key]
         assert f"NOT NORMALIZED at θ_i = {where}" in row.reason
+
+
+@pytest.mark.parametrize("variant, sets, topic, key", [
+    ("llvm_ad_rgb", ["diffuse_reflectance=0", "specular_reflectance=0"], "finite",
+     "pplastic-black-nan-pdf"),
+    ("llvm_ad_spectral_polarized", ["int_ior=3", "alpha=1"], "reciprocity",
+     "pplastic-polarized-grazing")])
+def test_pplastic_sweep_corners_are_known_by_their_findings(tmp_path, variant, sets, topic, key):
+    """Two corners of pplastic's sweep failed unexplained (#36/#37, --quick): both
+    reflectances 0 (the 0/0 sampling weight, pplastic.cpp:239) and int_ior = 3 (the polarized
+    grazing cancellation, pplastic.cpp:377, whose band widens with eta to min cos 0.0197).
+    Typed on the command line as an author would: an integer int_ior loads (settings.IOR_NAMES),
+    and the rows read KNOWN by those findings; with --no-known they are fails."""
+    import json
+
+    from phonglab.cli import main
+    args = ["validate", "pplastic", "--no-sweep", "--quick", "--only", topic,
+            "--variant", variant] + [a for s in sets for a in ("--set", s)]
+    out = tmp_path / "r.json"
+    assert main(args + ["--json", str(out)]) == 0
+    rows = [r for r in json.loads(out.read_text())["results"] if r["status"] == "KNOWN"]
+    assert rows and all(key in r["details"]["known_by"] for r in rows)
+    assert main(args + ["--no-known"]) == 1

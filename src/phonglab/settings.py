@@ -17,7 +17,11 @@ Grammar of a ``--set NAME=VALUE`` (``phonglab validate``, ``phonglab fit``), as
   - a number (``0.25``, ``1e-3``; finite)              -> float;
   - anything else                                      -> str (``distribution=ggx``, a filename).
 
-Mitsuba takes an int wherever a float is expected (``alpha=1`` loads as α = 1.0).  A scene's
+Mitsuba takes an int wherever a float is expected (``alpha=1`` loads as α = 1.0), except an
+index of refraction: ``lookup_ior`` (``include/mitsuba/render/ior.h:79-94``) reads ``int_ior``
+and ``ext_ior`` as a number only when their type is Float and otherwise as a material name, so
+an integer there fails to load ("expected string, got integer"); an integer literal given to a
+name in :data:`IOR_NAMES` is read as a float (``int_ior=3`` -> 3.0).  A scene's
 ``<default>`` parameters (``phonglab render -D NAME=VALUE``) are split by the same
 :func:`split` but keep their value as text: Mitsuba substitutes it into the XML.
 
@@ -44,6 +48,9 @@ _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 #: An integer literal.
 _INT = re.compile(r"[+-]?\d+")
 #: The example every NAME=VALUE message ends with.
+#: Parameters Mitsuba reads with ``lookup_ior`` (a Float or a material name, never an integer).
+IOR_NAMES = frozenset({"int_ior", "ext_ior"})
+
 EXAMPLE = "--set alpha=0.2 or --set reflectance=0.2,0.3,0.4"
 
 
@@ -145,7 +152,10 @@ def parse_sets(items) -> dict:
         if isinstance(node.get(leaf), dict):
             raise ParameterError(f"--set {item!r}: {name} is a nested object already; set its "
                                  f"fields ({name}.NAME=VALUE) instead")
-        node[leaf] = parse_value(pair[1])
+        value = parse_value(pair[1])
+        if leaf in IOR_NAMES and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        node[leaf] = value
     return out
 
 

@@ -13,7 +13,7 @@ KNOWN).  The rows traced to the validator itself are :mod:`.validator_issues`.
 from __future__ import annotations
 
 from ..conformance import Finding
-from .polarized_findings import POLARIZED_FINDINGS
+from .polarized_findings import POLARIZED_FINDINGS, PPLASTIC_GRAZING
 from .signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe, Chi2Excess,
                          ComponentOutOfRange, Grazing, GrazingIncidence, IncidenceFrom,
                          IncidencePlaneY0, MaskedReflection, ParameterAt,
@@ -53,6 +53,8 @@ BLACK_PLASTIC = (("diffuse_reflectance", 0.0), ("specular_reflectance", 0.0))
 SPEC_TRANS_ON = (("spec_trans", (1e-4, 1.0)),)
 #: The plastic cases (a sweep reaches both reflectances 0 and int_ior 3 from the default).
 _PLASTIC = ("plastic/default", "plastic/nonlinear-ior1.9")
+#: The pplastic cases (a sweep reaches both reflectances 0 and int_ior 3 from each).
+_PPLASTIC = ("pplastic/default", "pplastic/rough-ggx")
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the conformance table.
 FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
@@ -122,6 +124,15 @@ FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
             "a finite pdf and weight (e.g. the diffuse lobe's, or 0)",
             "tests/repro/plastic_black_nan.py", rows=NAN_ROWS + (SAMPLE_ROW,),
             at=BLACK_PLASTIC),
+    Finding("pplastic-black-nan-pdf", "finite", _PPLASTIC, "src/bsdfs/pplastic.cpp:239",
+            "`m_specular_sampling_weight = s_mean / (d_mean + s_mean)` is 0/0 = NaN when both "
+            "reflectances are 0 (roughplastic.cpp:229's line), so prob_specular and "
+            "prob_diffuse (lines 454-455) and with them pdf() (line 476) and eval_pdf() are NaN "
+            "above the horizon; sample() compares sample1 < NaN (line 265), false, so it draws "
+            "the diffuse lobe with a finite weight",
+            "pdf = nan at 40 deg (eval = 0)",
+            "a finite pdf (e.g. the diffuse lobe's, or 0)",
+            "tests/repro/pplastic_black_nan.py", rows=NAN_ROWS, at=BLACK_PLASTIC),
     Finding("plastic-fdr-fit-energy", "energy", _PLASTIC,
             "include/mitsuba/render/fresnel.h:341",
             "plastic's diffuse term divides by 1 − F_dr(1/η) (plastic.cpp:196, 290-294), and "
@@ -562,7 +573,7 @@ FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
             "(unpolarized) variant agrees to 1.5e-8",
             "f(a, b) = f(b, a) to float32 precision",
             "tests/repro/pplastic_polarized_grazing.py",
-            rows=(REFLECTION_ROW,), region=Grazing(0.01)),
+            rows=(REFLECTION_ROW,), region=PPLASTIC_GRAZING),
     Finding("shading-normal-reciprocity", "reciprocity",
             ("normalmap/diffuse", "normalmap/roughconductor", "bumpmap/diffuse",
              "bumpmap/roughconductor"),
