@@ -157,6 +157,21 @@ def test_fresnel_weighted_diffuse_lobes_are_not_held_to_it(variant_llvm_rgb):
         assert not any(row.details["lambertian"])
 
 
+def test_a_lobe_that_vanishes_at_some_incidences_only_is_not_lambertian_there(variant_llvm_rgb):
+    """plastic at int_ior 1 (η = 1/1.000277 < 1, the BSDF sweep's corner): beyond the critical
+    angle its coating reflects everything, so the diffuse lobe is 0 at cos θ_i = 1e-4 and
+    eval_diffuse_reflectance is still ρ = 0.5. A lobe that is 0 there and not elsewhere
+    depends on ω_i: not Lambertian (the row was a fail, 0.5 vs 0). A lobe that is 0
+    everywhere (diffuse, ρ = 0) is still held to its albedo 0."""
+    row = _row(validate_bsdf({"type": "plastic", "int_ior": 1.0}, quick=True,
+                             topics=["eval_diffuse_reflectance"]), "eval_diffuse_reflectance")
+    assert row.status == "skipped" and "not Lambertian" in row.reason, row.reason
+    assert min(row.details["diffuse_albedo"]) == 0.0 and max(row.details["value"]) == 0.5
+    row = _row(validate_bsdf({"type": "diffuse", "reflectance": 0.0}, quick=True,
+                             topics=["eval_diffuse_reflectance"]), "eval_diffuse_reflectance")
+    assert row.status == "pass" and all(row.details["lambertian"]), row.reason
+
+
 def test_the_inherited_default_approximation_passes_with_a_note(variant_llvm_rgb):
     """blendbsdf(diffuse 0.7, roughconductor 0.3) blends roughconductor's inherited default
     π·eval(wi, n) (bsdf.cpp:38-43): 7.85 at normal incidence, where the mirror peak lies at n,

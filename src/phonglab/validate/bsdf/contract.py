@@ -145,7 +145,14 @@ def eval_null_transmission(bsdf, opts, m_tests: int) -> list[Row]:
 
 def _diffuse_albedo(bsdf, comps, cells, n):
     """Per cell and channel: Σ_k ∫ eval_k dω_o (upper hemisphere, rule centred on the normal),
-    and whether every diffuse component is Lambertian there (eval_k / cos θ_o constant)."""
+    and whether every diffuse component is Lambertian there (eval_k / cos θ_o constant).
+
+    A component that is 0 at some lit incidences and not at others depends on ω_i, so it is
+    not Lambertian at the incidences where it vanishes either (a Lambertian lobe is constant
+    in ω_i and ω_o alike): plastic at η < 1 totally reflects light beyond the critical angle
+    at its coating, its diffuse term (1 − F(ω_i))… is 0 there, and Mitsuba documents
+    eval_diffuse_reflectance as an approximation for such a lobe (bsdf.h:566-575).  A
+    component that is 0 at every incidence (a black one) is Lambertian with albedo 0."""
     wo, w = lobes.nodes((0.0, 0.0, lobes.FALLBACK_WIDTH), None, n)
     wis = lanes.exact(probe.direction(cells[:, 0], cells[:, 1]))
     wi = np.repeat(wis, len(wo), axis=0)
@@ -160,7 +167,8 @@ def _diffuse_albedo(bsdf, comps, cells, n):
         g = (ev[shaped] / wo_all[shaped, 2:3]).reshape(len(cells), -1, c)
         ref = np.median(g, axis=1, keepdims=True)
         spread = np.max(np.abs(g - ref), axis=1) / np.maximum(np.abs(ref[:, 0]), ABS_FLOOR)
-        lambert &= np.all(spread <= REL_TOL, axis=1)
+        vanishes = np.all(ev.reshape(len(cells), -1) == 0.0, axis=1)
+        lambert &= np.all(spread <= REL_TOL, axis=1) & (~vanishes | vanishes.all())
     return total, lambert
 
 
