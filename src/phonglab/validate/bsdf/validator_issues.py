@@ -124,6 +124,16 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "reported (hair samples, evaluates and passes chi2 standalone)",
         fixed_by="commit 7442576 (validate.gradient: unreadable traversed values are skipped: "
         "hair's unused sigma_a) and " + _D815814 + ": a topic that raises is one failing row"),
+    ValidatorIssue(
+        "diffuse-reflectance-vanishing-lobe", "eval_diffuse_reflectance", ("plastic/default",),
+        "found by the --quick sweep at int_ior = 1 (eta = 1/1.000277 < 1): beyond the critical "
+        "angle the coating reflects everything, so plastic's diffuse lobe is 0 at cos theta_i "
+        "= 1e-4 (its albedo 0 there) while eval_diffuse_reflectance returns the reflectance "
+        "0.5; the validator called a lobe that is 0 at one incidence 'Lambertian' there "
+        "(eval/cos theta_o constant: 0), though it is not 0 at the other incidences, so it "
+        "depends on wi and Mitsuba's documented approximation applies (bsdf.h:566-575)",
+        fixed_by="commit 0b7989a (eval_diffuse_reflectance: a lobe that vanishes at some lit "
+        "incidences only is not Lambertian there; one that is 0 everywhere still is)"),
 )
 
 
