@@ -144,7 +144,7 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "spike at phi = 2.1) and as wide as the broad lobe, so the spike fell between nodes: "
         "integral of pdf 0.8625 for 0.9004 counted, where an independent Monte Carlo integral "
         "gives 0.905 +- 0.0015 (Mitsuba's sample and pdf agree)",
-        fixed_by=f"commit {h} (lobes.layout: where the 1 % most probable samples lie 16x closer "
+        fixed_by="commit 59e3f4a (lobes.layout: where the 1 % most probable samples lie 16x closer "
         "together than the lobe's width, the rule is centred on them and graded down to "
         "their width)"),
 )
