@@ -44,6 +44,17 @@ def test_diffuse_normalization_is_one_lit_and_zero_at_grazing(variant_llvm_rgb):
     assert max(d["band"]) < 1e-4
 
 
+def test_chi2_counts_a_sample_whose_weight_is_0_because_the_bsdf_is_black_there(
+        variant_llvm_rgb):
+    """plastic at int_ior 1 (η = 0.99972, the sweep's corner), default sizes: diffuse samples
+    beyond the critical angle (cos θ_o < 0.0236) have eval 0 and weight 0. χ² dropped them
+    while pdf counts that region, so the first cos θ_o row was empty (p = 3.5e-13); they
+    count, as in the normalization topic (lanes.black_at_wo)."""
+    report = validate_bsdf({"type": "plastic", "int_ior": 1.0}, topics=["chi2"])
+    row = _row(report, "chi2")
+    assert row.status == "pass", row.reason
+
+
 def test_a_spike_beside_a_broad_lobe_is_integrated(variant_llvm_rgb):
     """principled with every parameter 1 (a sweep corner) at cos θ_i = 1e-4: ~1 % of the
     samples fall in a clearcoat spike ~7e-4 rad wide beside a GGX lobe 0.3 rad wide. A rule

@@ -110,6 +110,18 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarra
     return drawn & ~delta_mask(s.sampled_type) & finite_sample(s)
 
 
+def black_at_wo(bsdf, wi: np.ndarray, s: probe.Sample) -> np.ndarray:
+    """Per sample of ``s`` (drawn at incidence ``wi``): weight 0, bs.pdf > 0 and a finite wo
+    where the BSDF is black (pdf(wi, wo) > 0, eval(wi, wo) = 0 in every channel): the weight
+    0 is the right value eval/pdf there, not a rejection (:func:`counted`)."""
+    zero = ~some(s.weight != 0) & (s.pdf > 0) & every(np.isfinite(s.wo))
+    black = np.zeros(len(zero), dtype=bool)
+    if zero.any():
+        ev, pd = probe.eval(bsdf, wi, s.wo[zero]), probe.pdf(bsdf, wi, s.wo[zero])
+        black[zero] = (pd > 0) & np.all(ev == 0, axis=1)
+    return black
+
+
 def finite_sample(s: probe.Sample) -> np.ndarray:
     """Samples whose weight and wo are finite: a non-finite one is the ``finite`` topic's
     alone, and the other topics leave it out (of their counts and their totals)."""

@@ -73,11 +73,7 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     for theta, phi in cells:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
-        zero = (~lanes.some(s.weight != 0) & (s.pdf > 0) & lanes.every(np.isfinite(s.wo)))
-        black = np.zeros(n, dtype=bool)
-        if zero.any():
-            ev, pd = probe.eval(bsdf, wi, s.wo[zero]), probe.pdf(bsdf, wi, s.wo[zero])
-            black[zero] = (pd > 0) & np.all(ev == 0, axis=1)
+        black = lanes.black_at_wo(bsdf, wi, s)
         k = lanes.counted(s, black)
         ks.append(int(k.sum()))
         totals.append(int(lanes.finite_sample(s).sum()))

@@ -18,10 +18,15 @@ planted scale defect failed χ² or not by the luck of the seed).  One test per 
 energy cells that use sample weights), so the BSDF as a whole fails by chance with probability
 ALPHA = 0.01.
 
-What counts as a sample (:func:`_kept`): weight ≠ 0 (a rejected sample has weight 0), not a
+What counts as a sample (:func:`_kept`): weight ≠ 0 (a rejected sample has weight 0), or
+weight 0 at a direction drawn inside the support where the BSDF is black
+(:func:`.lanes.black_at_wo`: the ``normalization`` topic's rule, the same per sample), not a
 delta lobe's (``pdf`` has no density for it: a mixture such as ``plastic`` is histogrammed on
 its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a finite
-direction.  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
+direction.  Without the black-at-wo part, plastic at int_ior 1 (η = 0.99972 < 1) failed:
+its diffuse samples beyond the critical angle (cos θ_o < 0.0236, 0.056 % of them) have eval
+0 -- the coating reflects that light back in -- so their weight is 0, and the histogram's
+first row was empty against pdf's cos θ_o share there (p = 3.5e-13 at default sizes).  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
 expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a
 cell whose samples and pdf both lie within one bin and agree there (``narrow``: a lobe
 narrower than a bin, whose shape this grid cannot test, e.g. roughdielectric's transmission
@@ -60,8 +65,8 @@ DIRECTION_TOL = 1e-4
 def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
     """Which samples the histogram counts (N,) bool.
 
-    A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so), or, with
-    ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
+    A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so) or is 0
+    where the BSDF is black at its wo (:func:`.lanes.black_at_wo`), or, with ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
     (``pdf(wo) > 0``; a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet
     it draws its directions from its density.  Delta samples never count (``pdf`` has no
     density for them), nor do non-finite directions (the ``finite`` topic's).
@@ -72,7 +77,7 @@ def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
         if drawn.any():
             drawn[drawn] = probe.pdf(bsdf, wi, s.wo[drawn]) > 0
     else:
-        drawn = lanes.some(s.weight != 0)
+        drawn = lanes.some(s.weight != 0) | lanes.black_at_wo(bsdf, wi, s)
     return drawn & finite & ~lanes.delta_mask(s.sampled_type)
 
 
@@ -111,7 +116,8 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
     expected, integration = sphere_bins.expected_counts(grid, pdf_fn, n, opts.chi2_ires,
                                                         opts.chi2_ires_max)
     pdf_sum = float(expected.sum()) / n
-    black = not kept.any() and pdf_sum >= 1e-6 and black_at(bsdf, wi, opts)
+    black = (not lanes.some(s.weight != 0).any() and pdf_sum >= 1e-6
+             and black_at(bsdf, wi, opts))
     if black:
         kept = _kept(bsdf, wi, s, black=True)
     if not kept.any() and pdf_sum < 1e-6:
