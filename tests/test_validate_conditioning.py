@@ -74,3 +74,22 @@ def test_refine_leaves_passing_lanes_alone():
     rel = np.max(roundoff.rel_diff(value, value), axis=1)
     ex, info = roundoff.refine(rel, np.zeros(4), np.zeros(4), _cosine, wi, wo, value)
     assert np.all(ex == 0.0) and info["box_searched"] == 0
+
+
+def test_a_lanes_box_does_not_depend_on_the_lanes_beside_it():
+    """A lane whose value drops to 0 within its box (a grazing retro-reflection's pdf,
+    1.05e5 -> 0) has relative change 1 there, whatever lanes share its batch: with one
+    rel_diff floor for the batch, neighbours of ~1e9 (roughdielectric near eta = 1) made it
+    0.21 and failed a row of a correct plugin."""
+    def fn(wi, wo):
+        # lane 0's value vanishes when wo.x moves off its float32 value; lane 1 is huge, flat
+        big = wi[:, 0] > 0.5
+        edge = np.float32(0.6)
+        small = np.where(wo[:, 0].astype(np.float32) == edge, 1.05e5, 0.0)
+        return np.where(big, 1e9, small)
+    wi = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    wo = np.array([[0.6, 0.0, 0.8], [0.0, 0.6, 0.8]], dtype=np.float32).astype(np.float64)
+    value = fn(wi, wo)
+    alone = roundoff.box_sensitivity(fn, wi[:1], wo[:1], value[:1])
+    batch = roundoff.box_sensitivity(fn, wi, wo, value)
+    assert alone[0] == 1.0 and batch[0] == alone[0] and batch[1] == 0.0
