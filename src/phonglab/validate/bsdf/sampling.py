@@ -26,9 +26,10 @@ its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a
 direction.  Without the black-at-wo part, plastic at int_ior 1 (η = 0.99972 < 1) failed:
 its diffuse samples beyond the critical angle (cos θ_o < 0.0236, 0.056 % of them) have eval
 0 -- the coating reflects that light back in -- so their weight is 0, and the histogram's
-first row was empty against pdf's cos θ_o share there (p = 3.5e-13 at default sizes).  A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of
-expected count 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a
-cell whose samples and pdf both lie within one bin and agree there (``narrow``: a lobe
+first row was empty against pdf's cos θ_o share there (p = 3.5e-13 at default sizes).
+
+A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of expected count
+0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a cell whose samples and pdf both lie within one bin and agree there (``narrow``: a lobe
 narrower than a bin, whose shape this grid cannot test, e.g. roughdielectric's transmission
 at η ≈ 1, α·|1 − η|/η wide): it is not tested, and the reason says so.  A failing cell
 keeps its histogram, its expected counts and its residual map (obs − scale·exp)/√(scale·exp) (NaN where the
@@ -66,9 +67,9 @@ def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
     """Which samples the histogram counts (N,) bool.
 
     A sample counts when its weight is not 0 (Mitsuba marks a rejected sample so) or is 0
-    where the BSDF is black at its wo (:func:`.lanes.black_at_wo`), or, with ``black``, when ``sample`` drew a direction (``bs.pdf > 0``) inside the support
-    (``pdf(wo) > 0``; a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet
-    it draws its directions from its density.  Delta samples never count (``pdf`` has no
+    where the BSDF is black at its wo (:func:`.lanes.black_at_wo`), or, with ``black``,
+    when ``sample`` drew a direction (``bs.pdf > 0``) inside the support (``pdf(wo) > 0``;
+    a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet it draws its directions from its density.  Delta samples never count (``pdf`` has no
     density for them), nor do non-finite directions (the ``finite`` topic's).
     """
     finite = lanes.every(np.isfinite(s.wo))
