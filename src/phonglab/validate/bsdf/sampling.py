@@ -30,8 +30,9 @@ first row was empty against pdf's cos θ_o share there (p = 3.5e-13 at default s
 
 A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of expected count
 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a cell whose
-samples and pdf both lie within one bin and agree there (``narrow``: a lobe narrower than a bin, whose shape this grid cannot test, e.g. roughdielectric's transmission
-at η ≈ 1, α·|1 − η|/η wide): it is not tested, and the reason says so.  A failing cell
+samples and pdf both lie within one bin and agree there (``narrow``: a lobe narrower
+than a bin, whose shape this grid cannot test, e.g. roughdielectric's transmission at η ≈ 1,
+α·|1 − η|/η wide): it is not tested, and the reason says so.  A failing cell
 keeps its histogram, its expected counts and its residual map (obs − scale·exp)/√(scale·exp) (NaN where the
 bin was pooled or empty), and names its worst bin (θ_o/φ_o range, observed, expected,
 residual), which the row's evidence line repeats for the cell of smallest p.
@@ -70,7 +71,8 @@ def _kept(bsdf, wi: np.ndarray, s: probe.Sample, black: bool) -> np.ndarray:
     where the BSDF is black at its wo (:func:`.lanes.black_at_wo`), or, with ``black``,
     when ``sample`` drew a direction (``bs.pdf > 0``) inside the support (``pdf(wo) > 0``;
     a rejected one keeps its bs.pdf): a black BSDF's weights are all 0, yet it draws its
-    directions from its density.  Delta samples never count (``pdf`` has no density for them), nor do non-finite directions (the ``finite`` topic's).
+    directions from its density.  Delta samples never count (``pdf`` has no density for
+    them), nor do non-finite directions (the ``finite`` topic's).
     """
     finite = lanes.every(np.isfinite(s.wo))
     if black:
