@@ -8,6 +8,7 @@ import pickle
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from phonglab.cli import main
@@ -15,6 +16,7 @@ from phonglab.settings import ParameterError, parse_sets
 from phonglab.testing import assert_bsdf_valid
 from phonglab.validate import TOPICS, validate_bsdf
 from phonglab.validate.bsdf.topics import Row
+from phonglab.validate.gradient import unconverged
 from phonglab.validate.inputs import ValidateError
 from phonglab.verdict import STATUSES, Report
 
@@ -436,3 +438,17 @@ def test_ad_that_loses_a_dependence_eval_has_fails(variant_llvm_rgb, tmp_path):
     report = validate_bsdf("author_lambert", plugins=[plugin], topics=["gradient"])
     (row,) = [r for r in report.rows if r.name == "kd"]
     assert row.status == "fail" and "AD lost a dependence eval has" in row.reason
+
+
+def test_a_lane_judges_ad_only_where_its_own_quotients_converge(variant_llvm_rgb):
+    """pplastic at int_ior 1 (η = 0.99972, the default-size sweep's corner): lanes just above
+    the critical cosine 0.0235 have ∂eval/∂η ~ 1/√(cos² θ − cos² θ_c), AD 138 against
+    quotients D(h) 0.31 and D(h/2) 0.78 (the step crosses the total-reflection edge). Judged
+    against 1 % of max(|D(h/2)|, |AD|), they were kept and the row read 408 against 3.4 (a
+    fail); judged from the quotients alone they are left out, and the kept lanes agree."""
+    assert unconverged(np.array([0.31]), np.array([0.78]), np.zeros(1))[0]
+    assert not unconverged(np.array([0.780]), np.array([0.781]), np.zeros(1))[0]
+    report = validate_bsdf({"type": "pplastic", "int_ior": 1.0}, topics=["gradient"])
+    (row,) = [r for r in report.rows if r.name == "eta.value"]
+    assert row.status == "pass", row.reason
+    assert row.details["jump_lanes"] > 0 and abs(row.measured) < 10

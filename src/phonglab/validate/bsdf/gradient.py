@@ -13,8 +13,9 @@ over fixed random directions (ω_o on the whole sphere) and fixed weights c_l �
   parameter with an element at 0 (a weight or reflectance at 0, where x − hv leaves its domain
   and plugins may switch a lobe off) gets the second-order one-sided difference
   (−3S(x) + 4S(x + hv) − S(x + 2hv))/2h instead;
-* lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % of max(|D_l(h/2)|,
-  |AD_l|) + 4× the lane's round-off bound) hold a jump that moves with x (e.g.
+* lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % of |D_l(h/2)| + 4× the
+  lane's round-off bound, judged from the quotients alone: :func:`..gradient.unconverged`)
+  hold a jump or a kink that moves with x (e.g.
   roughdielectric's total-internal-reflection boundary under eta, a parameter flagged
   ``ParamFlags.Discontinuous``): there AD differentiates the continuous part only, by
   Mitsuba's design, so those lanes are left out and counted, as are lanes whose AD derivative
@@ -38,6 +39,7 @@ import numpy as np
 from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
+from ..gradient import unconverged
 from ..roundoff import EPS32
 from .topics import Row
 
@@ -171,9 +173,8 @@ def _one(bsdf, params, key, opts, dirs, discontinuous: bool) -> Row:
         return _refused(key, h, exc)
     s_abs = np.abs(_lanes(bsdf, wi, wo, c))
     noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))          # per-lane round-off bound
-    jumps = np.abs(d1 - d2) > 0.01 * np.maximum(np.abs(d2), np.abs(g)) + 4.0 * noise
     nonfinite = ~np.isfinite(g)
-    jumps &= ~nonfinite
+    jumps = unconverged(d1, d2, noise) & ~nonfinite
     keep = ~jumps & ~nonfinite & np.isfinite(d1) & np.isfinite(d2)
     ad, fd1, fd2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
     details = {"fd_h": fd1, "fd_h2": fd2, "h": h / 2, "one_sided": one_sided,
