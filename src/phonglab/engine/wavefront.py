@@ -47,7 +47,7 @@ b's pixel average — the model puts their variance into p, and
 overestimates it by orders of magnitude along such edges (docs/adaptive.md has the figures).  The exact table costs 2C + 1 scatters per offset and sample, so
 the pilot fills it for every pixel and later passes only for the source pixels where the
 pilot found the two u (below) a factor :data:`EXACT_RATIO` apart, and their 3×3 neighbours
-(:meth:`Wavefront.select_exact`, a second launch over those lanes only); the rest use the
+(:meth:`Wavefront.select_exact`; masked scatters in the pass's own kernel); the rest use the
 model (:meth:`Wavefront.estimate`).  The relative error of pixel p is
 ``e_p² = mean_c Var x_pc / (max(x_pc² − Var x_pc, 0) + ε)`` (ε =
 :data:`phonglab.engine.metrics.REL_EPS`, the project's relative MSE; E x² = r² + Var x, so
@@ -254,41 +254,31 @@ class Wavefront:
             dr.scatter_reduce(dr.ReduceOp.Add, s1[c], v, idx)
             dr.scatter_reduce(dr.ReduceOp.Add, s2[c], v * v, idx)
         width = len(self.offsets) * (self.channels + 1)
+        if self.squares:    # Q for the lanes of the pixels in `exact`: masked, in this kernel
+            width2 = len(self.offsets) * (2 * self.channels + 1)
+            if self.splat2 is None:
+                self.splat2 = dr.zeros(mi.Float, self.pixels * width2)
+            keep = mi.Bool(True) if self.exact is None else \
+                dr.gather(mi.Bool, mi.Bool(self.exact), idx)
+            moments = [mi.Float(1.0)] + values + [v * v for v in values]
         for k, (dy, dx) in enumerate(self.offsets):
             # weight of target pixel q + d: filter at (sample position − target centre)
             w = (self.rfilter.eval(u.x - (dx + 0.5)) * self.rfilter.eval(u.y - (dy + 0.5)))
             base = idx * width + k * (self.channels + 1)
             for c, v in enumerate(values + [mi.Float(1.0)]):
                 dr.scatter_reduce(dr.ReduceOp.Add, self.splat, w * v, base + c)
-        if self.squares:    # the per-sample values and positions only when Q needs them
-            dr.eval(s1, s2, self.splat, values, u)
-            self._squares(index, values, u)
-        else:               # (stored, 7M samples of nb_sphere_row's pass took 1.64 s, not 0.32)
-            dr.eval(s1, s2, self.splat)
+            if self.squares:
+                base2 = idx * width2 + k * (2 * self.channels + 1)
+                for c, v in enumerate(moments):
+                    dr.scatter_reduce(dr.ReduceOp.Add, self.splat2, w * w * v, base2 + c, keep)
+        # One kernel a pass, nothing per sample stored: a second launch over the Q lanes
+        # needed every sample's values and position in memory (outdoor_envmap 128², a pass of
+        # 5.2M samples, Q on 0.9 % of the pixels: 2.33 s; masked here 1.57 s; 1.19 s without
+        # Q, whose pixels, the noisy ones, take many of the samples).
+        dr.eval(s1, s2, self.splat, *([self.splat2] if self.squares else []))
         self.s1 += np.stack([np.array(a, dtype=np.float64) for a in s1], axis=1)
         self.s2 += np.stack([np.array(a, dtype=np.float64) for a in s2], axis=1)
         self.n += np.bincount(index, minlength=self.pixels)
-
-    def _squares(self, index: np.ndarray, values, u) -> None:
-        """Add the samples of the pixels in :attr:`exact` (all in the pilot) to Q: a second,
-        smaller launch over those lanes of the evaluated pass."""
-        lanes = np.arange(len(index)) if self.exact is None else np.flatnonzero(self.exact[index])
-        if len(lanes) == 0:
-            return
-        width = len(self.offsets) * (2 * self.channels + 1)
-        if self.splat2 is None:
-            self.splat2 = dr.zeros(mi.Float, self.pixels * width)
-        sel = mi.UInt32(lanes.astype(np.uint32))
-        vals = [dr.gather(mi.Float, v, sel) for v in values]
-        ux, uy = dr.gather(mi.Float, u.x, sel), dr.gather(mi.Float, u.y, sel)
-        idx = mi.UInt32(index[lanes])
-        for k, (dy, dx) in enumerate(self.offsets):
-            w = self.rfilter.eval(ux - (dx + 0.5)) * self.rfilter.eval(uy - (dy + 0.5))
-            w2 = w * w
-            base = idx * width + k * (2 * self.channels + 1)
-            for c, v in enumerate([mi.Float(1.0)] + vals + [v * v for v in vals]):
-                dr.scatter_reduce(dr.ReduceOp.Add, self.splat2, w2 * v, base + c)
-        dr.eval(self.splat2)
 
     def cost_map(self, seed: int, spp: int = cost.PROBE_SPP) -> np.ndarray | None:
         """(H, W) c_q = a + s_q, the cost of one sample of pixel q in rays
