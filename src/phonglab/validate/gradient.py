@@ -138,7 +138,7 @@ def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
 
     Judged from the quotients alone, never from AD: a lane's use as a judge of AD must not
     depend on the AD it judges.  (1 % of max(|D_l(h/2)|, |AD_l|) kept, at pplastic's
-    η = 0.99972, lanes just inside the critical cosine 0.0235 whose AD derivative is 138
+    η = 0.99972, lanes just above the critical cosine 0.0235 whose AD derivative is 138
     against quotients 0.31 and 0.78 -- the step crosses the total-reflection edge, where
     ∂/∂η of the Fresnel term grows as 1/√(cos² θ − cos² θ_c) -- and the sums read 408
     against 3.4: ValidatorIssue ``gradient-convergence-judged-by-ad``.)  Lanes with a

@@ -175,8 +175,8 @@ VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
         "converge (D(h) 0.31, D(h/2) 0.78, AD 138 on one lane).  A lane was left out when "
         "|D(h) - D(h/2)| exceeded 1 % of max(|D(h/2)|, |AD|): the large AD derivative itself "
         "kept it, and the sums read 544 against 4.5 (default), 216 against 1.7 (rough-ggx)",
-        fixed_by="commit 'validate: a lane's quotients judge their own convergence, never AD' "
-        "(gradient.unconverged, one rule for the BSDF, emitter and phase kinds): at int_ior 1 "
+        fixed_by="commit 1cf0c21 (gradient.unconverged: a lane's quotients judge their own "
+        "convergence, never AD; one rule for the BSDF, emitter and phase kinds): at int_ior 1 "
         "AD 0.181 against D(h/2) 0.232, tolerance 0.861"),
 )
 
