@@ -405,3 +405,47 @@ def test_by_time_render_keeps_its_cost_map_and_meets_its_estimate(variant_llvm_r
     assert r.cost is not None and r.cost.shape == (16, 16) and np.all(r.cost > cost.FIXED_COST)
     assert r.stopped == "target" and r.estimated_error <= 0.1 * (1 + adaptive.STOP_SLACK)
     assert adaptive.render_adaptive(scene, 0.1, seed=3).cost is None
+
+
+def _exact_variances_numpy(wf, image, sources):
+    """The delta method on the exact sums (wavefront module docstring), term by term in numpy
+    from the whole tables T and Q copied to the host: the reference the device kernel of
+    :meth:`Wavefront.exact_variances` is checked against."""
+    h, w, c, k = wf.height, wf.width, wf.channels, len(wf.offsets)
+    T = np.array(wf.splat, dtype=np.float64).reshape(wf.pixels, k, c + 1)
+    Q = np.array(wf.splat2, dtype=np.float64).reshape(wf.pixels, k, 2 * c + 1)
+    var, u = np.zeros((wf.pixels, c)), np.zeros(wf.pixels)
+    x_all, weight = image.reshape(-1, c), wf.weight.reshape(-1)
+    for q in np.flatnonzero(sources & (wf.n > 1)):
+        n = float(wf.n[q])
+        for j, (dy, dx) in enumerate(wf.offsets):
+            py, px = q // w + dy, q % w + dx
+            if not (0 <= py < h and 0 <= px < w) or weight[py * w + px] <= 0:
+                continue
+            p = py * w + px
+            x = x_all[p]
+            sz = T[q, j, :c] - x * T[q, j, c]
+            sz2 = Q[q, j, 1 + c:] - 2 * x * Q[q, j, 1:1 + c] + x * x * Q[q, j, 0]
+            term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1) * weight[p] ** 2)
+            var[p] += term
+            u[q] += n * np.mean(term / (x * x + metrics.REL_EPS))
+    return var.reshape(h, w, c), u.reshape(h, w)
+
+
+def test_exact_variances_on_the_device_are_the_delta_method_term_by_term(variant_llvm_rgb):
+    """The device kernel of the exact sums gives what the formula gives evaluated term by term
+    in float64 on the host, for every source pixel and for a subset (the pixels after the
+    pilot), with pixels of 0 and 1 samples among them (no terms)."""
+    wf = wavefront.Wavefront(_load("gray_room", res=12))
+    wf.squares = True
+    counts = np.random.default_rng(2).integers(0, 30, wf.pixels)
+    counts[:5] = [0, 1, 1, 0, 2]
+    wf.trace(counts, 4)
+    image = wf.image()
+    subset = np.random.default_rng(3).random(wf.pixels) < 0.3
+    for sources in (np.ones(wf.pixels, bool), subset):
+        var, u = wf.exact_variances(image, sources)
+        ref_var, ref_u = _exact_variances_numpy(wf, image, sources)
+        assert np.allclose(var, ref_var, rtol=1e-9, atol=0.0)
+        assert np.allclose(u, ref_u, rtol=1e-9, atol=0.0)
+        assert (u[~sources.reshape(u.shape)] == 0).all() and (u > 0).any()

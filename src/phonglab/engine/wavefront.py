@@ -102,13 +102,6 @@ MAX_WAVEFRONT = 1 << 24
 #: with temporaries (25 offsets for the gaussian filter: about 1.7 KiB a pixel, 1.7 GiB at
 #: 1024²).
 HOST_BYTES_PER_PIXEL_OFFSET = 68
-#: Source pixels per block of :meth:`Wavefront.exact_variances` (float64 host copies of
-#: their rows: ~2.8 MB a block for RGB and 25 offsets).  Small enough that each block's
-#: temporaries come from the allocator's heap, reused block after block: at 2¹⁵ (~90 MB a
-#: block) every temporary was a fresh mapping, and the pilot's estimate over all 16384
-#: pixels of textured_room at 128² spent 0.86 s, 0.71 of it in page faults (system time);
-#: at 2¹⁰ it takes 0.058 s.
-EXACT_BLOCK = 1 << 10
 
 
 def filter_integrals(rfilter, samples: int = 64) -> tuple[np.ndarray, np.ndarray]:
@@ -401,33 +394,52 @@ class Wavefront:
         """((H, W, C) Var x_p, (H, W) u_q) by the delta method on the exact squared-weight sums
         Q (module docstring): no assumption on where in its pixel a sample lies; the terms of
         the source pixels in ``sources`` (flat bool), each of which has every sample in Q.
-        ``image`` is the last :meth:`image` (its weights W_p are reused)."""
+        ``image`` is the last :meth:`image` (its weights W_p are reused).
+
+        One Dr.Jit kernel over the lanes (q, k), a source pixel and a filter offset (at most
+        :data:`MAX_WAVEFRONT` a launch): each gathers its rows of T and Q where they lie and
+        scatters its term, in float64, to its target pixel p = q + d_k and to u_q.  (A numpy
+        version copied the rows to the host in blocks: 0.06 s of the pilot's 0.15 s on
+        textured_room at 128², more than the device kernel by an order of magnitude.)"""
         h, w, c, k = self.height, self.width, self.channels, len(self.offsets)
-        var, u = np.zeros((self.pixels, c)), np.zeros(self.pixels)
-        every = np.flatnonzero(sources & (self.n > 1))
-        d = np.array(self.offsets)
-        for start in range(0, len(every), EXACT_BLOCK):     # bounded host memory
-            q = every[start:start + EXACT_BLOCK]
-            # the rows of T and Q of those pixels only, gathered on the device
-            rows = lambda table, size: np.array(dr.gather(mi.Float, table, mi.UInt32(
-                (q[:, None] * (k * size) + np.arange(k * size)).ravel().astype(np.uint32))),
-                dtype=np.float64).reshape(len(q), k, size)
-            T, Q = rows(self.splat, c + 1), rows(self.splat2, 2 * c + 1)
-            py, px = q[:, None] // w + d[None, :, 0], q[:, None] % w + d[None, :, 1]
-            inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
-            p = np.where(inside, py * w + px, 0)                   # target p = q + d, (M, K)
-            x = image.reshape(-1, c)[p]                             # (M, K, C)
-            wp = np.where(inside, self.weight.reshape(-1)[p], 0.0)[..., None]
-            n = self.n[q].astype(np.float64)[:, None, None]
-            sz = T[..., :c] - x * T[..., c:]
-            sz2 = Q[..., 1 + c:] - 2 * x * Q[..., 1:1 + c] + x * x * Q[..., :1]
-            term = np.maximum(sz2 - sz * sz / n, 0.0) / (n * (n - 1))
-            term = np.where(wp > 0, term / np.maximum(wp * wp, 1e-300), 0.0)
-            for ch in range(c):
-                var[:, ch] += np.bincount(p.ravel(), term[..., ch].ravel(),
-                                          minlength=self.pixels)
-            u[q] = n[:, 0, 0] * np.sum(np.mean(term / (x * x + REL_EPS), axis=2), axis=1)
-        return var.reshape(h, w, c), u.reshape(h, w)
+        every = np.flatnonzero(sources & (self.n > 1)).astype(np.uint32)
+        var = dr.zeros(mi.Float64, self.pixels * c)
+        u = dr.zeros(mi.Float64, self.pixels)
+        if len(every):
+            x_all = mi.Float64(image.reshape(-1).astype(np.float64))
+            weight = mi.Float64(self.weight.reshape(-1).astype(np.float64))
+            counts = mi.Float64(self.n.astype(np.float64))
+            dy, dx = (mi.Int32(np.array(self.offsets, dtype=np.int32)[:, i].copy())
+                      for i in (0, 1))
+            per_launch = max(1, MAX_WAVEFRONT // k)
+            for start in range(0, len(every), per_launch):
+                lane = dr.arange(mi.UInt32, min(per_launch, len(every) - start) * k)
+                q = dr.gather(mi.UInt32, mi.UInt32(every[start:start + per_launch]), lane // k)
+                j = lane % k
+                py = mi.Int32(q // w) + dr.gather(mi.Int32, dy, j)
+                px = mi.Int32(q % w) + dr.gather(mi.Int32, dx, j)
+                inside = (py >= 0) & (py < h) & (px >= 0) & (px < w)
+                p = mi.UInt32(dr.select(inside, py * w + px, 0))        # target p = q + d
+                wp = dr.gather(mi.Float64, weight, p, inside)
+                ok = inside & (wp > 0)
+                n = dr.gather(mi.Float64, counts, q)
+                rows_t, rows_q = q * (k * (c + 1)) + j * (c + 1), q * (k * (2 * c + 1)) + j * (2 * c + 1)
+                T = [mi.Float64(dr.gather(mi.Float, self.splat, rows_t + i)) for i in range(c + 1)]
+                Q = [mi.Float64(dr.gather(mi.Float, self.splat2, rows_q + i))
+                     for i in range(2 * c + 1)]
+                scale = dr.rcp(n * (n - 1) * wp * wp)
+                rel = mi.Float64(0.0)
+                for ch in range(c):
+                    x = dr.gather(mi.Float64, x_all, p * c + ch, ok)
+                    sz = T[ch] - x * T[c]
+                    sz2 = Q[1 + c + ch] - 2 * x * Q[1 + ch] + x * x * Q[0]
+                    term = dr.maximum(sz2 - sz * sz / n, 0.0) * scale
+                    dr.scatter_reduce(dr.ReduceOp.Add, var, term, p * c + ch, ok)
+                    rel += term / (x * x + REL_EPS)
+                dr.scatter_reduce(dr.ReduceOp.Add, u, n * rel / c, q, ok)
+                dr.eval(var, u)
+        return (np.array(var, dtype=np.float64).reshape(h, w, c),
+                np.array(u, dtype=np.float64).reshape(h, w))
 
 
 def relative_error_map(image: np.ndarray, variance: np.ndarray) -> np.ndarray:
