@@ -449,3 +449,50 @@ def test_exact_variances_on_the_device_are_the_delta_method_term_by_term(variant
         assert np.allclose(var, ref_var, rtol=1e-9, atol=0.0)
         assert np.allclose(u, ref_u, rtol=1e-9, atol=0.0)
         assert (u[~sources.reshape(u.shape)] == 0).all() and (u > 0).any()
+
+
+def _model_numpy(wf, image, exclude=None):
+    """The position-free model (wavefront module docstring) as convolutions with the separable
+    kernels in numpy: (H, W, C) Var x_p and (H, W) u_q, the reference of the device kernels of
+    :meth:`Wavefront.variance` and :meth:`Wavefront.source_variance`."""
+    h, w, c = wf.height, wf.width, wf.channels
+    f = wavefront.separable_filter
+    n = wf.n.reshape(h, w, 1).astype(np.float64)
+    s1, s2 = wf.s1.reshape(h, w, c), wf.s2.reshape(h, w, c)
+    scale = np.where(n > 1, 1.0 / np.maximum(n * (n - 1.0), 1.0), 0.0)
+    if exclude is not None:
+        scale = scale * ~exclude.reshape(h, w, 1)
+    x = image
+    num = (f(wf.b, s2 * scale) - 2 * x * f(wf.b, s1 * scale) + x * x * f(wf.b, n * scale)
+           - f(wf.a ** 2, s1 * s1 * scale / np.maximum(n, 1.0))
+           + 2 * x * f(wf.a ** 2, s1 * scale) - x * x * f(wf.a ** 2, n * scale))
+    den, lonely = f(wf.a, (n > 0).astype(float)), f(wf.a, (n == 1).astype(float)) > 0
+    var = np.where((den > 0) & ~lonely, np.maximum(num, 0.0) / np.maximum(den * den, 1e-300),
+                   np.inf)
+    sigma2 = np.where(n > 1, (s2 - s1 * s1 / np.maximum(n, 1)) / np.maximum(n - 1, 1), 0.0)
+    omega = np.where(den > 0, 1.0 / np.maximum(den * den, 1e-300), 0.0) / (x * x + metrics.REL_EPS)
+    return var, np.mean(np.maximum(sigma2, 0.0) * f(wf.b, omega), axis=2)
+
+
+@pytest.mark.parametrize("rfilter", ["gaussian", "box"])
+def test_the_position_free_model_on_the_device_is_its_convolutions(variant_llvm_rgb, rfilter):
+    """The device kernels of the position-free model give what its convolutions give in numpy
+    (gray_room's gaussian filter: 5x5 offsets; nb_sphere_row's box: one), with sources of 0 and 1 samples (unknown
+    targets: inf) and an excluded set."""
+    scene = _load("gray_room", res=12) if rfilter == "gaussian" else \
+        _load("nb_sphere_row", width=16, height=8)           # its film's filter is a box
+    wf = wavefront.Wavefront(scene)
+    assert len(wf.offsets) == (25 if rfilter == "gaussian" else 1)
+    counts = np.random.default_rng(5).integers(0, 30, wf.pixels)
+    counts[:6] = [0, 1, 1, 0, 2, 0]
+    wf.trace(counts, 6)
+    image = wf.image()
+    exclude = np.random.default_rng(6).random(wf.pixels) < 0.3
+    for ex in (None, exclude):
+        var, ref_var = wf.variance(image, ex), _model_numpy(wf, image, ex)[0]
+        assert np.array_equal(np.isinf(var), np.isinf(ref_var)) and np.isinf(var).any()
+        fin = np.isfinite(ref_var)
+        np.testing.assert_allclose(var[fin], ref_var[fin], rtol=1e-9, atol=1e-300)
+    u, ref_u = wf.source_variance(image), _model_numpy(wf, image)[1]
+    np.testing.assert_allclose(u, ref_u, rtol=1e-9, atol=0.0)
+    assert (u > 0).any()
