@@ -38,10 +38,10 @@ the box moments ``N_q, S1_q = Σ f, S2_q = Σ f²``:
 
     Var x_p ≈ Σ_q B_{q−p} · Σ_{s∈q} (f_s − x_p)² / (Σ_q A_{q−p} N_q)²
 
-(:meth:`Wavefront.variance`: convolutions, the textbook variance of the mean for a box
-filter).  It assumes a sample's value is independent of where in its pixel it lies, and
-fails where that is most false: a pixel straddling a bright edge (an area light seen against
-a dark ceiling) has samples of 15 on one side and 0.1 on the other, and its neighbour p on the
+(:meth:`Wavefront.variance`: a device kernel over each pixel's filter window, the textbook
+variance of the mean for a box filter).  It assumes a sample's value is independent of where
+in its pixel it lies, and fails where that is most false: a pixel straddling a bright edge (an
+area light seen against a dark ceiling) has samples of 15 on one side and 0.1 on the other, and its neighbour p on the
 dark side takes the bright samples with the filter's far tail, where w² is tiny, not with
 b's pixel average — the model puts their variance into p, and
 overestimates it by orders of magnitude along such edges (docs/adaptive.md has the figures).  The exact table costs 2C + 1 scatters per offset and sample, so
@@ -469,7 +469,8 @@ class Wavefront:
                 wp = dr.gather(mi.Float64, weight, p, inside)
                 ok = inside & (wp > 0)
                 n = dr.gather(mi.Float64, counts, q)
-                rows_t, rows_q = q * (k * (c + 1)) + j * (c + 1), q * (k * (2 * c + 1)) + j * (2 * c + 1)
+                rows_t = q * (k * (c + 1)) + j * (c + 1)
+                rows_q = q * (k * (2 * c + 1)) + j * (2 * c + 1)
                 T = [mi.Float64(dr.gather(mi.Float, self.splat, rows_t + i)) for i in range(c + 1)]
                 Q = [mi.Float64(dr.gather(mi.Float, self.splat2, rows_q + i))
                      for i in range(2 * c + 1)]
