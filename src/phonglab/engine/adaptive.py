@@ -89,7 +89,8 @@ class AdaptiveResult:
     source_variance: np.ndarray | None = None
     #: (H, W) c_q, the cost of one sample of pixel q in rays (by_time renders of ``path``)
     cost: np.ndarray | None = None
-    passes: list[dict[str, Any]] = field(default_factory=list)  #: per pass: pixels, samples, s
+    #: per pass: pixels, samples, seconds (its tracing: trace_seconds), estimated_error
+    passes: list[dict[str, Any]] = field(default_factory=list)
     metadata: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -257,6 +258,7 @@ class AdaptiveSampling:
         while True:
             t = time.perf_counter()
             traced = wf.trace(counts, pass_seed(seed, k))
+            trace_seconds = time.perf_counter() - t
             image = wf.image()
             var, u = wf.estimate(image)
             err2 = relative_error_map(image, var)
@@ -266,7 +268,8 @@ class AdaptiveSampling:
                     costs = wf.cost_map(pass_seed(seed, COST_SEED))
             estimate = math.sqrt(float(np.mean(np.where(np.isfinite(err2), err2, 0.0))))
             passes.append({"pixels": int(np.count_nonzero(counts)), "samples": traced,
-                           "seconds": time.perf_counter() - t, "estimated_error": estimate})
+                           "seconds": time.perf_counter() - t, "trace_seconds": trace_seconds,
+                           "estimated_error": estimate})
             k += 1
             if (estimate <= self.target_error * (1.0 + STOP_SLACK)
                     and np.all(np.isfinite(err2))):

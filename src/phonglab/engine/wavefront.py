@@ -104,6 +104,32 @@ MAX_WAVEFRONT = 1 << 24
 HOST_BYTES_PER_PIXEL_OFFSET = 68
 
 
+#: numpy dtype of each Dr.Jit element type :func:`jit_array` converts to
+_DTYPES = {"Float32": np.float32, "Float64": np.float64, "UInt32": np.uint32,
+           "Int32": np.int32, "Bool": np.bool_}
+#: Alignment (bytes) of every host buffer :func:`jit_array` hands to Dr.Jit.
+JIT_ALIGN = 64
+
+
+def jit_array(cls, array: np.ndarray):
+    """``cls(array)`` from a contiguous buffer aligned to :data:`JIT_ALIGN` bytes, copied there
+    when it is not.
+
+    Dr.Jit 1.5 compiles a different kernel for a host array that happens to be 64-byte aligned
+    (its load is emitted ``align 64``, else ``align 1``), so the same pass got one of two
+    kernel hashes depending on where numpy had put the index array, and a hash first seen
+    cost a fresh LLVM compile (~1 s: cornell_phong 128², 3 of 8 renders in one process, and
+    in fresh processes again).  Always aligned, each kernel has one hash, cached once."""
+    a = np.ascontiguousarray(array, dtype=_DTYPES[str(dr.type_v(cls)).split(".")[-1]]).ravel()
+    if a.ctypes.data % JIT_ALIGN:
+        buf = np.empty(a.nbytes + JIT_ALIGN, dtype=np.uint8)
+        start = -buf.ctypes.data % JIT_ALIGN
+        aligned = buf[start:start + a.nbytes].view(a.dtype)
+        aligned[...] = a
+        a = aligned
+    return cls(a)
+
+
 def filter_integrals(rfilter, samples: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """(a, b) on offsets d = −R..R: ``a(d) = ∫₀¹ w(u − ½ − d) du`` and ``b(d) = ∫₀¹ w(...)² du``
     (midpoint rule, ``samples`` points), the mean weight (and squared weight) a sample
@@ -236,7 +262,7 @@ class Wavefront:
 
     def _launch(self, index: np.ndarray, seed: int) -> None:
         self.sampler.seed(dr.opaque(mi.UInt32, seed), len(index))
-        idx = mi.UInt32(index)
+        idx = jit_array(mi.UInt32, index)
         ray, weight, u = self._camera_rays(idx)
         spec, _, _ = self.integrator.sample(self.scene, self.sampler, ray,
                                             self.sensor.get_medium(), mi.Bool(True))
@@ -255,7 +281,7 @@ class Wavefront:
             if self.splat2 is None:
                 self.splat2 = dr.zeros(mi.Float, self.pixels * width2)
             keep = mi.Bool(True) if self.exact is None else \
-                dr.gather(mi.Bool, mi.Bool(self.exact), idx)
+                dr.gather(mi.Bool, jit_array(mi.Bool, self.exact), idx)
             moments = [mi.Float(1.0)] + values + [v * v for v in values]
         for k, (dy, dx) in enumerate(self.offsets):
             # weight of target pixel q + d: filter at (sample position − target centre)
@@ -284,7 +310,7 @@ class Wavefront:
             return None
         index = np.repeat(np.arange(self.pixels, dtype=np.uint32), spp)
         self.sampler.seed(dr.opaque(mi.UInt32, seed), len(index))
-        idx = mi.UInt32(index)
+        idx = jit_array(mi.UInt32, index)
         ray, _, _ = self._camera_rays(idx)
         casts = cost.path_casts(self.scene, self.sampler, ray, *depths)
         total = dr.zeros(mi.Float, self.pixels)
@@ -294,7 +320,7 @@ class Wavefront:
 
     def image(self) -> np.ndarray:
         """(H, W, C): x_p = Σ_q T_qp / N_q ÷ Σ_q W_qp / N_q (module docstring), on the device."""
-        inv = mi.Float(np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0))
+        inv = jit_array(mi.Float, np.where(self.n > 0, 1.0 / np.maximum(self.n, 1), 0.0))
         p = dr.arange(mi.UInt32, self.pixels)
         px, py = mi.Int32(p % self.width), mi.Int32(p // self.width)
         width = len(self.offsets) * (self.channels + 1)
@@ -348,13 +374,13 @@ class Wavefront:
         kernels, it took 10–35 ms a pass at 128² to 512×128, 9–17 % of an adaptive render.)
         """
         c = self.channels
-        n = mi.Float64(self.n.astype(np.float64))
+        n = jit_array(mi.Float64, self.n)
         scale = np.where(self.n > 1, 1.0 / np.maximum(self.n * (self.n - 1.0), 1.0), 0.0)
         if exclude is not None:
             scale = scale * ~exclude
-        scale = mi.Float64(scale)
-        s1, s2 = mi.Float64(self.s1.ravel()), mi.Float64(self.s2.ravel())
-        x_all = mi.Float64(np.asarray(image, np.float64).ravel())
+        scale = jit_array(mi.Float64, scale)
+        s1, s2 = jit_array(mi.Float64, self.s1), jit_array(mi.Float64, self.s2)
+        x_all = jit_array(mi.Float64, image)
         p = dr.arange(mi.UInt32, self.pixels)
         px, py = mi.Int32(p % self.width), mi.Int32(p // self.width)
         x = [dr.gather(mi.Float64, x_all, p * c + ch) for ch in range(c)]
@@ -413,11 +439,11 @@ class Wavefront:
         (its box moments) times Σ_p B_{p−q} / (D_p² (x_p² + ε)), mean over channels (module
         docstring, "Where the variance lives"); two Dr.Jit kernels (D_p, then u_q)."""
         h, w, c = self.height, self.width, self.channels
-        n = mi.Float64(self.n.astype(np.float64))
+        n = jit_array(mi.Float64, self.n)
         p = dr.arange(mi.UInt32, self.pixels)
         px, py = mi.Int32(p % w), mi.Int32(p // w)
         den, _ = self._den(n, px, py)
-        x_all = mi.Float64(np.asarray(image, np.float64).ravel())
+        x_all = jit_array(mi.Float64, image)
         omega = []
         for ch in range(c):
             x = dr.gather(mi.Float64, x_all, p * c + ch)
@@ -452,15 +478,16 @@ class Wavefront:
         var = dr.zeros(mi.Float64, self.pixels * c)
         u = dr.zeros(mi.Float64, self.pixels)
         if len(every):
-            x_all = mi.Float64(image.reshape(-1).astype(np.float64))
-            weight = mi.Float64(self.weight.reshape(-1).astype(np.float64))
-            counts = mi.Float64(self.n.astype(np.float64))
-            dy, dx = (mi.Int32(np.array(self.offsets, dtype=np.int32)[:, i].copy())
+            x_all = jit_array(mi.Float64, image)
+            weight = jit_array(mi.Float64, self.weight)
+            counts = jit_array(mi.Float64, self.n)
+            dy, dx = (jit_array(mi.Int32, np.array(self.offsets)[:, i])
                       for i in (0, 1))
             per_launch = max(1, MAX_WAVEFRONT // k)
             for start in range(0, len(every), per_launch):
                 lane = dr.arange(mi.UInt32, min(per_launch, len(every) - start) * k)
-                q = dr.gather(mi.UInt32, mi.UInt32(every[start:start + per_launch]), lane // k)
+                q = dr.gather(mi.UInt32, jit_array(mi.UInt32, every[start:start + per_launch]),
+                              lane // k)
                 j = lane % k
                 py = mi.Int32(q // w) + dr.gather(mi.Int32, dy, j)
                 px = mi.Int32(q % w) + dr.gather(mi.Int32, dx, j)
