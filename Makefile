@@ -56,6 +56,12 @@ notebook-figures: setup
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 5
 
+# Where an adaptive render's time goes against mi.render at its samples, per oracle scene of
+# the bench (docs/adaptive.md, issue 39): docs/bench/adaptive_cost.json (~2 min, quiet machine).
+.PHONY: adaptive-cost
+adaptive-cost: setup
+	$(BIN)/python scripts/adaptive_cost.py --seeds 3 --json docs/bench/adaptive_cost.json
+
 # bench --quick and validate --all-builtins --quick serially vs on a 2-process LocalCluster
 # (alternating, ~6 min), phonglab.parallel's per-job overhead and the expected time on N
 # machines: docs/bench/cluster.json, rendered into BENCHMARKS.md (docs/cluster.md).
