@@ -41,14 +41,15 @@ the box moments ``N_q, S1_q = Σ f, S2_q = Σ f²``:
 (:meth:`Wavefront.variance`: a device kernel over each pixel's filter window, the textbook
 variance of the mean for a box filter).  It assumes a sample's value is independent of where
 in its pixel it lies, and fails where that is most false: a pixel straddling a bright edge (an
-area light seen against a dark ceiling) has samples of 15 on one side and 0.1 on the other, and its neighbour p on the
-dark side takes the bright samples with the filter's far tail, where w² is tiny, not with
-b's pixel average — the model puts their variance into p, and
-overestimates it by orders of magnitude along such edges (docs/adaptive.md has the figures).  The exact table costs 2C + 1 scatters per offset and sample, so
-the pilot fills it for every pixel and later passes only for the source pixels where the
-pilot found the two u (below) a factor :data:`EXACT_RATIO` apart, and their 3×3 neighbours
-(:meth:`Wavefront.select_exact`; masked scatters in the pass's own kernel); the rest use the
-model (:meth:`Wavefront.estimate`).  The relative error of pixel p is
+area light seen against a dark ceiling) has samples of 15 on one side and 0.1 on the other,
+and its neighbour p on the dark side takes the bright samples with the filter's far tail,
+where w² is tiny, not with b's pixel average — the model puts their variance into p, and
+overestimates it by orders of magnitude along such edges (docs/adaptive.md has the figures).
+The exact table costs 2C + 1 scatters per offset and sample, so the pilot fills it for every
+pixel and later passes only for the source pixels where the pilot found the two u (below) a
+factor :data:`EXACT_RATIO` apart, and their 3×3 neighbours (:meth:`Wavefront.select_exact`;
+masked scatters in the pass's own kernel); the rest use the model (:meth:`Wavefront.estimate`).
+The relative error of pixel p is
 ``e_p² = mean_c Var x_pc / (max(x_pc² − Var x_pc, 0) + ε)`` (ε =
 :data:`phonglab.engine.metrics.REL_EPS`, the project's relative MSE; E x² = r² + Var x, so
 x² − Var is the unbiased estimate of r²).  Per-sample sums, not the spread of pass images:
@@ -105,8 +106,8 @@ HOST_BYTES_PER_PIXEL_OFFSET = 68
 
 
 #: numpy dtype of each Dr.Jit element type :func:`jit_array` converts to
-_DTYPES = {"Float32": np.float32, "Float64": np.float64, "UInt32": np.uint32,
-           "Int32": np.int32, "Bool": np.bool_}
+_DTYPES = {dr.VarType.Float32: np.float32, dr.VarType.Float64: np.float64,
+           dr.VarType.UInt32: np.uint32, dr.VarType.Int32: np.int32, dr.VarType.Bool: np.bool_}
 #: Alignment (bytes) of every host buffer :func:`jit_array` hands to Dr.Jit.
 JIT_ALIGN = 64
 
@@ -120,7 +121,7 @@ def jit_array(cls, array: np.ndarray):
     kernel hashes depending on where numpy had put the index array, and a hash first seen
     cost a fresh LLVM compile (~1 s: cornell_phong 128², 3 of 8 renders in one process, and
     in fresh processes again).  Always aligned, each kernel has one hash, cached once."""
-    a = np.ascontiguousarray(array, dtype=_DTYPES[str(dr.type_v(cls)).split(".")[-1]]).ravel()
+    a = np.ascontiguousarray(array, dtype=_DTYPES[dr.type_v(cls)]).ravel()
     if a.ctypes.data % JIT_ALIGN:
         buf = np.empty(a.nbytes + JIT_ALIGN, dtype=np.uint8)
         start = -buf.ctypes.data % JIT_ALIGN
