@@ -56,6 +56,15 @@ notebook-figures: setup
 bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 5
 
+# The planner's 512² rows (issue 39), kept apart from `make bench` (which they would take past
+# 30 min): docs/bench/planner-512.json, which BENCHMARKS.md shows with its date. About 100 min
+# on 2 quiet cores with an empty reference cache (1024- to 32768-spp references, ~40 min of it);
+# PLANNER_SCENES=... reruns some scenes and keeps the other rows.
+PLANNER_SCENES ?=
+.PHONY: bench-planner-512
+bench-planner-512: setup
+	$(BIN)/python scripts/planner_bench.py --res 512 --repeats 3 --merge --out docs/bench/planner-512.json $(PLANNER_SCENES)
+
 # Where an adaptive render's time goes against mi.render at its samples, per oracle scene of
 # the bench (docs/adaptive.md, issue 39): docs/bench/adaptive_cost.json (~2 min, quiet machine).
 .PHONY: adaptive-cost

@@ -26,8 +26,13 @@ Reported per scene: the plan (model, sampling, variant, depth, spp), both errors
 times (median, min-max over seeds), the speed-up T_default/T_planned with its spread, and the
 plan's reasons.  Written to ``--out`` (JSON) and printed as a table.
 
-Run: ``.venv/bin/python scripts/planner_bench.py [--res 128 256] [--repeats 3] [scene ...]``
-(``make bench-planner``).
+Each row also records what it cost the bench (``bench_seconds``: reference, calibration,
+warm-ups and repeats) and its date; the JSON is written after every row, so an interrupted
+run keeps what it finished, and ``--merge`` keeps the rows of ``--out`` this run does not
+redo (the 512² rows, ``make bench-planner-512``, are run a few scenes at a time).
+
+Run: ``.venv/bin/python scripts/planner_bench.py [--res 128 256] [--repeats 3] [--merge]
+[scene ...]`` (``make bench``, ``make bench-planner``, ``make bench-planner-512``).
 """
 
 from __future__ import annotations
@@ -230,6 +235,14 @@ def bench_scene(name: str, res: int, repeats: int, ref_spp: int, workdir: Path) 
     return row
 
 
+def merged_rows(path: Path, fresh: list[dict]) -> list[dict]:
+    """The rows of ``path`` (a previous run's JSON) that ``fresh`` does not replace (same
+    scene and resolution), then ``fresh``: a run over some scenes keeps the others' rows."""
+    done = {(r["scene"], r["res"]) for r in fresh}
+    old = json.loads(path.read_text()) if path.is_file() else []
+    return [r for r in old if (r["scene"], r["res"]) not in done] + fresh
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -242,17 +255,32 @@ def main(argv=None) -> int:
                     help=f"reference spp (default {REF_SPP} at 128² and below, fewer on "
                          f"larger films: reference_spp())")
     ap.add_argument("--out", default=str(references.CACHE_DIR / "planner_bench.json"))
+    ap.add_argument("--merge", action="store_true",
+                    help="keep the rows of --out that this run does not redo (other scenes or "
+                         "resolutions): the 512² rows are run a few scenes at a time")
     args = ap.parse_args(argv)
+    unknown = [s for s in args.scenes if s not in SCENES]
+    if unknown:
+        print(f"planner_bench: unknown scene(s) {', '.join(unknown)}: choose from "
+              f"{', '.join(SCENES)}.", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
     rows = []
     with tempfile.TemporaryDirectory(prefix="planner-bench-") as tmp:
         for res in args.res:
             for name in args.scenes:
                 ref_spp = args.ref_spp or reference_spp(res)
-                rows.append(bench_scene(name, res, args.repeats, ref_spp, Path(tmp)))
-                print(json.dumps({k: rows[-1][k] for k in ("scene", "res", "speedup")}),
-                      flush=True)
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    write_json(args.out, rows, indent=2)
+                t0 = time.perf_counter()
+                row = bench_scene(name, res, args.repeats, ref_spp, Path(tmp))
+                # what the row cost the bench (reference, calibration, warm-ups, repeats) and when
+                row["bench_seconds"] = time.perf_counter() - t0
+                row["date"] = time.strftime("%Y-%m-%d")
+                rows.append(row)
+                # written after every row: an interrupted run keeps the rows it finished
+                write_json(out, merged_rows(out, rows) if args.merge else rows, indent=2)
+                print(json.dumps({k: row[k] for k in ("scene", "res", "speedup",
+                                                       "bench_seconds")}), flush=True)
     print(planner.benchmark_table(rows))
     for r in rows:
         print(f"\n{r['scene']}: plan reasons:")

@@ -900,3 +900,65 @@ def test_full_pilot_without_a_target_error_is_one_sentence(capsys):
     """--full-pilot belongs to the planner: alone (or with --adaptive) it is refused, exit 2."""
     assert main(["render", "gray_direct", "--full-pilot"]) == 2
     assert "--full-pilot is about the planner's pilot" in capsys.readouterr().err
+
+
+def _planner_bench_module():
+    """scripts/planner_bench.py, imported from its file (it is a script, not a module)."""
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "scripts" / "planner_bench.py"
+    spec = importlib.util.spec_from_file_location("planner_bench", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _bench_row(scene, res, **extra):
+    return {"scene": scene, "res": res, "target_error": 0.01, "speedup": 1.0, "speedup_min": 0.9,
+            "speedup_max": 1.1, "default": {"spp": 10, "error": 0.01, "seconds_median": 3.0},
+            "planned": {"model": "path", "sampling": "uniform", "variant": "llvm_ad_rgb",
+                        "max_depth": 8, "spp": 10.0, "error": 0.01, "seconds_median": 3.0,
+                        "pilot_seconds": 0.5, "reasons": []}, **extra}
+
+
+def test_planner_bench_merge_keeps_the_rows_a_run_does_not_redo(tmp_path):
+    """--merge: rows of other scenes or resolutions stay, a redone (scene, res) is replaced,
+    and no file yet means just the fresh rows."""
+    pb = _planner_bench_module()
+    out = tmp_path / "p.json"
+    assert pb.merged_rows(out, [_bench_row("a", 512)]) == [_bench_row("a", 512)]
+    out.write_text(json.dumps([_bench_row("a", 512, speedup=2.0), _bench_row("b", 512),
+                               _bench_row("a", 256)]))
+    merged = pb.merged_rows(out, [_bench_row("a", 512, speedup=3.0)])
+    assert [(r["scene"], r["res"], r["speedup"]) for r in merged] == \
+        [("b", 512, 1.0), ("a", 256, 1.0), ("a", 512, 3.0)]
+
+
+def test_planner_bench_refuses_an_unknown_scene_before_any_work(capsys):
+    pb = _planner_bench_module()
+    assert pb.main(["no_such_scene", "--out", "/nonexistent/p.json"]) == 2
+    assert "unknown scene(s) no_such_scene" in capsys.readouterr().err
+
+
+def test_benchmarks_md_shows_the_512_rows_apart_with_their_date_and_cost(tmp_path):
+    """BENCHMARKS.md's planner section: the make bench rows, then the 512² rows make bench does
+    not rerun, with their dates and what they cost (bench_seconds summed); either alone too."""
+    from phonglab.bench import report
+    from phonglab.bench.report_data import RunData
+
+    def section():
+        data = RunData(out=tmp_path, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
+                       quick=None)
+        return "\n".join(report.planner_section(data))
+
+    assert section() == ""
+    (tmp_path / report.PLANNER_LARGE).write_text(json.dumps(
+        [_bench_row("a", 512, date="2026-12-06", bench_seconds=600.0),
+         _bench_row("b", 512, date="2026-12-07", bench_seconds=1200.0, speedup=0.5)]))
+    text = section()
+    assert "### At 512²" in text and "measured 2026-12-06, 2026-12-07" in text
+    assert "these 2 rows took 30 min" in text and "| a (512²) |" in text
+    assert "* **b** (512): 0.50x at equal error" in text and "At 128² and 256²" not in text
+    (tmp_path / "planner.json").write_text(json.dumps([_bench_row("a", 128)]))
+    text = section()
+    assert text.index("| a (128²) |") < text.index("### At 512²") < text.index("| a (512²) |")

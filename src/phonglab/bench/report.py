@@ -381,9 +381,14 @@ def mis_section(d: RunData) -> list[str]:
     return L
 
 
+#: The planner's 512² rows: ``make bench-planner-512`` writes them apart from ``make bench``.
+PLANNER_LARGE = "planner-512.json"
+
+
 def planner_section(d: RunData) -> list[str]:
     rows = part_record(d, "planner.json")
-    if rows is None:
+    large = part_record(d, PLANNER_LARGE)
+    if rows is None and large is None:
         return []
     return ["\n## Planner: planned against the default configuration at equal error\n",
             "`scripts/planner_bench.py` (run by `make bench`): per scene a target relative RMSE E; "
@@ -402,6 +407,22 @@ def planner_section(d: RunData) -> list[str]:
             "pilot render that samples its image (inverse-variance weights; *+ pilot* in the "
             "promise table), and the held-out scenes (textured_room, outdoor_envmap) were "
             "added before any planner change was measured on them.\n",
+            *(["At 128² and 256² (`make bench` reruns these):\n", benchmark_table(rows), "",
+               *planner_misses(rows)] if rows else []),
+            *planner_large_rows(large)]
+
+
+def planner_large_rows(rows: list[dict] | None) -> list[str]:
+    """The 512² table (:data:`PLANNER_LARGE`): rows ``make bench`` does not rerun, with their
+    dates and what they cost to measure."""
+    if not rows:
+        return []
+    dates = sorted({r.get("date", "undated") for r in rows})
+    cost = sum(r.get("bench_seconds", 0.0) for r in rows) / 60
+    return [f"\n### At 512²\n\n`make bench-planner-512` (measured {', '.join(dates)}; not rerun "
+            f"by `make bench`, whose 30 minutes it would more than double: these "
+            f"{len(rows)} rows took {cost:.0f} min, references, calibration and repeats "
+            f"included). The same commands, targets and timing as above.\n",
             benchmark_table(rows), "", *planner_misses(rows)]
 
 
