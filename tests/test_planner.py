@@ -896,6 +896,24 @@ def test_a_render_cheaper_than_the_pilot_is_planned_straight_away(monkeypatch):
         assert done.error.achieved <= 1.15 * target, (done.error, p.summary())
 
 
+def test_a_rest_of_a_few_first_renders_goes_straight(monkeypatch):
+    """gray_room at 32², E = 0.008: the rest of the image needs more spp than the first pilot
+    render took (the rule before issue 39 ran the whole pilot then) but at most
+    STRAIGHT_RENDERS times as many, as the straight reason says: the plan goes straight;
+    with the threshold at one first render the depth search runs."""
+    import re
+
+    p = planner.plan("gray_room", 0.008, params=RES, straight=True)
+    reason = next((r for r in p.reasons if r.startswith("straight:")), None)
+    assert reason is not None and p.max_depth == -1, p.summary()
+    rest = int(re.search(r"needs (\d+) more spp", reason).group(1))
+    assert p.pilot_spp < rest <= planner.planning.STRAIGHT_RENDERS * p.pilot_spp
+    assert f"{planner.planning.STRAIGHT_RENDERS} first renders or less" in reason
+    monkeypatch.setattr(planner.planning, "STRAIGHT_RENDERS", 1)
+    full = planner.plan("gray_room", 0.008, params=RES, straight=True)
+    assert not any(r.startswith("straight:") for r in full.reasons) and full.max_depth > 0
+
+
 def test_full_pilot_without_a_target_error_is_one_sentence(capsys):
     """--full-pilot belongs to the planner: alone (or with --adaptive) it is refused, exit 2."""
     assert main(["render", "gray_direct", "--full-pilot"]) == 2

@@ -26,6 +26,19 @@ from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, 
 
 #: :func:`plan` renders straight away (:func:`_straight`) when it pays, unless told not to.
 STRAIGHT = True
+#: :func:`_straight` goes straight when the rest of the render, priced at the pilot's first
+#: render's time per spp, takes at most this many first renders.  The later pilot steps (ladder
+#: stages, the time model's seven renders) cost 1.0-5.9 first renders before the render they
+#: choose, median 4 (the seven bench scenes at 128², 256², 512², warm, in-process), and a
+#: full-depth ``path`` sample costs 1/1.9-1/1.5 of the ladder sample the rest is priced at
+#: (an image per depth: gray_room 512² 65 against 121 ms/spp, 256² 16 against 25,
+#: textured_room 128² 4.1 against 6.4): a rest priced at 8 first renders takes about as long
+#: as the later steps alone.  Measured, plan + render, warm: gray_room 256² straight 0.86 s
+#: against 0.96 s, 512² 3.6 s against 4.7 s, textured_room 128² 0.73 s against 0.79 s
+#: (rests of 7.0, 5.75 and 7.7 first renders); textured_room 256² (a rest of 36) took 2.74 s
+#: straight against 2.34 s planned, and gray_direct 128² (12.7) gains 1.3x from a multijitter
+#: sampler only its later steps find.
+STRAIGHT_RENDERS = 8
 #: A plan predicted to take longer than this (seconds) is refused unless asked for.
 MAX_SECONDS = 3600.0
 
@@ -290,19 +303,20 @@ def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int |
 def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
               reasons: list[str]):
     """(N, spp to render, seconds per pixel sample x pixels, the pilot's renders) of a
-    straight render, or None: when the rest of the render is predicted to take less than
-    the pilot's first render did, the rest of the pilot (the depth search, the time model)
-    cannot save more than it costs, and the plan is the default configuration at once:
+    straight render, or None: when the rest of the render is predicted to take at most
+    :data:`STRAIGHT_RENDERS` times what the pilot's first render did, the rest of the pilot
+    (the depth search, the time model) cannot save more than it costs, and the plan is the
+    default configuration at once:
     ``path`` at full depth (unbiased), independent samples, combined with the pilot's two
     full-depth renders.
 
     With n(1) the first pilot's relative noise at full depth and P the two renders'
     precision (:func:`_reusable`), the render needs n = ⌈n(1)² (1/E² − P)⌉ samples (at
-    least 2); the first render took t seconds for s samples per pixel of the same kernel
-    (the ladder costs what ``path`` at full depth does: 75 against 69 ms at 128², gray_room),
-    so the rest takes about t·n/s.  Every later step of the pilot costs at least a render
-    of its own (a ladder stage, seven time-model renders), so a rest shorter than t cannot
-    be shortened by more than it would cost to find out how.
+    least 2); the first render took t seconds for s samples per pixel of the ladder, whose
+    time per sample is 1.5-1.9 times a full-depth ``path`` sample's, so the rest takes at most
+    t·n/s.  The later steps of the pilot cost about 4 first renders (1.0-5.9) before the
+    render they choose, so a rest of at most :data:`STRAIGHT_RENDERS` · t (at most about
+    4-5 t of ``path``) cannot be shortened by more than it would cost to find out how.
     """
     full = pilot.measure(-1)
     if full.noise_per_sample == 0.0 or pilot.first_seconds <= 0.0:
@@ -316,14 +330,16 @@ def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
     n_total = max(1, math.ceil(v1 / target_error ** 2))
     rest = choice.credited_spp(full.noise_per_sample, target_error ** 2, credit)
     per_spp = pilot.first_seconds / pilot.spp
-    if per_spp * rest >= pilot.first_seconds:
+    if per_spp * rest > STRAIGHT_RENDERS * pilot.first_seconds:
         return None
     reasons.append(f"straight: the pilot's first render took {pilot.first_seconds:.3g} s for "
                    f"{pilot.spp} spp at full depth; with its two full-depth renders (worth "
                    f"{credit * v1:.1f} independent samples) the image needs {rest} more spp "
-                   f"of {n_total}, about {per_spp * rest:.3g} s, less than any further pilot "
-                   f"step would cost, so no depth search or timing: path at full depth "
-                   f"(max_depth -1, unbiased), {rest} spp, combined with the pilot's renders")
+                   f"of {n_total}, at most {per_spp * rest:.3g} s at that render's rate "
+                   f"({STRAIGHT_RENDERS} first renders or less: about what the depth search and "
+                   f"the time model would cost before their render), so no depth search or "
+                   f"timing: path at full depth (max_depth -1, unbiased), {rest} spp, combined "
+                   f"with the pilot's renders")
     prior = Prior(tuple(part for part, _ in parts), precisions, pilot.weight)
     return n_total, rest, per_spp, prior
 
