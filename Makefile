@@ -27,7 +27,9 @@ test-all: setup
 	$(BIN)/python -m pytest $(PYTEST_ARGS)
 
 # Regenerates BENCHMARKS.md and docs/bench/ (CSV + PNG) from a fresh full run, after a timed
-# --quick run whose wall time the report quotes. About 3 minutes on 2 quiet cores.
+# --quick run whose wall time the report quotes. About 28 minutes on 2 quiet cores with the
+# references cached (.bench_cache/references), about 42 with an empty cache; the planner's 512²
+# rows are apart (make bench-planner-512), shown in BENCHMARKS.md with their date.
 bench: setup
 	$(BIN)/phonglab bench --quick --fresh --no-progress --out out/bench-quick
 	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 3 --out docs/bench/planner.json
