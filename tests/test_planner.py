@@ -971,11 +971,13 @@ def test_benchmarks_md_shows_the_512_rows_apart_with_their_date_and_cost(tmp_pat
 
     assert section() == ""
     (tmp_path / report.PLANNER_LARGE).write_text(json.dumps(
-        [_bench_row("a", 512, date="2026-12-06", bench_seconds=600.0),
+        [_bench_row("a", 512, date="2026-12-06", bench_seconds=600.0,
+                    reference={"spp": 1024, "seconds": 120.0}),
          _bench_row("b", 512, date="2026-12-07", bench_seconds=1200.0, speedup=0.5)]))
     text = section()
     assert "### At 512²" in text and "measured 2026-12-06, 2026-12-07" in text
-    assert "these 2 rows took 30 min" in text and "| a (512²) |" in text
+    assert "these 2 rows took 30 min, 2 of them rendering references" in text
+    assert "| a (512²) |" in text
     assert "* **b** (512): 0.50x at equal error" in text and "At 128² and 256²" not in text
     (tmp_path / "planner.json").write_text(json.dumps([_bench_row("a", 128)]))
     text = section()

@@ -419,10 +419,13 @@ def planner_large_rows(rows: list[dict] | None) -> list[str]:
         return []
     dates = sorted({r.get("date", "undated") for r in rows})
     cost = sum(r.get("bench_seconds", 0.0) for r in rows) / 60
+    refs = sum(r.get("reference", {}).get("seconds", 0.0) for r in rows) / 60
     return [f"\n### At 512²\n\n`make bench-planner-512` (measured {', '.join(dates)}; not rerun "
             f"by `make bench`, whose 30 minutes it would more than double: these "
-            f"{len(rows)} rows took {cost:.0f} min, references, calibration and repeats "
-            f"included). The same commands, targets and timing as above.\n",
+            f"{len(rows)} rows took {cost:.0f} min, {refs:.0f} of them rendering references "
+            f"not yet in the cache, the rest calibration, warm-ups and repeats; what the "
+            f"references cost: docs/planner.md). The same commands, targets and timing as "
+            f"above.\n",
             benchmark_table(rows), "", *planner_misses(rows)]
 
 

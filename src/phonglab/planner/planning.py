@@ -28,8 +28,8 @@ from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, 
 STRAIGHT = True
 #: :func:`_straight` goes straight when the rest of the render, priced at the pilot's first
 #: render's time per spp, takes at most this many first renders.  The later pilot steps (ladder
-#: stages, the time model's seven renders) cost 1.0-5.9 first renders before the render they
-#: choose, median 4 (the seven bench scenes at 128², 256², 512², warm, in-process), and a
+#: stages, the time model's seven renders) cost 0.3-5.9 first renders before the render they
+#: choose, median 3.9 (the seven bench scenes at 128², 256², 512², warm, in-process), and a
 #: full-depth ``path`` sample costs 1/1.9-1/1.5 of the ladder sample the rest is priced at
 #: (an image per depth: gray_room 512² 65 against 121 ms/spp, 256² 16 against 25,
 #: textured_room 128² 4.1 against 6.4): a rest priced at 8 first renders takes about as long
@@ -314,7 +314,7 @@ def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
     precision (:func:`_reusable`), the render needs n = ⌈n(1)² (1/E² − P)⌉ samples (at
     least 2); the first render took t seconds for s samples per pixel of the ladder, whose
     time per sample is 1.5-1.9 times a full-depth ``path`` sample's, so the rest takes at most
-    t·n/s.  The later steps of the pilot cost about 4 first renders (1.0-5.9) before the
+    t·n/s.  The later steps of the pilot cost about 4 first renders (0.3-5.9) before the
     render they choose, so a rest of at most :data:`STRAIGHT_RENDERS` · t (at most about
     4-5 t of ``path``) cannot be shortened by more than it would cost to find out how.
     """
