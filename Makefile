@@ -59,9 +59,9 @@ bench-planner: setup
 	$(BIN)/python scripts/planner_bench.py --res 128 256 --repeats 5
 
 # The planner's 512² rows (issue 39), kept apart from `make bench` (which they would take past
-# 30 min): docs/bench/planner-512.json, which BENCHMARKS.md shows with its date. About 100 min
-# on 2 quiet cores with an empty reference cache (1024- to 32768-spp references, ~40 min of it);
-# PLANNER_SCENES=... reruns some scenes and keeps the other rows.
+# 30 min): docs/bench/planner-512.json, which BENCHMARKS.md shows with its date. About 75 min
+# on 2 quiet cores with an empty reference cache (1024- to 32768-spp references, ~40 min of it;
+# measured 2026-12-06); PLANNER_SCENES=... reruns some scenes and keeps the other rows.
 PLANNER_SCENES ?=
 .PHONY: bench-planner-512
 bench-planner-512: setup
