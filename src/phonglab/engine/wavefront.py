@@ -208,6 +208,11 @@ class Wavefront:
         #: offsets d = p − q (target pixel p, the sample's pixel q) the filter reaches
         self.offsets = [(iy - radius, ix - radius) for iy in range(self.A.shape[0])
                         for ix in range(self.A.shape[1]) if self.A[iy, ix] > 0]
+        #: (d_y, d_x, A_d, B_d) of every offset d = p − q where A or B is non-zero: the window
+        #: of the device kernels of :meth:`variance` and :meth:`source_variance`
+        self.window = [(iy - radius, ix - radius, float(self.A[iy, ix]), float(self.B[iy, ix]))
+                       for iy in range(self.A.shape[0]) for ix in range(self.A.shape[1])
+                       if self.A[iy, ix] != 0 or self.B[iy, ix] != 0]
         npix = self.width * self.height
         require_memory(HOST_BYTES_PER_PIXEL_OFFSET * len(self.offsets) * npix,
                        f"{path}: adaptive sampling of a {self.width} x {self.height} film",
@@ -341,14 +346,6 @@ class Wavefront:
         self.weight = weight          # W_p, the ratio's denominator (exact_variances)
         return np.where(weight > 0, t[..., :-1] / np.where(weight > 0, weight, 1), 0.0)
 
-    def _window(self):
-        """(d_y, d_x, A_d, B_d) of every offset d = p − q (target minus source) where A or B
-        is non-zero, for the device kernels of :meth:`variance` and :meth:`source_variance`."""
-        r = self.A.shape[0] // 2
-        return [(iy - r, ix - r, float(self.A[iy, ix]), float(self.B[iy, ix]))
-                for iy in range(self.A.shape[0]) for ix in range(self.A.shape[1])
-                if self.A[iy, ix] != 0 or self.B[iy, ix] != 0]
-
     def _neighbour(self, px, py, dy: int, dx: int, sign: int):
         """(index, in-image mask) of the pixel at (px, py) + sign·(dx, dy)."""
         qx, qy = px + sign * dx, py + sign * dy
@@ -358,7 +355,7 @@ class Wavefront:
     def _den(self, n, px, py):
         """(D_p = Σ_q A_{p−q} [N_q > 0], Σ_q A_{p−q} [N_q = 1]) on the device."""
         den, lonely = mi.Float64(0.0), mi.Float64(0.0)
-        for dy, dx, a_d, _ in self._window():
+        for dy, dx, a_d, _ in self.window:
             q, ok = self._neighbour(px, py, dy, dx, -1)
             nq = dr.gather(mi.Float64, n, q, ok)
             den += dr.select(nq > 0, mi.Float64(a_d), 0.0)
@@ -386,7 +383,7 @@ class Wavefront:
         px, py = mi.Int32(p % self.width), mi.Int32(p // self.width)
         x = [dr.gather(mi.Float64, x_all, p * c + ch) for ch in range(c)]
         num = [mi.Float64(0.0) for _ in range(c)]
-        for dy, dx, a_d, b_d in self._window():
+        for dy, dx, a_d, b_d in self.window:
             q, ok = self._neighbour(px, py, dy, dx, -1)
             nq = dr.gather(mi.Float64, n, q, ok)
             sc = dr.gather(mi.Float64, scale, q, ok)
@@ -451,7 +448,7 @@ class Wavefront:
             omega.append(dr.select(den > 0, 1.0 / (den * den), 0.0) / (x * x + REL_EPS))
         dr.eval(omega)
         spread = [mi.Float64(0.0) for _ in range(c)]
-        for dy, dx, _, b_d in self._window():   # targets p = q + d of source q
+        for dy, dx, _, b_d in self.window:   # targets p = q + d of source q
             t, ok = self._neighbour(px, py, dy, dx, +1)
             for ch in range(c):
                 spread[ch] += b_d * dr.gather(mi.Float64, omega[ch], t, ok)
