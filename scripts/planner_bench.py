@@ -53,7 +53,8 @@ from phonglab import planner, runtime
 from phonglab.engine import exr, metrics, references, render, scenes
 from phonglab.bench import timing
 from phonglab.planner import benchmark
-from phonglab.engine.outputs import write_json
+from phonglab.engine.outputs import check_output_file, write_json
+from phonglab.errors import PhonglabError
 
 #: The default configuration: ``phonglab render``'s default variant, path at max_depth 8.
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -264,8 +265,11 @@ def main(argv=None) -> int:
         print(f"planner_bench: unknown scene(s) {', '.join(unknown)}: choose from "
               f"{', '.join(SCENES)}.", file=sys.stderr)
         return 2
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    try:   # before any render: an hour of 512² rows must not end in a file it cannot write
+        out = check_output_file(args.out, "planner bench record (--out)")
+    except PhonglabError as exc:
+        print(f"planner_bench: {exc}.", file=sys.stderr)
+        return 2
     rows = []
     with tempfile.TemporaryDirectory(prefix="planner-bench-") as tmp:
         for res in args.res:

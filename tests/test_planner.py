@@ -952,10 +952,15 @@ def test_planner_bench_merge_keeps_the_rows_a_run_does_not_redo(tmp_path):
         [("b", 512, 1.0), ("a", 256, 1.0), ("a", 512, 3.0)]
 
 
-def test_planner_bench_refuses_an_unknown_scene_before_any_work(capsys):
+def test_planner_bench_refuses_bad_input_before_any_work(capsys):
+    """An unknown scene, or an --out naming a folder: one sentence, exit 2, no render."""
     pb = _planner_bench_module()
     assert pb.main(["no_such_scene", "--out", "/nonexistent/p.json"]) == 2
     assert "unknown scene(s) no_such_scene" in capsys.readouterr().err
+    # an --out that names a folder is refused before any render, in one sentence
+    assert pb.main(["gray_direct", "--out", "/tmp/"]) == 2
+    err = capsys.readouterr().err
+    assert "ends in '/', which names a folder" in err and len(err.strip().splitlines()) == 1
 
 
 def test_benchmarks_md_shows_the_512_rows_apart_with_their_date_and_cost(tmp_path):
