@@ -62,6 +62,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from . import dispatch
+
 __all__ = ["Sample", "context", "default_wavelengths", "direction", "eval",
            "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction",
            "mueller_eval", "mueller_eval_pdf", "mueller_sample", "pdf", "sample",
@@ -308,6 +310,7 @@ def _probe(call, wi, matrices: bool = False, **args) -> list[np.ndarray]:
 # ----------------------------------------------------------------------------- BSDF queries
 def eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """``bsdf.eval`` = f_r(wi, wo) cos θ_o, all channels: (N, C)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
     return value
@@ -315,6 +318,7 @@ def eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def pdf(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """``bsdf.pdf``: the solid-angle density with which :func:`sample` picks wo, (N,)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (p,) = _probe(lambda si, v: (bsdf.pdf(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
     return p
@@ -322,6 +326,7 @@ def pdf(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     """``bsdf.eval_pdf``: (eval (N, C), pdf (N,)) in one call."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, wo=(mi.Vector3f, wo, 3))
     return value, p
@@ -330,6 +335,7 @@ def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
 def eval_null_transmission(bsdf, wi) -> np.ndarray:
     """``bsdf.eval_null_transmission``: the un-scattered transmission (the ``Null`` lobe's
     weight along −wi) for light arriving along wi, all channels: (N, C)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     (value,) = _probe(lambda si: (bsdf.eval_null_transmission(si),), wi)
     return value
 
@@ -337,6 +343,7 @@ def eval_null_transmission(bsdf, wi) -> np.ndarray:
 def eval_diffuse_reflectance(bsdf, wi) -> np.ndarray:
     """``bsdf.eval_diffuse_reflectance``: the BSDF's diffuse reflectance at incidence wi, all
     channels: (N, C)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     (value,) = _probe(lambda si: (bsdf.eval_diffuse_reflectance(si),), wi)
     return value
 
@@ -346,6 +353,7 @@ def sample(bsdf, wi, sample1, sample2, ctx=None) -> Sample:
 
     sample1 usually picks the lobe, sample2 the direction within it.
     """
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
 
     def call(si, u1, u2):
@@ -372,6 +380,7 @@ def sample_random(bsdf, wi, n: int, seed: int = 0, ctx=None) -> Sample:
 # ----------------------------------------------------------------------------- Mueller matrices
 def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """:func:`eval` in a polarized variant, the Mueller matrices whole: (N, C, 4, 4)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, matrices=True,
                       wo=(mi.Vector3f, wo, 3))
@@ -380,6 +389,7 @@ def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def mueller_eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`eval_pdf` with the matrices whole: ((N, C, 4, 4), (N,))."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, matrices=True,
                       wo=(mi.Vector3f, wo, 3))
@@ -389,6 +399,7 @@ def mueller_eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
 def mueller_sample(bsdf, wi, sample1, sample2, ctx=None):
     """:func:`sample` with the weight's matrices whole: (wo (N, 3), weight (N, C, 4, 4),
     pdf (N,), sampled_type (N,) int64)."""
+    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
 
     def call(si, u1, u2):

@@ -42,7 +42,7 @@ from typing import Any
 import mitsuba as mi
 import numpy as np
 
-from .. import registration, stats
+from .. import dispatch, registration, stats
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
 from .inputs import ValidateError, check_plugin_file, check_topics
@@ -281,10 +281,27 @@ def _guarded(topic: str, runner) -> list[Row]:
 
 
 def _raised(topic: str, exc: Exception) -> list[Row]:
-    """The failing row of a topic that raised ``exc`` (inside an ``except`` block)."""
+    """The failing row of a topic that raised ``exc`` (inside an ``except`` block): the
+    plugin's own exception and its file:line where it came from the plugin's code
+    (:func:`phonglab.dispatch.describe`, Dr.Jit's "(see above)" wrappers unwrapped); a method
+    the plugin leaves unimplemented is "not implemented: <method>"."""
+    cause = dispatch.root_cause(exc)
+    where = dispatch.origin(cause)
+    details = {"traceback": "".join(traceback.format_exception(cause))[-3000:]}
+    missing = dispatch.not_implemented(cause)
+    if where is not None:
+        details["plugin_error"] = {"file": where[0], "line": where[1], "function": where[2],
+                                   "type": type(cause).__name__,
+                                   "message": str(cause).strip()[:1000]}
+        reason = f"the plugin raised {dispatch.describe(cause)}"
+    else:
+        reason = f"raised {type(cause).__name__}: {_first_line(cause)}"
+    if missing is not None:
+        details["not_implemented"] = missing
+        reason = (f"{dispatch.describe(cause)}: the topic needs it (Mitsuba's integrators call "
+                  f"it), so nothing was judged")
     return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
-                "fail", f"raised {type(exc).__name__}: {_first_line(exc)}",
-                {"traceback": traceback.format_exc()[-3000:]})]
+                "fail", reason, details)]
 
 
 @dataclass(frozen=True)

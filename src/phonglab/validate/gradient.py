@@ -59,18 +59,18 @@ def _lanes(setup, it, fixed, c) -> np.ndarray:
     """Per lane: c · Σ_channels w₀ · eval_direction(ds₀) / e₀ at the fixed samples ds₀ (the
     weight with its sampling factor w₀/e₀ held; 0 where e₀ = 0)."""
     ds, ratio = fixed
-    x = probe.to_numpy(setup.emitter.eval_direction(it, ds), len(c)) * ratio
+    x = probe.to_numpy(setup.calls.eval_direction(it, ds), len(c)) * ratio
     return c * np.sum(np.where(np.isfinite(x), x, 0.0), axis=1)
 
 
 def _fixed(setup, it, u, n: int):
     """ds₀ = sample_direction at the current parameters (evaluated, no gradient) and the
     sampling factor w₀/e₀ per channel, e₀ = eval_direction(ds₀)."""
-    ds, w = setup.emitter.sample_direction(it, u)
+    ds, w = setup.calls.sample_direction(it, u)
     ds = dr.detach(ds)
     dr.eval(ds)
     w0 = probe.to_numpy(w, n)
-    e0 = probe.to_numpy(setup.emitter.eval_direction(it, ds), n)
+    e0 = probe.to_numpy(setup.calls.eval_direction(it, ds), n)
     return ds, np.where((e0 != 0) & np.isfinite(w0), w0 / np.where(e0 != 0, e0, 1.0), 0.0)
 
 
@@ -78,8 +78,8 @@ def _dark(setup, it, u, n: int) -> np.ndarray:
     """Per lane: no radiance arrives along the sample at x (e₀ = 0 in every channel), so the
     sampling factor w₀/e₀ the FD side holds is undefined there (an emitter whose emitted
     quantity is 0 at the point swept: its FD side is 0 whatever the derivative)."""
-    ds, _ = setup.emitter.sample_direction(it, u)
-    e0 = probe.to_numpy(setup.emitter.eval_direction(it, dr.detach(ds)), n)
+    ds, _ = setup.calls.sample_direction(it, u)
+    e0 = probe.to_numpy(setup.calls.eval_direction(it, dr.detach(ds)), n)
     return np.all(e0 == 0, axis=1)
 
 
@@ -97,7 +97,7 @@ def _ad(setup, params, key, v, it, u, c) -> np.ndarray:
     params.update()
     try:
         dr.set_grad(x, v)
-        _, w = setup.emitter.sample_direction(it, u)
+        _, w = setup.calls.sample_direction(it, u)
         dr.forward_to(w)
         return c * np.sum(probe.to_numpy(dr.grad(w), len(c)), axis=1)
     finally:                 # a parameter left tracked would add its derivative to the next's

@@ -1,19 +1,21 @@
-r"""The types a Python plugin's methods return, checked in Python on a one-lane call before
-Dr.Jit sees them.
+r"""The returns of a Python plugin's methods, checked on one lane the way Mitsuba casts them.
 
-Mitsuba's trampolines cast what a Python ``sample()``/``eval()`` returns to C++ types.  Some
-wrong returns are not refused there but misread: an integrator whose ``sample()`` returns a
-bare ``mi.Spectrum`` instead of ``(L, valid, aovs)`` has its three channels unpacked as the
-tuple, and the process aborts inside Dr.Jit ("Referenced an unknown variable", exit 134) with
-no report.  So each method the plugin's Python class defines is called once on one lane and
-what it returned is compared with what Mitsuba expects; a mismatch is one sentence
-(:class:`~phonglab.validate.kind.ValidateError`, exit 2) naming the method, what it returned
-and what Mitsuba expects.  Only Python-defined methods are called (a built-in's C++ methods
-return their own types), and an exception inside the call is left to the topics, which report
-it as a failing row.
+Mitsuba's trampolines cast what a Python method returns to the C++ type
+(:mod:`phonglab.dispatch`): a Python number, a ``mi.Float``, a ``mi.Vector3f`` or a 3-tuple
+becomes a ``Spectrum``, a tuple a pair.  So each method the plugin's class defines is called
+once on one lane *through the trampoline*; what it accepts is accepted -- the tutorial's delta
+BSDF returning ``0.0`` from ``eval`` and ``(0.0, 0.0)`` from ``eval_pdf``, an integrator
+returning its radiance as a ``mi.Vector3f`` -- and what it refuses (nanobind's
+``std::bad_cast``) is one sentence (:class:`~phonglab.validate.kind.ValidateError`, exit 2)
+naming the method, what it returned (the Python method called directly, to say so) and what
+Mitsuba expects.
 
-Accepted where Mitsuba accepts it (tried on 3.9.1): a Spectrum slot takes ``mi.Spectrum``,
-``mi.Float`` or a Python number (broadcast); a tuple may be a list.
+One return is misread rather than refused: an integrator whose ``sample()`` returns a bare
+``mi.Spectrum`` instead of ``(L, valid, aovs)`` has its three channels unpacked as the tuple,
+and the process aborts inside Dr.Jit ("Referenced an unknown variable", exit 134) with no
+report.  An integrator's return is therefore first checked in Python to be a sequence of three.
+Only Python-defined methods are called (a built-in's C++ methods return their own types), and
+an exception inside the call is left to the topics, which report it as the plugin's error.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from .. import dispatch
 from .kind import ValidateError
 
 __all__ = ["check_bsdf", "check_integrator", "check_phase"]
@@ -40,57 +43,58 @@ def _what(value) -> str:
     return type(value).__name__
 
 
-def _spectrum(v) -> bool:
-    return (isinstance(v, (mi.Spectrum, mi.Float)) or type(v) in (float, int)) \
-        and not isinstance(v, bool)
-
-
-def _float(v) -> bool:
-    return isinstance(v, mi.Float) or (type(v) in (float, int))
-
-
-def _mask(v) -> bool:
-    return isinstance(v, (mi.Bool, bool))
-
-
 def _refuse(word, name, method, value, expects):
-    raise ValidateError(f"{method}() of the {word} {name!r} returned {_what(value)}, but Mitsuba "
-                        f"expects {expects}; fix the return statement (checked on one lane "
-                        f"before Dr.Jit sees it: a wrong tuple can abort the process inside "
-                        f"Dr.Jit)")
+    raise ValidateError(f"{method}() of the {word} {name!r} returned {_what(value)}, which "
+                        f"Mitsuba cannot take: it expects {expects}; fix the return statement "
+                        f"(checked on one lane, as Mitsuba's trampoline casts it)")
 
 
 def _call(method, *args):
-    """The method's return, None when it raised (the topics report that as a failing row)."""
+    """(True, the return) or (False, the exception) of one call; the topics report a
+    plugin's exception as its error, so it is not bad input here."""
     from . import core          # the topics' time limit, if one is set (core.topic_timeout)
 
     try:
         with core.within_topic_limit():
             return True, method(*args)
-    except (Exception, core.TopicTimeout):
-        return False, None
+    except (Exception, core.TopicTimeout) as exc:
+        return False, exc
+
+
+def _checked(word, plugin, name, method, args, expects):
+    """Call ``method`` through Mitsuba's dispatch; where the trampoline cannot cast what the
+    Python method returned, say what that was (the method called directly) and refuse it."""
+    ok, out = _call(getattr(dispatch.view(plugin), method), *args)
+    if ok or not dispatch.is_bad_cast(out):
+        return
+    ok, raw = _call(getattr(plugin, method), *args)
+    _refuse(word, name, method, raw if ok else out, expects)
+
+
+def _sequence(out, n: int) -> bool:
+    return isinstance(out, (tuple, list)) and not isinstance(out, dr.ArrayBase) and len(out) == n
 
 
 def check_integrator(plugin, name: str = "integrator") -> None:
-    """A Python ``SamplingIntegrator.sample()`` returns ``(Spectrum, Bool, list of Float)``."""
+    """A Python ``SamplingIntegrator.sample()`` returns three things, ``(L, valid, aovs)``,
+    that Mitsuba casts to (Spectrum, Bool, list of Float); L may be any 3-vector or number."""
     if not isinstance(plugin, mi.SamplingIntegrator) or not _defines(plugin, "sample"):
         return
     scene = mi.load_dict({"type": "scene", "shape": {"type": "sphere"},
                           "light": {"type": "constant"}})
     sampler = mi.load_dict({"type": "independent"})
     sampler.seed(0, 1)
-    ray = mi.Ray3f(mi.Point3f(0, 0, -4), mi.Vector3f(0, 0, 1))
-    ok, out = _call(plugin.sample, scene, sampler, ray, None, mi.Bool(True))
+    ray = mi.RayDifferential3f(mi.Point3f(0, 0, -4), mi.Vector3f(0, 0, 1))
+    args = (scene, sampler, ray, None, mi.Bool(True))
+    expects = ("a tuple (L: the radiance, a mi.Spectrum, mi.Color3f or mi.Vector3f; valid: "
+               "mi.Bool; aovs: a list of mi.Float, one per aov_names()), e.g. return L, valid, []")
+    ok, out = _call(plugin.sample, *args)
     if not ok:
         return
-    expects = ("a tuple (L: mi.Spectrum, valid: mi.Bool, aovs: a list of mi.Float), e.g. "
-               "return L, valid, []")
-    if not isinstance(out, (tuple, list)) or isinstance(out, dr.ArrayBase) or len(out) != 3:
+    if not _sequence(out, 3):
         _refuse("integrator", name, "sample", out, expects)
-    L, valid, aovs = out
-    if not _spectrum(L) or not _mask(valid) or not isinstance(aovs, (list, tuple)) \
-            or not all(_float(a) for a in aovs):
-        _refuse("integrator", name, "sample", out, expects)
+    sampler.seed(0, 1)
+    _checked("integrator", plugin, name, "sample", args, expects)
 
 
 def _one_lane():
@@ -104,42 +108,26 @@ def _one_lane():
 
 
 def check_bsdf(plugin, name: str = "BSDF") -> None:
-    """A Python BSDF's ``sample`` returns ``(BSDFSample3f, Spectrum)``, ``eval`` a Spectrum,
-    ``pdf`` a Float and ``eval_pdf`` ``(Spectrum, Float)`` -- those its class defines."""
+    """A Python BSDF's ``sample``, ``eval``, ``pdf`` and ``eval_pdf`` (those its class defines)
+    return what Mitsuba casts to (BSDFSample3f, Spectrum), Spectrum, Float, (Spectrum, Float)."""
     if not isinstance(plugin, mi.BSDF) or mi.is_polarized:
         return          # Mueller matrices: the polarized topics read them
     ctx, si, wo = _one_lane()
     active = mi.Bool(True)
-    if _defines(plugin, "sample"):
-        ok, out = _call(plugin.sample, ctx, si, mi.Float(0.5), mi.Point2f(0.3, 0.6), active)
-        if ok and (not isinstance(out, (tuple, list)) or isinstance(out, dr.ArrayBase)
-                   or len(out) != 2 or not isinstance(out[0], mi.BSDFSample3f)
-                   or not _spectrum(out[1])):
-            _refuse("BSDF", name, "sample", out, "a tuple (bs: mi.BSDFSample3f, weight: "
-                    "mi.Spectrum), e.g. return bs, weight")
-    if _defines(plugin, "eval"):
-        ok, out = _call(plugin.eval, ctx, si, wo, active)
-        if ok and not _spectrum(out):
-            _refuse("BSDF", name, "eval", out, "one mi.Spectrum (the BSDF times cos θ_o)")
-    if _defines(plugin, "pdf"):
-        ok, out = _call(plugin.pdf, ctx, si, wo, active)
-        if ok and not _float(out):
-            _refuse("BSDF", name, "pdf", out, "one mi.Float")
-    if _defines(plugin, "eval_pdf"):
-        ok, out = _call(plugin.eval_pdf, ctx, si, wo, active)
-        if ok and (not isinstance(out, (tuple, list)) or isinstance(out, dr.ArrayBase)
-                   or len(out) != 2 or not _spectrum(out[0]) or not _float(out[1])):
-            _refuse("BSDF", name, "eval_pdf", out, "a tuple (value: mi.Spectrum, pdf: "
-                    "mi.Float), e.g. return value, pdf")
-
-
-def _tuple(out, n: int) -> bool:
-    return isinstance(out, (tuple, list)) and not isinstance(out, dr.ArrayBase) and len(out) == n
+    for method, args, expects in (
+            ("sample", (ctx, si, mi.Float(0.5), mi.Point2f(0.3, 0.6), active),
+             "a tuple (bs: mi.BSDFSample3f, weight: mi.Spectrum), e.g. return bs, weight"),
+            ("eval", (ctx, si, wo, active), "one mi.Spectrum or number (the BSDF times cos θ_o)"),
+            ("pdf", (ctx, si, wo, active), "one mi.Float or number"),
+            ("eval_pdf", (ctx, si, wo, active),
+             "a tuple (value: mi.Spectrum, pdf: mi.Float), e.g. return value, pdf")):
+        if _defines(plugin, method):
+            _checked("BSDF", plugin, name, method, args, expects)
 
 
 def check_phase(plugin, name: str = "phase function") -> None:
-    """A Python phase function's ``sample`` returns ``(Vector3f wo, Spectrum weight, Float
-    pdf)`` and ``eval_pdf`` ``(Spectrum, Float)`` -- those its class defines."""
+    """A Python phase function's ``sample`` and ``eval_pdf`` (those its class defines) return
+    what Mitsuba casts to (Vector3f wo, Spectrum weight, Float pdf) and (Spectrum, Float)."""
     if not isinstance(plugin, mi.PhaseFunction) or mi.is_polarized:
         return
     ctx = mi.PhaseFunctionContext(None)
@@ -148,15 +136,12 @@ def check_phase(plugin, name: str = "phase function") -> None:
     mei.sh_frame = mi.Frame3f(mei.wi)
     mei.t = mi.Float(0.0)
     active = mi.Bool(True)
-    if _defines(plugin, "sample"):
-        ok, out = _call(plugin.sample, ctx, mei, mi.Float(0.5), mi.Point2f(0.3, 0.6), active)
-        if ok and (not _tuple(out, 3) or not isinstance(out[0], mi.Vector3f)
-                   or not _spectrum(out[1]) or not _float(out[2])):
-            _refuse("phase function", name, "sample", out, "a tuple (wo: mi.Vector3f, weight: "
-                    "mi.Spectrum, pdf: mi.Float), e.g. return wo, weight, pdf")
-    if _defines(plugin, "eval_pdf"):
-        wo = dr.normalize(mi.Vector3f(-0.2, 0.1, 0.9))
-        ok, out = _call(plugin.eval_pdf, ctx, mei, wo, active)
-        if ok and (not _tuple(out, 2) or not _spectrum(out[0]) or not _float(out[1])):
-            _refuse("phase function", name, "eval_pdf", out, "a tuple (value: mi.Spectrum, "
-                    "pdf: mi.Float), e.g. return value, pdf")
+    wo = dr.normalize(mi.Vector3f(-0.2, 0.1, 0.9))
+    for method, args, expects in (
+            ("sample", (ctx, mei, mi.Float(0.5), mi.Point2f(0.3, 0.6), active),
+             "a tuple (wo: mi.Vector3f, weight: mi.Spectrum, pdf: mi.Float), e.g. return wo, "
+             "weight, pdf"),
+            ("eval_pdf", (ctx, mei, wo, active),
+             "a tuple (value: mi.Spectrum, pdf: mi.Float), e.g. return value, pdf")):
+        if _defines(plugin, method):
+            _checked("phase function", plugin, name, method, args, expects)

@@ -18,6 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ... import dispatch
 from .config import rng
 from .setup import Setup, interaction, point2
 from .topics import Row
@@ -50,7 +51,7 @@ def cost(setup: Setup, opts) -> list[Row]:
     it, su = interaction(p), point2(u)
 
     def run(e):
-        ds, w = e.sample_direction(it, su)
+        ds, w = dispatch.emitter(e).sample_direction(it, su)
         dr.eval(ds.pdf, w)
         dr.sync_thread()
 

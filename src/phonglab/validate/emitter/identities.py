@@ -154,7 +154,7 @@ def weight(setup: Setup, opts) -> list[Row]:
     s = lanes_.sample(setup, opts, "weight")
     live = s.live
     lhs = s.weight * s.pdf[:, None]
-    ev = probe.to_numpy(setup.emitter.eval_direction(s.it, s.ds), s.n)
+    ev = probe.to_numpy(setup.calls.eval_direction(s.it, s.ds), s.n)
     rel = np.where(live, np.max(np.nan_to_num(rel_diff(lhs, ev), nan=np.inf), axis=1), 0.0)
     inputs = lane_inputs(setup, s, np.ones(s.n, bool))
     if setup.delta:
@@ -212,7 +212,7 @@ def pdf(setup: Setup, opts) -> list[Row]:
                         f"lanes (of {int(live.sum())} sampled) where ds.delta is not set or "
                         f"ds.pdf ≠ 1 (Mitsuba's convention for a delta light: the weight is "
                         f"the whole contribution)", {"lanes": int(live.sum())}, inputs)]
-    pd = probe.to_numpy(setup.emitter.pdf_direction(s.it, s.ds), s.n)
+    pd = probe.to_numpy(setup.calls.pdf_direction(s.it, s.ds), s.n)
     rel = np.where(live, np.nan_to_num(rel_diff(s.pdf, pd), nan=np.inf), 0.0)
     sens = np.zeros(s.n)
     check = np.flatnonzero(rel > REL_TOL)

@@ -70,7 +70,7 @@ def sample(setup: Setup, opts, topic: str) -> Lanes:
     group = np.repeat(np.arange(len(groups)), n)
     u = with_edges(rng(opts.seed, topic).random((len(p), 2)), n)
     it = interaction(p)
-    ds, w = setup.emitter.sample_direction(it, point2(u))
+    ds, w = setup.calls.sample_direction(it, point2(u))
     N = len(p)
     return Lanes(groups, group, p, u, it, ds, probe.to_numpy(w, N), probe.to_numpy(ds.pdf, N),
                  probe.to_numpy(ds.d, N), probe.to_numpy(ds.dist, N), probe.to_numpy(ds.p, N),
@@ -104,12 +104,12 @@ def traced_radiance(setup: Setup, p: np.ndarray, d: np.ndarray):
         valid = np.array(si.is_valid(), bool).reshape(-1)
         if valid.size == 1:
             valid = np.repeat(valid, n)
-        value = probe.to_numpy(setup.emitter.eval(si, si.is_valid()), n)
+        value = probe.to_numpy(setup.calls.eval(si, si.is_valid()), n)
         t = np.where(valid, probe.to_numpy(si.t, n), np.inf)
         return value, t
     si = surface_interaction(n)
     si.wi = -probe.to_vectors(d)
-    return probe.to_numpy(setup.emitter.eval(si), n), np.full(n, np.inf)
+    return probe.to_numpy(setup.calls.eval(si), n), np.full(n, np.inf)
 
 
 def pdf_towards(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -122,11 +122,11 @@ def pdf_towards(setup: Setup, p: np.ndarray, d: np.ndarray) -> np.ndarray:
         si = trace(setup, p, d)
         ds = mi.DirectionSample3f(None, si, it)
         ds.emitter = mi.EmitterPtr(setup.emitter)
-        value = dr.select(si.is_valid(), setup.emitter.pdf_direction(it, ds, si.is_valid()), 0.0)
+        value = dr.select(si.is_valid(), setup.calls.pdf_direction(it, ds, si.is_valid()), 0.0)
     else:
         ds = dr.zeros(mi.DirectionSample3f, n)
         ds.d = probe.to_vectors(d)
         ds.dist = mi.Float(float("inf"))
-        value = setup.emitter.pdf_direction(it, ds)
+        value = setup.calls.pdf_direction(it, ds)
     out = probe.to_numpy(value, n)
     return np.where(np.isfinite(out), out, 0.0)

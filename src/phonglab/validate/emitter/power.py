@@ -89,7 +89,7 @@ def _peak(setup: Setup, r) -> tuple[np.ndarray, float] | None:
     """(the direction, the cosine of the cone) of an environment's concentrated feature, found
     as sample_direction's most probable direction from the scene centre; None if none."""
     n = 4096
-    ds, _ = setup.emitter.sample_direction(interaction(np.tile(setup.center, (n, 1))),
+    ds, _ = setup.calls.sample_direction(interaction(np.tile(setup.center, (n, 1))),
                                            point2(r.random((n, 2))))
     pdf = probe.to_numpy(ds.pdf, n)
     pdf = np.where(np.isfinite(pdf), pdf, 0.0)
@@ -103,7 +103,7 @@ def _peak(setup: Setup, r) -> tuple[np.ndarray, float] | None:
 def sample_ray_mean(setup: Setup, opts) -> tuple[float, float]:
     n = opts.power_samples
     u = rng(opts.seed, "power").random((n, 5))
-    _, w = setup.emitter.sample_ray(float_(np.zeros(n)), float_(u[:, 4]), point2(u[:, :2]),
+    _, w = setup.calls.sample_ray(float_(np.zeros(n)), float_(u[:, 4]), point2(u[:, :2]),
                                     point2(u[:, 2:4]))
     x = np.sum(probe.to_numpy(w, n), axis=1)
     return _mean(np.where(np.isfinite(x), x, 0.0))
@@ -114,7 +114,7 @@ def intensity(setup: Setup, d: np.ndarray, r: float = 1.0, lam=None) -> np.ndarr
     ``lam`` in spectral variants)."""
     p = setup.center + r * d
     it = interaction(p, lam)
-    _, w = setup.emitter.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
+    _, w = setup.calls.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
     return np.sum(probe.to_numpy(w, len(p)), axis=1) * r * r
 
 
@@ -227,7 +227,7 @@ def position_pdf(setup: Setup, ps, n: int) -> tuple[np.ndarray, str]:
     (area.cpp defines no pdf_position: Endpoint::pdf_position raises 'not implemented'; a
     renderer asks the shape, as Mitsuba's integrators do)."""
     try:
-        return probe.to_numpy(setup.emitter.pdf_position(ps), n), "the emitter's"
+        return probe.to_numpy(setup.calls.pdf_position(ps), n), "the emitter's"
     except RuntimeError as exc:
         if "not implemented" not in str(exc):
             raise
@@ -238,7 +238,7 @@ def position_pdf(setup: Setup, ps, n: int) -> tuple[np.ndarray, str]:
 def _positions(setup, opts) -> list[Row]:
     n = opts.n_lanes
     u = rng(opts.seed, "power").random((n, 2))
-    ps, w = setup.emitter.sample_position(float_(np.zeros(n)), point2(u))
+    ps, w = setup.calls.sample_position(float_(np.zeros(n)), point2(u))
     a = probe.to_numpy(ps.pdf, n)
     b, whose = position_pdf(setup, ps, n)
     weight = np.sum(probe.to_numpy(w, n), axis=1) if dr.depth_v(w) > 1 else probe.to_numpy(w, n)
@@ -267,7 +267,7 @@ def _intensity_sensitivity(setup, d, r, value, gen) -> np.ndarray:
     f → 0 while its slope is 1/(θ_c − θ_b), is ill-conditioned in the point's rounding."""
     def at(p, _):
         it = interaction(p)
-        _, w = setup.emitter.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
+        _, w = setup.calls.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
         return np.sum(probe.to_numpy(w, len(p)), axis=1) * r * r
 
     return sensitivity(at, setup.center + r * d, d, gen, value=value)
@@ -313,7 +313,7 @@ def _irradiance_law(setup, opts) -> list[Row]:
     groups = ref_groups(setup, opts.n_lanes, opts.seed)
     p = np.concatenate([g.p for g in groups])
     it = interaction(p)
-    _, w = setup.emitter.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
+    _, w = setup.calls.sample_direction(it, point2(np.full((len(p), 2), 0.5)))
     E = np.sum(probe.to_numpy(w, len(p)), axis=1)
     rel = np.nan_to_num(rel_diff(E, np.full(len(p), E[0])), nan=np.inf)
     return [bounded("power", "irradiance E the same at every reference point", rel, REL_TOL,

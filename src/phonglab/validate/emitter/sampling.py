@@ -203,7 +203,7 @@ def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
     ds.d, ds.dist = probe.to_vectors(d), mi.Float(np.ascontiguousarray(dist, np.float32))
     ds.emitter = mi.EmitterPtr(setup.emitter)
     it = interaction(np.tile(p, (n, 1)))
-    pdf = probe.to_numpy(setup.emitter.pdf_direction(it, ds), n)
+    pdf = probe.to_numpy(setup.calls.pdf_direction(it, ds), n)
     cos = np.abs(np.sum(d * np.where(visible[:, None], geo_n, nrm), axis=1))
     f = np.where(visible & np.isfinite(pdf) & (p_area > 0) & (dist > 0),
                  pdf * cos / np.maximum(dist, 1e-30) ** 2 / np.where(p_area > 0, p_area, 1.0),
@@ -223,7 +223,7 @@ def emits(setup: Setup, points, seed, n: int = 4096) -> bool:
     r = np.random.default_rng(seed)
     for p in points:
         it = interaction(np.tile(p, (n, 1)))
-        _, w = setup.emitter.sample_direction(it, point2(r.random((n, 2))))
+        _, w = setup.calls.sample_direction(it, point2(r.random((n, 2))))
         if np.any(probe.to_numpy(w, n) != 0):
             return True
     return False
@@ -237,7 +237,7 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int,
     n = opts.chi2_samples
     r = np.random.default_rng(seed)
     it = interaction(np.tile(p, (n, 1)))
-    ds, w = setup.emitter.sample_direction(it, point2(r.random((n, 2))))
+    ds, w = setup.calls.sample_direction(it, point2(r.random((n, 2))))
     weight, pdf = probe.to_numpy(w, n), probe.to_numpy(ds.pdf, n)
     d = probe.to_numpy(ds.d, n)
     # an emitter that emits nothing (radiance swept to 0) still samples: its directions are
@@ -245,7 +245,7 @@ def chi2_at(setup: Setup, p: np.ndarray, opts, level: float, seed: int,
     # lit emitter's non-zero weights mark: a one-sided area light's back has ds.pdf > 0 but
     # pdf_direction = 0); a sample outside that support is the `pdf` topic's to catch
     counts = (np.any(weight != 0, axis=1) if not dark else
-              probe.to_numpy(setup.emitter.pdf_direction(it, ds), n) > 0)
+              probe.to_numpy(setup.calls.pdf_direction(it, ds), n) > 0)
     keep = (np.all(np.isfinite(weight), axis=1) & counts
             & np.all(np.isfinite(d), axis=1) & (pdf > 0))
     occluded = 0

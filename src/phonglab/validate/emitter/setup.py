@@ -37,7 +37,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ... import probe
+from ... import dispatch, probe
 from ..directions import basis
 from ..inputs import ValidateError
 from .config import rng
@@ -86,6 +86,14 @@ class Setup:
     @property
     def delta(self) -> bool:
         return self.kind in ("position", "direction")
+
+    @property
+    def calls(self):
+        """The emitter as Mitsuba's integrators call it (:mod:`phonglab.dispatch`: ``active``
+        passed, returns cast by the trampoline); a stand-in that is no ``mi.Emitter`` as it is."""
+        if isinstance(self.emitter, mi.Emitter):
+            return dispatch.emitter(self.emitter)
+        return self.emitter
 
     @property
     def sphere(self) -> tuple[np.ndarray, float] | None:
@@ -189,7 +197,7 @@ def _attach(setup: Setup, shape_spec) -> None:
 def _locate(setup: Setup) -> None:
     it = dr.zeros(mi.Interaction3f, 1)
     it.p = mi.Point3f(3.0, 5.0, 7.0)
-    ds, _ = setup.emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
+    ds, _ = setup.calls.sample_direction(it, mi.Point2f(0.5, 0.5))
     setup.center = probe.to_numpy(ds.p, 1)[0]
     params = mi.traverse(setup.emitter)
     if "to_world" in params.keys() and "cutoff_angle" in params.keys():

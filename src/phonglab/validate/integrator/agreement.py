@@ -63,7 +63,7 @@ def agreement(target: Target, opts, m: int) -> list[Row]:
     if depth is None:
         return [Row("agreement", name, None, None, None, None, "skipped", why,
                     {NOT_APPLICABLE: True} if target.aov else {})]
-    integ = target.make(depth) if target.depth == "settable" else target.integrator
+    integ = target.make(depth)
     ref = mi.load_dict({"type": "path", "max_depth": int(depth)})
     scene = mi.load_dict(scenes.box(opts.agreement_res))
     spp, p = opts.agreement_spp * opts.agreement_passes, opts.agreement_passes

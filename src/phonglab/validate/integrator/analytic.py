@@ -123,7 +123,7 @@ def measure_depth(target: Target, opts) -> DepthFit | None:
     means, ses, p = [], [], opts.bias_passes
     for i, rho in enumerate(MEASURE_RHOS):
         _, mean, se = _pass_stats(target, lambda r, rho=rho: scenes.enclosure(r, rho),
-                                  target.integrator, opts, MEASURE_SCENE + i)
+                                  target.judged, opts, MEASURE_SCENE + i)
         means.append(mean)
         ses.append(se)
     best = None
@@ -218,25 +218,41 @@ def finite(target: Target, opts) -> list[Row]:
         elif specular and target.splatting:
             integ, why = None, "light tracing cannot see the glass (see bias)"
         else:
-            integ, why = target.at_depth(depth)
+            integ, why = target.at_depth(depth, whole=True)
         if integ is None:
             rows.append(Row("finite", name, None, None, None, None, "skipped", why))
             continue
         res = render_scene(mi.load_dict(build(opts.res)), opts.finite_spp,
                            seed=seed(opts.seed, "finite", k), integrator=integ)
         img = res.image
+        # radiance first (finite and >= 0), then the AOV channels (finite only)
+        nc = 0 if target.aov else setup_.radiance_channels()
         nonfinite = int(np.count_nonzero(~np.isfinite(img)))
-        negative = 0 if target.aov else int(np.count_nonzero(img < 0))
+        negative = int(np.count_nonzero(img[..., :nc] < 0))
         bad = nonfinite + negative
-        where = np.argwhere(~np.isfinite(img) | ((img < 0) & (not target.aov)))
+        wrong = ~np.isfinite(img)
+        wrong[..., :nc] |= img[..., :nc] < 0
+        where = np.argwhere(wrong)
         rows.append(Row("finite", name, float(bad), 0.0, None, 0.0,
                         "pass" if bad == 0 else "fail",
                         f"{img.size} values of a {opts.finite_spp} spp render"
-                        + (" (AOV channels: finite only)" if target.aov else ", finite and ≥ 0")
+                        + _channels_text(target, img.shape[-1], nc)
                         + (f": {nonfinite} not finite, {negative} negative" if bad else ""),
                         {"non_finite": nonfinite, "negative": negative,
+                         "radiance_channels": nc, "aov_channels": list(target.aovs),
                          "first_bad_pixel": where[0].tolist() if bad else None}))
     return rows
+
+
+def _channels_text(target: Target, channels: int, nc: int) -> str:
+    """Which channels of the image are which, for the ``finite`` row."""
+    if target.aov:
+        return " (AOV channels: finite only)"
+    if channels > nc:
+        names = ", ".join(target.aovs) or f"{channels - nc} more"
+        return (f"; channels 0-{nc - 1} radiance (finite and ≥ 0), {nc}-{channels - 1} "
+                f"AOVs {names} (finite only)")
+    return ", finite and ≥ 0"
 
 
 def bias(target: Target, opts, m: int) -> list[Row]:

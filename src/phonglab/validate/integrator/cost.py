@@ -25,7 +25,7 @@ from .topics import Row
 
 def cost(target: Target, opts) -> list[Row]:
     depth, _ = depth_of(target)
-    integ = target.make(depth) if target.depth == "settable" and depth else target.integrator
+    integ = target.make(depth if depth else None)
     ref = mi.load_dict({"type": "path", **({"max_depth": int(depth)} if depth else {})})
     scene = mi.load_dict(scenes.box(opts.agreement_res))
 

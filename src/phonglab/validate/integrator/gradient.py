@@ -31,7 +31,7 @@ from ... import stats
 from ..roundoff import EPS32
 from . import scenes
 from .config import seed
-from .setup import Target
+from .setup import Target, radiance_channels
 from .topics import Row
 
 #: The finite-difference step on the reflectance.
@@ -55,7 +55,7 @@ def applies(target: Target) -> str:
 def _setup(target: Target, res: int):
     if target.depth == "settable" or (target.own_depth or 0) >= 2:
         depth = DEPTH if target.depth == "settable" else target.own_depth
-        integ = target.make(depth) if target.depth == "settable" else target.integrator
+        integ = target.make(depth, whole=True)
         deriv = sum(k * RHO ** (k - 1) for k in range(1, depth)) * scenes.LE
         return (scenes.enclosure(res, RHO), "enclosure.bsdf.reflectance.value", integ,
                 f"enclosure ρ = {RHO} D = {depth}", deriv)
@@ -64,7 +64,8 @@ def _setup(target: Target, res: int):
 
 
 def _mean(img) -> float:
-    return float(np.asarray(img, np.float64).mean())
+    """The mean of the image's radiance channels (AOV channels, if any, follow them)."""
+    return float(np.asarray(img, np.float64)[..., :radiance_channels()].mean())
 
 
 def gradient(target: Target, opts, m: int) -> list[Row]:

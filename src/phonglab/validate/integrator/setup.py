@@ -19,8 +19,13 @@ and every scene is then judged at the measured depth as at a declared one.  An X
 loaded object cannot be rebuilt and is likewise run as it is (its depth read back, else
 measured).
 
-Kinds of estimator: an AOV integrator (``aov_names()`` not empty: it returns channels that are
-not radiance) is checked for finite output only; a splatting (adjoint, light-tracing)
+Kinds of estimator: an integrator that returns AOVs beside its radiance (``aov_names()`` not
+empty, a Python ``sample()`` returning ``(L, valid, [depth])``, Mitsuba's ``moment``, ``aov``
+with a nested integrator) has its radiance judged on every topic -- rendered through
+:func:`radiance_only`, which calls it as Mitsuba's render loop does and drops the AOVs -- and
+its AOV channels on ``finite`` alone (finite; they may be negative); an integrator whose image
+has no radiance at all (``aov`` without a nested integrator: its image has exactly its AOV
+channels; ``depth``) is checked for finite output only; a splatting (adjoint, light-tracing)
 integrator (``mi.AdjointIntegrator``: ``ptracer``) cannot connect a pinhole camera through a
 delta BSDF, so scenes seen through glass do not apply; an AD integrator
 (``mi.ad.integrators.common.ADIntegrator``: ``prb``, ``direct_projective`` ...) in an AD
@@ -34,6 +39,7 @@ from dataclasses import dataclass
 import drjit as dr
 import mitsuba as mi
 
+from ... import dispatch
 from ...engine.render import max_depth_of
 from ...settings import Loaded
 
@@ -63,33 +69,44 @@ class Target:
     #: measurement, or when it matched no integer depth)
     fixed_depth: int | None
     depth_note: str              #: why (the table's skip reasons quote it)
-    aov: bool
+    aov: bool                    #: its image has no radiance (AOV channels alone): finite only
     splatting: bool
     ad: bool
     #: the depth measurement (:class:`~.analytic.DepthFit`) once made (``depth == "measured"``)
     measurement: object = None
+    #: its AOV names when it returns them beside radiance (the radiance topics drop them)
+    aovs: tuple[str, ...] = ()
 
-    def make(self, max_depth: int | None = None):
-        """The integrator at ``max_depth`` (settable), else as it is."""
+    @property
+    def judged(self):
+        """The integrator as loaded, as the radiance topics render it (:func:`radiance_only`
+        when it returns AOVs beside its radiance)."""
+        return radiance_only(self.integrator) if self.aovs else self.integrator
+
+    def make(self, max_depth: int | None = None, whole: bool = False):
+        """The integrator at ``max_depth`` (settable), else as it is; its radiance alone
+        unless ``whole`` (the image with its AOV channels)."""
         if self.depth != "settable" or max_depth is None:
-            return self.integrator
-        return mi.load_dict({**self.spec, "max_depth": int(max_depth)})
+            integ = self.integrator
+        else:
+            integ = mi.load_dict({**self.spec, "max_depth": int(max_depth)})
+        return integ if whole or not self.aovs else radiance_only(integ)
 
-    def at_depth(self, depth: int | None) -> tuple[object | None, str]:
+    def at_depth(self, depth: int | None, whole: bool = False) -> tuple[object | None, str]:
         """(integrator, "") for a scene needing path depth ``depth`` (None: any depth >= 2),
-        or (None, why it does not apply)."""
+        or (None, why it does not apply); ``whole`` as in :meth:`make`."""
         if depth is None:
             if self.own_depth is not None and self.own_depth < 2:
                 return None, f"the scene needs depth >= 2; {self.depth_note}"
-            return self.make(4), ""
+            return self.make(4, whole), ""
         if self.depth == "settable":
             try:
-                return self.make(depth), ""
+                return self.make(depth, whole), ""
             except Exception as exc:     # it takes max_depth but refuses this one (whitted: <= 10)
                 why = str(exc).strip().splitlines()[-1][:200] if str(exc).strip() else repr(exc)
                 return None, f"it refuses max_depth {depth}: {why}"
         if self.depth in ("fixed", "measured") and self.fixed_depth == depth:
-            return self.integrator, ""
+            return self.make(None, whole), ""
         return None, f"the scene's value holds at max_depth {depth}; {self.depth_note}"
 
     @property
@@ -97,6 +114,64 @@ class Target:
         """The depth it computes when it cannot be set (declared, kept or measured)."""
         return self.fixed_depth if self.depth in ("fixed", "measured") else None
 
+
+def radiance_channels() -> int:
+    """How many leading channels of a rendered image are radiance (1 in mono variants, else 3:
+    spectral images are developed to RGB)."""
+    return 1 if mi.is_monochromatic else 3
+
+
+_RADIANCE_ONLY: dict = {}
+
+
+def radiance_only(integrator):
+    """``integrator`` as a sampling integrator without AOVs: its ``sample`` called through
+    Mitsuba's dispatch (:func:`phonglab.dispatch.integrator`, as ``SamplingIntegrator::render``
+    calls it) and its radiance and validity returned, the AOVs dropped."""
+    variant = mi.variant()
+    if variant not in _RADIANCE_ONLY:
+        class RadianceOnly(mi.SamplingIntegrator):
+            def __init__(self, inner):
+                mi.SamplingIntegrator.__init__(self, mi.Properties())
+                self.inner = dispatch.integrator(inner)
+
+            def sample(self, scene, sampler, ray, medium, active):
+                spectrum, valid, _ = self.inner.sample(scene, sampler, ray, medium, active)
+                return spectrum, valid, []
+
+            def aov_names(self):
+                return []
+
+            def to_string(self):
+                return f"RadianceOnly[{self.inner.plugin}]"
+
+        _RADIANCE_ONLY[variant] = RadianceOnly
+    return _RADIANCE_ONLY[variant](integrator)
+
+
+def _image_channels(integ) -> int:
+    """The channels of ``integ``'s image: one 1-spp render of a 2 × 2 film."""
+    scene = mi.load_dict({"type": "scene", "shape": {"type": "sphere"},
+                          "light": {"type": "constant"},
+                          "sensor": {"type": "perspective", "film": {
+                              "type": "hdrfilm", "width": 2, "height": 2},
+                              "to_world": mi.ScalarTransform4f().look_at(
+                                  [0, 0, -4], [0, 0, 0], [0, 1, 0])}})
+    return int(mi.render(scene, integrator=integ, spp=1).shape[-1])
+
+
+def _returns_radiance(integ, names: list) -> bool:
+    """Whether ``integ``'s image has radiance channels: not one of :data:`NOT_RADIANCE`, and,
+    when it has AOVs, an image with more channels than its AOV names (Mitsuba's ``aov``
+    without a nested integrator develops its AOV channels alone)."""
+    if integ.class_name() in NOT_RADIANCE:
+        return False
+    if not names or not isinstance(integ, mi.SamplingIntegrator):
+        return True
+    try:
+        return _image_channels(integ) != len(names)
+    except Exception:           # the topics render it again and report its error
+        return True
 
 def _kept_depth(integrator) -> int | None:
     own = getattr(integrator, "max_depth", None)
@@ -113,7 +188,10 @@ def build(loaded: Loaded, spec, params: dict | None) -> Target:
         d = {"type": spec, **(params or {})}
     elif isinstance(spec, dict):
         d = {**spec, **(params or {})}
-    aov = bool(list(integ.aov_names())) or integ.class_name() in NOT_RADIANCE
+    names = list(integ.aov_names())
+    radiance = _returns_radiance(integ, names)
+    aov = not radiance
+    aovs = tuple(names) if radiance else ()
     splatting = isinstance(integ, mi.AdjointIntegrator)
     ad = dr.is_diff_v(mi.Float) and isinstance(integ, mi.ad.integrators.common.ADIntegrator)
     depth, fixed, note = "measured", None, ""
@@ -145,5 +223,6 @@ def build(loaded: Loaded, spec, params: dict | None) -> Target:
                 note = f"it has no max_depth and computes the depth-{fixed} model"
             else:
                 note = f"it has no max_depth and declares no FIXED_DEPTH: its depth is measured. {DECLARE}"
-    return Target(loaded.label, d, integ, depth, fixed, note, aov, splatting, ad)
+    return Target(loaded.label, d, integ, depth, fixed, note, aov, splatting, ad,
+                  aovs=aovs)
 

@@ -16,7 +16,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ... import probe
+from ... import dispatch, probe
 from . import lanes
 from .config import rng
 from .topics import Row
@@ -35,12 +35,12 @@ def cost(phase, opts) -> list[Row]:
     ctx = lanes.context()
 
     def run_sample(p):
-        out = p.sample(ctx, it, u1, u2)
+        out = dispatch.phase(p).sample(ctx, it, u1, u2)
         dr.eval(out[0], out[2])
         dr.sync_thread()
 
     def run_eval(p):
-        v, q = p.eval_pdf(ctx, it, wo)
+        v, q = dispatch.phase(p).eval_pdf(ctx, it, wo)
         dr.eval(v, q)
         dr.sync_thread()
 

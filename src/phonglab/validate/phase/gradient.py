@@ -24,7 +24,7 @@ import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ... import probe
+from ... import dispatch, probe
 from ..gradient import verdict
 from . import lanes
 from .config import rng
@@ -35,7 +35,7 @@ class _Fixed:
     """The emitter verdict's view of a phase function at fixed directions wo."""
 
     def __init__(self, phase):
-        self.phase = phase
+        self.phase = dispatch.phase(phase)
 
     def sample_direction(self, it, wo):
         return wo, self.eval_direction(it, wo)
@@ -71,6 +71,6 @@ def gradient(phase, opts) -> list[Row]:
     wo = lanes.sphere(r, n)[::-1].copy()
     d = -wi[: n // 2] + 0.1 * lanes.sphere(r, n // 2)
     wo[: n // 2] = d / np.linalg.norm(d, axis=1)[:, None]
-    setup = SimpleNamespace(emitter=_Fixed(phase))
+    setup = SimpleNamespace(emitter=_Fixed(phase), calls=_Fixed(phase))
     it, u, c = lanes.interaction(wi), probe.to_vectors(wo), 0.5 + r.random(n)
     return [_phase_row(verdict(setup, params, key, it, u, c)) for key in keys]

@@ -21,7 +21,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ... import probe
+from ... import dispatch, probe
 from ..directions import ONE_MINUS, basis  # noqa: F401  (basis: the χ² and normalization frames)
 from ..directions import sphere as _uniform
 
@@ -54,7 +54,7 @@ def sample(phase, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray):
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     u1 = mi.Float(np.ascontiguousarray(np.minimum(u1, ONE_MINUS), np.float32))
     u2 = np.ascontiguousarray(np.minimum(u2, ONE_MINUS), np.float32)
-    wo, w, pdf = phase.sample(context(), interaction(wi), u1, mi.Point2f(u2[:, 0], u2[:, 1]))
+    wo, w, pdf = dispatch.phase(phase).sample(context(), interaction(wi), u1, mi.Point2f(u2[:, 0], u2[:, 1]))
     w = probe.to_numpy(w, n)
     return probe.to_numpy(wo, n), (w if w.ndim == 2 else w[:, None]), probe.to_numpy(pdf, n)
 
@@ -64,7 +64,7 @@ def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray):
     n = len(wi)
     if n == 0:                      # no lanes (every sample dropped): Dr.Jit refuses width 0
         return np.zeros((0, 3)), np.zeros(0)
-    v, p = phase.eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
+    v, p = dispatch.phase(phase).eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
     v = probe.to_numpy(v, n)
     return (v if v.ndim == 2 else v[:, None]), probe.to_numpy(p, n)
 

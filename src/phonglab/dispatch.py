@@ -1,0 +1,189 @@
+r"""Plugins called the way Mitsuba calls them, and a plugin's own errors told as the plugin's.
+
+Mitsuba's C++ code calls every plugin method virtually.  For a plugin written in Python the
+call lands in the kind's trampoline (``PyBSDF``, ``PyPhaseFunction``, ``PyEmitter``,
+``PySamplingIntegrator`` in ``src/render/python/*_v.cpp`` at v3.9.1), which
+
+* passes every argument positionally, ``active`` included
+  (``NB_OVERRIDE_PURE(sample, ctx, si, sample1, sample2, active)``): a Python method may
+  declare ``active`` without a default, as Mitsuba's tutorial does, and is always given it;
+* casts what the Python method returns to the C++ return type: a Python number or a
+  ``mi.Float`` becomes a ``Spectrum`` (broadcast over the channels), a tuple a ``std::pair``,
+  a ``mi.Vector3f`` radiance a ``Spectrum``; a return it cannot cast fails with nanobind's
+  ``std::bad_cast``.
+
+Calling the method through the base class's binding -- ``mi.BSDF.eval(plugin, ctx, si, wo,
+active)`` -- enters the same virtual call, so a Python plugin goes through its trampoline
+and a built-in through its C++ code: what :func:`bsdf` and its siblings return is what a
+Mitsuba integrator would get.  Every probe and topic of ``phonglab validate`` calls plugins
+through these views, never through the Python methods directly.
+
+Errors.  An exception raised inside the plugin's Python code comes back through the
+trampoline with its type and traceback; :func:`origin` finds the innermost frame of that
+traceback in the plugin's own file (not in phonglab, Mitsuba, Dr.Jit, numpy or the standard
+library) and :func:`describe` words it as the plugin's: ``NameError: name 'x' is not
+defined (my_bsdf.py:41, in eval)``.  Dr.Jit's wrapper for an exception raised inside a
+custom operation or a symbolic loop ("error while performing a custom differentiable
+operation. (see above)") is unwrapped to the plugin's own exception (its ``__cause__``).  A
+method the plugin leaves unimplemented (``raise NotImplementedError``) is
+:class:`NotImplementedByPlugin`'s "not implemented: <method>", never a physics failure.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import sys
+import sysconfig
+import traceback
+
+import mitsuba as mi
+
+__all__ = ["METHODS", "Dispatched", "base_of", "bsdf", "describe", "emitter", "integrator",
+           "is_bad_cast", "not_implemented", "origin", "phase", "root_cause", "view"]
+
+#: The query methods each base class binds, called through the binding (Mitsuba's dispatch).
+METHODS = {
+    "BSDF": ("eval", "pdf", "eval_pdf", "eval_pdf_sample", "sample", "eval_null_transmission",
+             "eval_diffuse_reflectance"),
+    "PhaseFunction": ("eval_pdf", "sample"),
+    "Emitter": ("sample_ray", "sample_direction", "pdf_direction", "eval_direction",
+                "sample_position", "pdf_position", "eval", "sample_wavelengths"),
+    "SamplingIntegrator": ("sample",),
+    "Texture": ("eval", "eval_1", "eval_3"),
+}
+
+
+def base_of(plugin):
+    """The Mitsuba base class whose binding :func:`view` calls ``plugin`` through."""
+    for name in METHODS:
+        base = getattr(mi, name, None)
+        if base is not None and isinstance(plugin, base):
+            return base
+    raise TypeError(f"{type(plugin).__name__} is none of Mitsuba's {', '.join(METHODS)}")
+
+
+class Dispatched:
+    """``plugin`` seen through its base class: the query methods of :data:`METHODS` go through
+    the base class's binding (``active`` passed, returns cast as Mitsuba casts them); every
+    other attribute (``flags``, ``component_count``, ``traverse`` ...) is the plugin's own."""
+
+    __slots__ = ("plugin", "base", "_methods")
+
+    def __init__(self, plugin, base=None):
+        base = base_of(plugin) if base is None else base
+        object.__setattr__(self, "plugin", plugin)
+        object.__setattr__(self, "base", base)
+        object.__setattr__(self, "_methods", METHODS[base.__name__])
+
+    def __getattr__(self, name):
+        if name in self._methods:
+            return functools.partial(getattr(self.base, name), self.plugin)
+        return getattr(self.plugin, name)
+
+    def __repr__(self) -> str:
+        return f"Dispatched({self.plugin!r} as mi.{self.base.__name__})"
+
+
+def view(plugin, base=None) -> Dispatched:
+    """``plugin`` as Mitsuba calls it (a view is returned as it is)."""
+    return plugin if isinstance(plugin, Dispatched) else Dispatched(plugin, base)
+
+
+def bsdf(plugin) -> Dispatched:
+    """A BSDF as Mitsuba's integrators call it."""
+    return view(plugin, mi.BSDF)
+
+
+def phase(plugin) -> Dispatched:
+    """A phase function as Mitsuba's volumetric integrators call it."""
+    return view(plugin, mi.PhaseFunction)
+
+
+def emitter(plugin) -> Dispatched:
+    """An emitter as Mitsuba's integrators call it."""
+    return view(plugin, mi.Emitter)
+
+
+def integrator(plugin) -> Dispatched:
+    """A sampling integrator as Mitsuba's ``render`` calls its ``sample``."""
+    return view(plugin, mi.SamplingIntegrator)
+
+
+# ----------------------------------------------------------------------------- errors
+def _library_roots() -> tuple[str, ...]:
+    """Folders whose frames are never the plugin's: phonglab, Mitsuba, Dr.Jit, numpy and the
+    standard library (a plugin installed as a package of its own is still the plugin's)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    paths = sysconfig.get_paths()
+    roots = {here, paths.get("stdlib", ""), paths.get("platstdlib", "")}
+    for mod in ("mitsuba", "drjit", "numpy"):
+        m = sys.modules.get(mod)
+        if m is not None and getattr(m, "__file__", None):
+            roots.add(os.path.dirname(os.path.abspath(m.__file__)))
+    return tuple(sorted(r for r in roots if r))
+
+
+def _plugin_frame(fs) -> bool:
+    name = fs.filename
+    if name.startswith("<") and not name.startswith("<plugin"):
+        return False
+    path = os.path.abspath(name)
+    return not any(path == r or path.startswith(r + os.sep) for r in _library_roots())
+
+
+def root_cause(exc: BaseException) -> BaseException:
+    """The plugin's own exception behind Dr.Jit's wrappers: a ``RuntimeError`` or
+    ``Exception`` whose message says "(see above)" or "custom differentiable operation" and
+    whose ``__cause__`` is set is replaced by that cause, recursively."""
+    seen = set()
+    while id(exc) not in seen:
+        seen.add(id(exc))
+        cause = exc.__cause__ or (exc.__context__ if not exc.__suppress_context__ else None)
+        text = str(exc)
+        if cause is None or not ("see above" in text or "custom differentiable" in text
+                                 or "dr.while_loop" in text or "symbolic" in text):
+            return exc
+        exc = cause
+    return exc
+
+
+def origin(exc: BaseException) -> tuple[str, int, str] | None:
+    """(file, line, function) of the innermost frame of ``exc``'s traceback that lies in the
+    plugin's own code, or None (a built-in's error, or the validator's own)."""
+    for fs in reversed(traceback.extract_tb(exc.__traceback__)):
+        if _plugin_frame(fs):
+            return fs.filename, fs.lineno or 0, fs.name
+    return None
+
+
+def not_implemented(exc: BaseException) -> str | None:
+    """The plugin method left unimplemented, when ``exc`` is a ``NotImplementedError`` raised
+    in the plugin's own code (its function's name), else None."""
+    exc = root_cause(exc)
+    if not isinstance(exc, NotImplementedError):
+        return None
+    where = origin(exc)
+    return where[2] if where is not None else None
+
+
+def is_bad_cast(exc: BaseException) -> bool:
+    """Whether ``exc`` is the trampoline refusing a return it cannot cast to Mitsuba's type."""
+    return "bad_cast" in str(exc) or "unable to convert" in str(exc).lower() \
+        or "incompatible function arguments" in str(exc)
+
+
+def describe(exc: BaseException) -> str:
+    """One line: the plugin's own exception and where in its file it was raised,
+    ``NameError: name 'x' is not defined (my_bsdf.py:41, in eval)``; "not implemented:
+    <method> (file:line)" for a ``NotImplementedError``."""
+    exc = root_cause(exc)
+    where = origin(exc)
+    text = str(exc).strip()
+    first = text.splitlines()[0] if text else ""
+    at = ""
+    if where is not None:
+        at = f" ({os.path.basename(where[0])}:{where[1]}, in {where[2]})"
+    if isinstance(exc, NotImplementedError) and where is not None:
+        return f"not implemented: {where[2]}{at}" + (f": {first}" if first else "")
+    return f"{type(exc).__name__}: {first or '(no message)'}{at}"
