@@ -99,12 +99,38 @@ def test_builtins_sweep_their_documented_ranges(variant_llvm_rgb):
     assert swept["alpha"]["source"] == "mitsuba" and swept["alpha"]["lo"] == 0.01
 
 
-def test_an_undeclared_plugin_is_probed(variant_llvm_rgb):
+def test_an_undeclared_parameter_named_as_mitsuba_names_it_carries_that_domain(variant_llvm_rgb):
     defects = Path(__file__).parent / "defects"
     report = validate_bsdf("defect_weight_noise", plugins=[defects / "weight_noise.py"],
                            quick=True, topics=["finite"], sweep=True)
     (p,) = report.meta["sweep"]["parameters"]
-    assert p["name"] == "reflectance" and p["source"] == "probed" and p["lo"] == 0.0
+    assert (p["name"], p["source"], p["lo"], p["hi"]) == ("reflectance", "named", 0.0, 1.0)
+
+
+def test_a_bright_lambert_without_declared_ranges_fails_energy_at_reflectance_1(
+        variant_llvm_rgb, tmp_path):
+    """Before: 3 % too bright at reflectance 1 passed with an advice row (a probed range is
+    no domain); now ``reflectance`` carries Mitsuba's [0, 1] and the bound is judged there."""
+    text = (Path(__file__).parent / "authors" / "my_lambert.py").read_text()
+    bright = tmp_path / "bright.py"
+    bright.write_text(text.replace("self.reflectance * dr.inv_pi", "self.reflectance * 1.03 * dr.inv_pi")
+                      .replace('"my_lambert"', '"bright_lambert"'))
+    report = validate_bsdf("bright_lambert", plugins=[bright], quick=True, topics=["energy"],
+                           sweep=True)
+    failing = [r for r in report.rows if r.status == "fail"]
+    assert [r.point for r in failing] == [{"reflectance": 1.0}], report.table()
+    assert not report.meta["sweep"]["advice"]
+
+
+def test_an_undeclared_parameter_of_no_mitsuba_name_is_probed(variant_llvm_rgb, tmp_path):
+    text = (Path(__file__).parent / "authors" / "my_lambert.py").read_text()
+    kd = tmp_path / "kd.py"
+    kd.write_text(text.replace('props.get("reflectance", 0.5)', 'props.get("kd", 0.5)')
+                  .replace('callback.put("reflectance"', 'callback.put("kd"')
+                  .replace('"my_lambert"', '"kd_lambert"'))
+    report = validate_bsdf("kd_lambert", plugins=[kd], quick=True, topics=["finite"], sweep=True)
+    (p,) = report.meta["sweep"]["parameters"]
+    assert p["name"] == "kd" and p["source"] == "probed" and p["lo"] == 0.0
 
 
 def test_json_rows_carry_their_point_and_a_single_point_run_has_none(variant_llvm_rgb,

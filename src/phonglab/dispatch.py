@@ -168,9 +168,10 @@ def not_implemented(exc: BaseException) -> str | None:
 
 
 def is_bad_cast(exc: BaseException) -> bool:
-    """Whether ``exc`` is the trampoline refusing a return it cannot cast to Mitsuba's type."""
-    return "bad_cast" in str(exc) or "unable to convert" in str(exc).lower() \
-        or "incompatible function arguments" in str(exc)
+    """Whether ``exc`` is the trampoline refusing a return it cannot cast to Mitsuba's type
+    (nanobind's ``std::bad_cast``, raised after the plugin's code returned: no frame of the
+    plugin's own in its traceback)."""
+    return "bad_cast" in str(exc) and origin(exc) is None
 
 
 def describe(exc: BaseException) -> str:

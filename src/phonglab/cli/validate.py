@@ -157,6 +157,14 @@ def sweep_text(report: Report) -> str:
         lines += ["", f"the ranges of {', '.join(probed)} were probed (the values the plugin "
                       f"accepts at load time); declare them on the plugin class as "
                       f"PARAMETER_RANGES = {{name: (lo, hi)}} if they are narrower"]
+    named = [p["name"] for p in sw["parameters"] if p["source"] == "named"]
+    if named:
+        one = len(named) == 1
+        lines += ["", f"the domain{'' if one else 's'} of {', '.join(named)} "
+                      f"{'was' if one else 'were'} inferred from {'its name' if one else 'their names'}"
+                      f" (the range Mitsuba's plugin reference gives a parameter of that name) "
+                      f"and the physical bounds judged there; declare PARAMETER_RANGES = "
+                      f"{{name: (lo, hi)}} on the plugin class to give another"]
     if sw.get("advice"):
         lines += ["", "advice (a physical bound exceeded outside the declared or documented "
                       "domain: not a fail):"]

@@ -18,12 +18,18 @@ The range of each, in this order of precedence:
    ``phong`` declare theirs);
 2. Mitsuba 3.9.1's documented ranges of its built-ins (each kind's ``ranges.BUILTIN`` table:
    the BSDF, emitter, integrator and phase-function folders each hold one);
-3. otherwise probed: the candidates 0, 10⁻⁴, d/10, d, 10d, 1, 10 and 10⁴ around the loaded
+3. inferred from the name (``named``): a parameter the author did not declare but named as
+   Mitsuba names it (``reflectance``, ``diffuse_reflectance``, ``specular_reflectance``,
+   ``alpha``, ``roughness``, ``int_ior`` ...; each kind's ``ranges.NAMED`` table) carries the
+   domain Mitsuba's plugin reference gives that name, and is judged physically there (an
+   albedo above 1 at ``reflectance = 1`` is a fail, not advice); the report says the domain
+   was inferred from the name and how to declare another;
+4. otherwise probed: the candidates 0, 10⁻⁴, d/10, d, 10d, 1, 10 and 10⁴ around the loaded
    value d, each loaded once; a value the plugin refuses at load time is outside the range,
    not a failure, and the range is [smallest accepted, largest accepted] (a parameter that
    accepts only its default is not swept).  Integrators and phase functions are not probed
    (``probe=False``: their parameters are counts and shape factors whose valid values loading
-   cannot reveal): without 1. or 2. they are checked at their given point.
+   cannot reveal): without 1. to 3. they are checked at their given point.
 
 Edges.  Besides the ends and the middle of its range a parameter is tried at the values where
 formulas break: 0 and the tiniest positive value where the range starts at 0 (1e-4: a cos^p
@@ -150,10 +156,11 @@ def domain(plugin, spec, *, builtin: dict) -> tuple[dict[str, Range], str]:
 
 
 def parameters(plugin, spec, pinned=(), *, builtin: dict, cls, word: str,
-               probe: bool = True) -> list[Parameter]:
+               probe: bool = True, named: dict | None = None) -> list[Parameter]:
     """The parameters a sweep of ``plugin`` (of Mitsuba class ``cls``, loaded from ``spec``: a
     type name or dict) varies, with their ranges (module docstring); ``builtin``: the kind's
-    table of Mitsuba's built-ins; ``pinned`` names are left out."""
+    table of Mitsuba's built-ins; ``named``: the domains of Mitsuba's parameter names, for a
+    plugin that declares none; ``pinned`` names are left out."""
     values = traversed(plugin)
     table, source = domain(plugin, spec, builtin=builtin)
     out = []
@@ -164,9 +171,14 @@ def parameters(plugin, spec, pinned=(), *, builtin: dict, cls, word: str,
         # absent specular_reflectance texture): the given value is unknown, so no range value
         # is taken for it and skipped
         out.append(Parameter(name, values.get(name, _spec_value(spec, name)), rng, source))
-    if source == "probed" and probe:
+    if source == "probed":
         for name, value in values.items():
-            if name not in pinned:
+            if name in pinned:
+                continue
+            if name in (named or {}) and _loads(spec, {name: named[name].lo}, cls, word) \
+                    and _loads(spec, {name: named[name].top}, cls, word):
+                out.append(Parameter(name, value, named[name], "named"))
+            elif probe:
                 rng = _probe(spec, name, value, cls, word)
                 if rng is not None:
                     out.append(Parameter(name, value, rng, "probed"))

@@ -181,7 +181,10 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
 
 SOURCES = {"declared": "declared by the plugin class's PARAMETER_RANGES",
            "mitsuba": "that phonglab validates it over (from Mitsuba 3.9.1's plugin reference: "
-                      "phonglab.validate.{kind}.ranges.BUILTIN)"}
+                      "phonglab.validate.{kind}.ranges.BUILTIN)",
+           "named": "that Mitsuba's plugin reference gives a parameter of that name "
+                    "(phonglab.validate.{kind}.ranges.NAMED; declare PARAMETER_RANGES on the "
+                    "plugin class for another)"}
 
 
 def check_set(kind: Kind, target, spec, params) -> None:

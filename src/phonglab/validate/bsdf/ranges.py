@@ -18,7 +18,7 @@ import mitsuba as mi
 
 from ..ranges import Range, domain as _domain, parameters as _parameters, traversed
 
-__all__ = ["BUILTIN", "Range", "domain", "parameters", "traversed"]
+__all__ = ["BUILTIN", "NAMED", "Range", "domain", "parameters", "traversed"]
 
 #: Mitsuba 3.9.1's built-ins: load-time parameter -> its documented range (module docstring).
 _REFLECTANCE = Range(0.0, 1.0)
@@ -60,10 +60,23 @@ BUILTIN: dict[str, dict[str, Range]] = {
 }
 
 
+#: The domains of Mitsuba's BSDF parameter names (its plugin reference), for a Python BSDF that
+#: declares no PARAMETER_RANGES: its ``roughness`` is swept over [0.01, 1] with 0.05 and 0.1
+#: (a lobe's normalization is most often wrong where it is sharp), a reflectance over [0, 1].
+NAMED: dict[str, Range] = {
+    **{name: _REFLECTANCE for name in (
+        "reflectance", "diffuse_reflectance", "specular_reflectance", "specular_transmittance",
+        "transmittance", "base_color", "albedo")},
+    **{name: Range(0.01, 1.0, (0.05, 0.1)) for name in ("alpha", "alpha_u", "alpha_v",
+                                                         "roughness")},
+    "int_ior": _IOR, "ext_ior": Range(1.0, 3.0),
+}
+
+
 def parameters(plugin, spec, pinned=(), probe: bool = True) -> list:
     """The BSDF's swept parameters (:func:`phonglab.validate.ranges.parameters`)."""
     return _parameters(plugin, spec, pinned, builtin=BUILTIN, cls=mi.BSDF, word="BSDF",
-                       probe=probe)
+                       probe=probe, named=NAMED)
 
 
 def domain(plugin, spec) -> tuple[dict, str]:
