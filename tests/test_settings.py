@@ -88,3 +88,13 @@ def test_load_plugin_forms(variant_llvm_rgb, tmp_path):
         load_plugin(loaded.plugin, {"alpha": 0.1}, kind=mi.BSDF, word="BSDF")
     with pytest.raises(PluginError, match="does not exist"):
         load_plugin(str(tmp_path / "none.xml"), kind=mi.BSDF, word="BSDF")
+
+
+def test_a_constant_textures_value_key_sets_the_parameter_itself():
+    """Before: ``reflectance.value=0.5,0.5,0.5`` (mi.traverse's key of a constant texture) was
+    wrapped twice, {"reflectance": {"value": {"type": "rgb", ...}}}, and Mitsuba refused it
+    ("missing 'type' attribute")."""
+    from phonglab.settings import parse_sets
+    assert parse_sets(["diffuse_reflectance.value=0.5,0.5,0.5", "roughness.value=0.2"]) == {
+        "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}, "roughness": 0.2}
+    assert parse_sets(["r.type=bitmap", "r.value=0.3"]) == {"r": {"type": "bitmap", "value": 0.3}}

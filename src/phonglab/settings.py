@@ -142,6 +142,10 @@ def parse_sets(items) -> dict:
             raise ParameterError(f"--set expects NAME=VALUE, and {item!r} is not NAME=VALUE; "
                                  f"write e.g. {EXAMPLE}")
         *path, leaf = name.split(".")
+        if path and leaf == "value" and "type" not in _at(out, path):
+            # NAME.value: mi.traverse's key of a constant texture, i.e. NAME itself (a
+            # colour stays one {"type": "rgb"} node, not a node wrapped in another)
+            *path, leaf = path
         node = out
         for key in path:
             child = node.setdefault(key, {})
@@ -157,6 +161,16 @@ def parse_sets(items) -> dict:
             value = float(value)
         node[leaf] = value
     return out
+
+
+def _at(out: dict, path: list[str]) -> dict:
+    """The node ``out`` holds at ``path`` so far ({} where there is none yet)."""
+    node = out
+    for key in path:
+        node = node.get(key) if isinstance(node, dict) else None
+        if not isinstance(node, dict):
+            return {}
+    return node
 
 
 def mitsuba_reason(exc: Exception) -> str:

@@ -1,9 +1,11 @@
-"""Mitsuba 3.9.1 principled / principledthin: a context restricted to one component is ignored.
+"""Mitsuba 3.9.1 principled / principledthin: a context restricted to one component, or to
+some lobe types (ctx.type_mask), is ignored.
 
 Neither src/bsdfs/principled.cpp nor src/bsdfs/principledthin.cpp calls ctx.is_enabled() or
 reads ctx.component: the lobe probabilities of sample() (principled.cpp:377-393,
 principledthin.cpp:291-299) and the lobes summed by eval()/pdf() are the same for every
-context, so BSDFContext(component=k) still samples and evaluates all lobes (other plugins,
+context, so BSDFContext(component=k) or BSDFContext(type_mask=DiffuseReflection) still
+samples and evaluates all lobes (other plugins,
 e.g. roughplastic.cpp:264-265, restrict themselves with ctx.is_enabled(flag, index)).
 
 Run: python tests/repro/principled_ignores_component.py  -> exit 1 while the bug is present.
@@ -37,4 +39,11 @@ for plugin, spec in SPECS.items():
     ids = sorted(set(np.array(bs.sampled_component)[np.array(bs.pdf) > 0].tolist()))
     print(f"{plugin}: context component 0 -> sampled components {ids} (expected [0])")
     bad |= ids != [0]
+    ctx = mi.BSDFContext(mi.TransportMode.Radiance, mi.BSDFFlags.DiffuseReflection)
+    bs, weight = bsdf.sample(ctx, si, u1, u2)
+    live = np.array(bs.pdf) > 0
+    types = sorted(set(np.array(bs.sampled_type)[live].tolist()))
+    print(f"{plugin}: context type_mask DiffuseReflection (0x2) -> sampled types "
+          f"{[hex(t) for t in types]} (expected ['0x2'])")
+    bad |= types != [int(mi.BSDFFlags.DiffuseReflection)]
 sys.exit(1 if bad else 0)

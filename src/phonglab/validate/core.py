@@ -188,11 +188,30 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
                                  word=kind.word, hint=hint)
     except PluginError as exc:
         raise ValidateError(str(exc)) from exc
+    _check_traverse(kind, loaded)
     returns = kind.part("returns")          # the Python methods' return types, on one lane
     if returns is not None:
         returns(loaded.plugin, loaded.label)
     files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
     return loaded._replace(files=files) if files else loaded
+
+
+def _check_traverse(kind: Kind, loaded: Loaded) -> None:
+    """``mi.traverse`` of the plugin works, else one sentence naming the plugin's own error
+    and its file:line (an API renamed before 3.9.1: ``callback.put_parameter`` -> ``put``)."""
+    plugin = loaded.plugin
+    if not isinstance(plugin, mi.Object):       # a kind's holder (an emitter's Setup ...)
+        plugin = next((v for v in vars(plugin).values() if isinstance(v, mi.Object)), None)
+    if plugin is None:
+        return
+    try:
+        mi.traverse(plugin)
+    except Exception as exc:
+        raise ValidateError(f"traverse() of the {kind.word} {loaded.label!r} raised "
+                            f"{dispatch.describe(exc)}; Mitsuba calls traverse() to expose its "
+                            f"parameters (mi.traverse, parameter updates, phonglab's sweep and "
+                            f"gradient): fix it (3.9.1's callback is callback.put(name, value, "
+                            f"flags)) or leave traverse() out") from exc
 
 
 def prepare(kind: Kind, spec, *, variant=None, params=None, plugins=()) -> Loaded:

@@ -40,6 +40,8 @@ ONE_TYPE_ROW = "one sampled_type per component"
 AGREE_ROW = "sampled_component/sampled_type agree with the flags"
 RESTRICTED_ROW = "restricted context samples only its component"
 SUM_ROW = "Σ_k eval(component k) = eval"
+MASK_ROW = "type_mask: samples only the lobes asked for"
+MASK_SUM_ROW = "type_mask: Σ eval(mask) = eval"
 REFLECTION_ROW = "f(wi, wo) = f(wo, wi), reflection"
 TRANSMISSION_ROW = "f(wi, wo) = f*(wo, wi), transmission (η² form)"
 
@@ -387,12 +389,14 @@ FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
              "principledthin/default", "principledthin/all-lobes"),
             "src/bsdfs/principled.cpp:377",
             "the lobe probabilities (principled.cpp:377-393, principledthin.cpp:291-299) and "
-            "eval/pdf never consult ctx.component or ctx.is_enabled(), so a context "
-            "restricted to one component still samples and evaluates every lobe",
-            "BSDFContext(component=0) samples components [0, 1, 2, 3]",
-            "only component 0",
+            "eval/pdf never consult ctx.component, ctx.type_mask or ctx.is_enabled(), so a "
+            "context restricted to one component or to some lobe types still samples and "
+            "evaluates every lobe",
+            "BSDFContext(component=0) samples components [0, 1, 2, 3]; type_mask "
+            "DiffuseReflection (0x2) samples types ['0x2', '0x8', '0x10']",
+            "only component 0; only type 0x2",
             "tests/repro/principled_ignores_component.py",
-            rows=(RESTRICTED_ROW, SUM_ROW)),
+            rows=(RESTRICTED_ROW, SUM_ROW, MASK_ROW, MASK_SUM_ROW)),
     Finding("blendbsdf-component-ids", "component",
             ("blendbsdf/diffuse+roughconductor", "blendbsdf/roughconductor+roughdielectric"),
             "src/bsdfs/blendbsdf.cpp:154",
@@ -462,7 +466,7 @@ FINDINGS: tuple[Finding, ...] = POLARIZED_FINDINGS + (
             "context = DiffuseReflection: 100 % of the samples are Null (wo = -wi)",
             "0 % Null samples (pdf() at line 177 already treats the context the right way)",
             "tests/repro/mask_restricted_context.py",
-            rows=(RESTRICTED_ROW,)),
+            rows=(RESTRICTED_ROW, MASK_ROW)),
     Finding("microfacet-sample-nan", "finite", _MICROFACET_NAN,
             "include/mitsuba/render/microfacet.h:418",
             "GGX visible-normal sampling divides by 0 on a measure-zero set of sample values: "

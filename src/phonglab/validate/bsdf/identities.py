@@ -358,5 +358,45 @@ def component(bsdf, opts) -> list[Row]:
     rows.append(bounded_row("component", "Σ_k eval(component k) = eval", max_finite(rel), REL_TOL,
                      f"max relative |Σ_k eval_k − eval| over random wo; {ROUND_OFF}",
                      worst_lane(rel, wi, wo), lanes=(rel, {"wi": wi, "wo": wo})))
+    return rows + type_mask_rows(bsdf, opts, wi, wo, full, flags)
+
+
+def type_mask_rows(bsdf, opts, wi, wo, full, flags) -> list[Row]:
+    """``ctx.type_mask`` honoured: with the lobe bits of one kind of component as the mask (its
+    ``flags(k)``), samples report only lobes within it, and the evals under masks that share no
+    bit add up to the full eval (an integrator asks for the smooth lobes alone for next-event
+    estimation: path.cpp masks its emitter sampling by ``BSDFFlags.Smooth``).  No rows when the
+    components are all of one kind of lobe."""
+    lobe_bits = int(mi.BSDFFlags.All)
+    masks = sorted({f & lobe_bits for f in flags if f & lobe_bits})
+    if len(masks) < 2:
+        return []
+    wrong, inputs = [], {"wi": [], "mask": [], "type": []}
+    total = np.zeros_like(full)
+    disjoint = all(a & b == 0 for i, a in enumerate(masks) for b in masks[i + 1:])
+    for j, mask in enumerate(masks):
+        ctx = probe.context(type_mask=mi.BSDFFlags(mask))
+        if disjoint:
+            total += probe.eval(bsdf, wi, wo, ctx)
+        sj = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 11 * j + 5, ctx=ctx)
+        live = np.any(sj.weight != 0, axis=1)
+        wrong.append(live & ((sj.sampled_type & lobe_bits & ~mask) != 0))
+        for name, v in (("wi", wi), ("mask", np.full(len(wi), mask)), ("type", sj.sampled_type)):
+            inputs[name].append(v)
+    wrong = np.concatenate(wrong)
+    names = ", ".join(f"{m:#x}" for m in masks)
+    rows = [bounded_row("component", "type_mask: samples only the lobes asked for",
+                        float(wrong.sum()), 0.0,
+                        f"count of samples from a context whose type_mask is one component's "
+                        f"lobe bits ({names}) that report a lobe outside it",
+                        {"bad": int(wrong.sum()), "masks": masks},
+                        lanes=(wrong.astype(float), {n: np.concatenate(v)
+                                                     for n, v in inputs.items()}))]
+    if disjoint:
+        rel = np.max(rel_diff(total, full), axis=1)
+        rows.append(bounded_row("component", "type_mask: Σ eval(mask) = eval", max_finite(rel),
+                                REL_TOL, f"max relative |Σ_mask eval − eval| over the disjoint "
+                                f"masks {names}, random wo; {ROUND_OFF}",
+                                worst_lane(rel, wi, wo), lanes=(rel, {"wi": wi, "wo": wo})))
     return rows
 

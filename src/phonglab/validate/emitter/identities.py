@@ -102,7 +102,7 @@ def _nonfinite(*arrays) -> np.ndarray:
 
 def finite(setup: Setup, opts) -> list[Row]:
     s = lanes_.sample(setup, opts, "finite")
-    e, n = setup.emitter, s.n
+    e, n = setup.calls, s.n
     rows = []
     marked = (s.pdf == 0) & np.all(s.weight == 0, axis=1)     # an invalid sample, so marked
     bad = invalid(s.pdf, s.weight) | (~np.all(np.isfinite(s.d), axis=1) & ~marked)
