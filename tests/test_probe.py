@@ -264,3 +264,25 @@ def test_sample_in_scalar_variant_matches_llvm():
     np.testing.assert_array_equal(lv.sampled_component, sc.sampled_component)
     np.testing.assert_allclose(lv.wo, sc.wo, rtol=0, atol=1e-6)
     np.testing.assert_allclose(lv.weight, sc.weight, rtol=1e-5)
+
+
+def test_a_return_of_another_width_is_refused_before_numpy_copies_it(variant_llvm_rgb):
+    """A Python eval returning 2 lanes for N queried was broadcast against N lanes downstream
+    (a validate run grew past 20 GB); now one sentence, before the copy."""
+    import drjit as dr
+    import mitsuba as mi
+
+    class Wide(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.m_flags = mi.BSDFFlags.DiffuseReflection
+            self.m_components = [self.m_flags]
+
+        def eval(self, ctx, si, wo, active):
+            return mi.Float(0.1, 0.2)
+
+    b = Wide(mi.Properties())
+    wo = probe.direction(np.linspace(0.1, 1.2, 1000), 0.3)
+    with pytest.raises(ValueError, match="returned 2 lanes where 1000 were queried"):
+        probe.eval(b, probe.direction(0.3), wo)
+    assert dr.width(mi.Float(0.1, 0.2)) == 2
