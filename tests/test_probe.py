@@ -286,3 +286,16 @@ def test_a_return_of_another_width_is_refused_before_numpy_copies_it(variant_llv
     with pytest.raises(ValueError, match="returned 2 lanes where 1000 were queried"):
         probe.eval(b, probe.direction(0.3), wo)
     assert dr.width(mi.Float(0.1, 0.2)) == 2
+
+
+def test_a_query_over_the_memory_budget_is_one_sentence_before_the_kernel_runs(
+        variant_llvm_rgb, monkeypatch):
+    import mitsuba as mi
+    b = mi.load_dict({"type": "diffuse"})
+    wo = probe.direction(np.linspace(0.1, 1.2, 1000), 0.3)
+    assert probe.eval(b, probe.direction(0.3), wo).shape == (1000, 3)
+    # 1000 lanes x 3 channels x 4 bytes x 4 (float32 + float64 copies) = 48000 bytes
+    monkeypatch.setattr(probe, "QUERY_BUDGET", 40_000)
+    with pytest.raises(MemoryError, match="one probe query of 1000 lanes would need about .* "
+                                          "budget for one query"):
+        probe.eval(b, probe.direction(0.3), wo)

@@ -62,7 +62,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import dispatch
+from . import dispatch, runtime
 
 __all__ = ["Sample", "context", "default_wavelengths", "direction", "eval",
            "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction",
@@ -287,6 +287,34 @@ def _read(x, n: int | None, matrices: bool) -> np.ndarray:
     return to_numpy(x, n)
 
 
+#: The most memory one probe query's results may take (Dr.Jit's float32 arrays and the float64
+#: numpy copies), checked before the kernel runs (:func:`_within_budget`).
+QUERY_BUDGET = 2 * 2 ** 30
+
+
+def _nbytes(x) -> int:
+    """Bytes of ``x``'s evaluated arrays: its float leaves times its width, 4 bytes each."""
+    shape = dr.shape(x) if dr.is_jit_v(x) else None
+    if not shape:
+        return 4 * max(1, dr.width(x)) if dr.is_jit_v(x) else 0
+    return 4 * int(np.prod(shape))
+
+
+def _within_budget(out, n: int) -> None:
+    """Refuse, in one sentence and before Dr.Jit evaluates anything, a query whose results
+    would take more than :data:`QUERY_BUDGET` (or the memory available): the float32 results
+    and their float64 numpy copies (three times as much again)."""
+    need = sum(_nbytes(x) for x in out) * 4
+    have = runtime.available_memory()
+    runtime.require_memory(need, f"one probe query of {n} lanes",
+                           "query fewer lanes at once (or fix a plugin that returns more "
+                           "values per lane than Mitsuba's types hold)",
+                           why=f" (its results; phonglab's budget for one query is "
+                               f"{QUERY_BUDGET / 2**30:g} GiB)",
+                           have=QUERY_BUDGET if have is None else min(have, QUERY_BUDGET),
+                           error=MemoryError)
+
+
 def _probe(call, wi, matrices: bool = False, **args) -> list[np.ndarray]:
     """Run ``call(si, *dr_args)`` (returning a tuple of Dr.Jit values) over the broadcast lanes.
 
@@ -304,6 +332,7 @@ def _probe(call, wi, matrices: bool = False, **args) -> list[np.ndarray]:
         if not matrices:
             # a Mueller matrix's intensity taken before the kernel runs: it computes M00 alone
             out = [_intensity(x) for x in out]
+        _within_budget(out, n)
         dr.eval(*out)
         return [_read(x, n, matrices) for x in out]
     lanes = [[_read(x, None, matrices) for x in call(interaction(rows[0][i]),
