@@ -98,3 +98,11 @@ def test_a_constant_textures_value_key_sets_the_parameter_itself():
     assert parse_sets(["diffuse_reflectance.value=0.5,0.5,0.5", "roughness.value=0.2"]) == {
         "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}, "roughness": 0.2}
     assert parse_sets(["r.type=bitmap", "r.value=0.3"]) == {"r": {"type": "bitmap", "value": 0.3}}
+
+
+def test_a_bitmap_without_a_file_is_one_sentence_not_a_crash(variant_llvm_rgb):
+    """Mitsuba 3.9.1 segfaults loading {"type": "bitmap"} (exit 139, no message)."""
+    import mitsuba as mi
+    with pytest.raises(PluginError, match="the bitmap texture diffuse_reflectance has no filename"):
+        load_plugin("roughplastic", {"diffuse_reflectance": {"type": "bitmap"}}, kind=mi.BSDF,
+                    word="BSDF")
