@@ -138,3 +138,15 @@ def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path
         assert "NameError" in r["reason"] and "sample_name_error.py:" in r["reason"]
         where = r["details"]["plugin_error"]
         assert where["file"].endswith("sample_name_error.py") and where["function"] == "sample"
+
+
+def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(tmp_path):
+    """Before: an integrator's report was titled "phonglab validate: ? (...)"."""
+    html = tmp_path / "r.html"
+    rc, _, _ = validate(tmp_path, "sample_name_error", "--no-sweep", "--report", str(html))
+    text = html.read_text()
+    assert rc == 1
+    assert "<title>phonglab validate: integrator sample_name_error (llvm_ad_rgb)" in text
+    source = (CORPUS / "sample_name_error.py").read_text().splitlines()
+    line = next(k for k, t in enumerate(source, 1) if "bsdf_ctx" in t and "import" not in t)
+    assert f"sample_name_error.py:{line}, in sample" in text

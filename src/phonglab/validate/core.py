@@ -522,7 +522,8 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
                 for topic in topics]
     rows.sort(key=lambda r: kind.topics.index(r.topic))
     mark_known(rows, known, parameter_values(kind, target))
-    meta = {kind.name: target.label, "spec": target.spec, "variant": mi.variant(), "seed": seed,
+    meta = {kind.name: target.label, "kind": kind.word, "plugin": target.label,
+            "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
             "not_covered": not_covered(kind, topics, rows),

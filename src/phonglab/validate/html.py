@@ -117,7 +117,9 @@ def _chi2_cells(d: dict) -> str:
 def render(report: Report) -> str:
     """The HTML text of ``report``."""
     m = report.meta
-    title = f"phonglab validate: {m.get('bsdf', m.get('emitter', '?'))} ({m.get('variant', '?')})"
+    name = m.get("plugin", m.get("bsdf", "?"))       # reports written before "plugin": a BSDF's
+    title = (f"phonglab validate: {m['kind'] + ' ' if 'kind' in m else ''}{name} "
+             f"({m.get('variant', '?')})")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failing)} rows)"
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
              f"</title><style>{STYLE}</style></head><body>",
