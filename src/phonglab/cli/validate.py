@@ -82,6 +82,10 @@ def add_parser(sub) -> None:
     p.add_argument("--quick", action="store_true",
                    help="fewer samples and angles (every topic kept), and a sweep of each "
                         "parameter's ends only")
+    p.add_argument("--profile", action="store_true",
+                   help="print where the time went: per topic and per sweep point, the wall "
+                        "time split into Dr.Jit kernel compilation, kernel execution and the "
+                        "rest (the JSON and HTML always carry it as meta.profile)")
     p.add_argument("--no-sweep", action="store_true",
                    help="check the given parameter point alone (by default every parameter "
                         "is swept across its range: its ends, middle and edge values, one at "
@@ -259,6 +263,10 @@ def validate_one(args, params: dict):
                                plugins=args.plugin, runner=runner)
         text = sweep_text(report)
     label = report.meta.get(kind.name, target.label)
+    if getattr(args, "profile", False):
+        from ..validate import profile
+        text += "\n\n" + profile.table(report.meta.get("profile", {}),
+                                        report.meta.get("sweep", {}).get("runs", ()))
     text += known_note(report, args.bsdf, kind.conformance)
     text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind, registered)
     return report, label, text

@@ -46,6 +46,7 @@ from .. import dispatch, registration, stats
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
 from .inputs import ValidateError, check_plugin_file, check_topics
+from . import profile as profile_
 from .kind import Kind
 
 __all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
@@ -505,15 +506,16 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         opts = replace(opts, source=target)
     planned = _guarded("plan", lambda: kind.part("statistical_tests")(target.plugin, opts,
                                                                        topics))
-    rows, seconds = [], {}
+    rows, seconds, profiled = [], {}, {}
     if isinstance(planned, int):
         m = planned * family
         runners = kind.part("runners")(target.plugin, opts, topics, m)
         with session(kind):
             for topic in topics:
-                t0 = time.perf_counter()
-                rows += _guarded(topic, runners[topic])
-                seconds[topic] = round(time.perf_counter() - t0, 3)
+                with profile_.Topic() as timed:
+                    rows += _guarded(topic, runners[topic])
+                seconds[topic] = round(timed.record["seconds"], 3)
+                profiled[topic] = timed.record
     else:          # counting the tests ran the plugin (an integrator's depth) and it failed
         m = 0
         (why,) = planned
@@ -526,6 +528,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
             "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
+            "profile": profiled,
             "not_covered": not_covered(kind, topics, rows),
             "known": {t: [k.describe() for k in known_entries(v)]
                       for t, v in (known or {}).items()}}

@@ -49,6 +49,7 @@ from pathlib import Path
 
 from ..verdict import Report, Row, point_label
 from . import core, registry
+from . import profile as profile_
 from .inputs import ValidateError, check_topics
 from .kind import Kind
 
@@ -153,13 +154,17 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                               [t for t in topics if t not in kind.informational])
     rows: list[Row] = []
     records = []
+    summed: dict = {}                   # topic -> its profile summed over the points
     for pt, rep in zip(runnable, reports):
         for r in rep.rows:
             r.point = dict(pt.params)
         rows += rep.rows
         records.append({"point": pt.params, "status": "run",
                         "failing": sorted({r.topic for r in rep.failing}),
-                        "seconds": rep.meta.get("seconds")})
+                        "seconds": rep.meta.get("seconds"),
+                        "profile": profile_.total(rep.meta.get("profile") or {})})
+        for topic, record in (rep.meta.get("profile") or {}).items():
+            summed[topic] = profile_.add(summed.get(topic), record)
     advice = advise(rows, swept, kind.bounds)
     meta = dict(reports[0].meta)
     # every point ran at the family level: its statistical_tests is already P·m (P points)
@@ -175,6 +180,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
             f"of it is documented or found by probing; declare PARAMETER_RANGES = "
             f"{{'name': (lo, hi)}} on its class to sweep it")
     meta.pop("topic_seconds", None)
+    meta["profile"] = summed
     meta["not_covered"] = core.not_covered(kind, topics, rows)
     return Report(meta, rows)
 
