@@ -11,7 +11,7 @@ cos θ_i ∈ {0.8, 0.5, 0.2}, φ_i = 0, 61 × 122 bins) and the check's χ² sam
 * ``reciprocity`` (topic ``reciprocity``): f(ω_i, ω_o) = f(ω_o, ω_i) over random and grid pairs
   on the upper hemisphere; measured = the worst lane's relative difference over its tolerance
   2⁻¹⁰ + the lane's sensitivity to an 8-ulp move of both directions
-  (:mod:`phonglab.validate.config`), passes at ≤ 1.
+  (:mod:`phonglab.validate.roundoff`), passes at ≤ 1.
 * ``non-negative, finite`` (topic ``finite``): the number of lanes with a negative or
   non-finite eval, pdf, eval_pdf or sample result over random, mirror, grazing and
   below-horizon directions (the sum of the topic's four rows), must be 0.

@@ -20,7 +20,7 @@ from .common import figure
 
 
 def fig_snell(n_inside: float = 1.5, n_outside: float = 1.0):
-    """θ_t against θ_i from phonglab.optics.refract, entering and leaving the denser medium,
+    """θ_t against θ_i from phonglab.physics.optics.refract, entering and leaving the denser medium,
     with the critical angle, and the Snell residual |n₁ sin θ₁ − n₂ sin θ₂|."""
     theta = np.linspace(0.0, math.pi / 2 * 0.999, 400)
     v = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
@@ -68,7 +68,7 @@ def fig_fresnel(n_inside: float = 1.5, n_outside: float = 1.0):
 
 @dataclass
 class RefractionAgreement:
-    """phonglab.optics.refract against mi.refract and the built-in dielectric's sample."""
+    """phonglab.physics.optics.refract against mi.refract and the built-in dielectric's sample."""
 
     thetas: np.ndarray              #: incidence angles [rad] (from the outside, and inside)
     inside: np.ndarray              #: bool, incidence from inside the denser medium

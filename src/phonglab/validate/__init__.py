@@ -7,16 +7,19 @@ kind.  The runner is kind-independent (:mod:`.core`: guarded topics, Šidák ove
 statistical rows, KNOWN causes, the report) and so is the parameter sweep (:mod:`.sweep`); a
 kind's folder brings its topics:
 
-* BSDFs (:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``component``,
-  ``chi2``, ``normalization``, ``energy``, ``reciprocity``, ``eval_null_transmission``,
-  ``eval_diffuse_reflectance``, ``gradient``, ``cost``;
+* BSDFs (:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``chi2``,
+  ``normalization``, ``energy``, ``reciprocity``, ``component``, ``eval_null_transmission``,
+  ``eval_diffuse_reflectance``, the polarized ``mueller``, ``intensity``,
+  ``mueller_identities``, ``mueller_reciprocity``, ``gradient``, ``cost``;
 * emitters (:mod:`.emitter`): ``finite``, ``weight``, ``pdf``, ``chi2``, ``power``,
   ``gradient``, ``cost``;
 * integrators (:mod:`.integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
-  ``gradient``, ``cost``.
+  ``gradient``, ``cost``;
+* phase functions (:mod:`.phase`): ``finite``, ``weight``, ``pdf``, ``chi2``,
+  ``normalization``, ``reciprocity``, ``gradient``, ``cost``.
 
 Rows and reports: :mod:`phonglab.verdict`; user input: :mod:`.inputs` and
-:mod:`phonglab.settings`; Mitsuba's built-ins and their findings: :mod:`.builtins`; many
+:mod:`phonglab.settings`; Mitsuba's built-ins and their findings: each kind's ``builtins`` module; many
 cases as jobs: :mod:`.batch`.  Importing this package does not import Mitsuba (the CLI
 starts fast); the validators do.
 """

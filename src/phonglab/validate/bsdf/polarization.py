@@ -71,7 +71,7 @@ divided by its own M00 first: these rows compare the *polarization part* M/M00 (
 ``weight``, ``reciprocity``, with their box search of ill-conditioned lanes and their
 findings), so a defect of the intensity fails one topic, not two.  The weight row's tolerance
 is REL_TOL plus the lane's sensitivity to an 8-ulp move of both directions
-(:func:`phonglab.validate.bsdf.config.perturb`), as the unpolarized weight topic's.
+(:func:`phonglab.validate.roundoff.perturb`), as the unpolarized weight topic's.
 
 ``mueller_reciprocity`` -- Helmholtz reciprocity as matrices.  Derivation.  For a reciprocal
 scatterer the Jones matrix of the reversed path is the transpose of the forward one, J_rev =

@@ -1,5 +1,6 @@
 """The phase-function kind of the validator: ``mi.PhaseFunction``, its topics table, its
-statistical tests, its loading and :func:`validate_phase`.
+statistical tests and its loading (the package face :mod:`phonglab.validate` gives it
+``validate_phase``).
 
 The statistical tests of a phase function are its χ² incidences (:data:`.lanes.INCIDENCES`);
 ``normalization`` is a deterministic quadrature with a stated error bound, the other topics
