@@ -6,7 +6,7 @@ therefore (re)builds each plugin module for the active variant and registers
 it; a variant callback repeats this after every later ``mi.set_variant``
 (the pattern of Mitsuba's own ``python/ad/integrators``).  It also makes every
 ``params.update()`` transactional across objects (:mod:`phonglab.transactions`): a plugin
-that refuses its new values no longer leaves the update's other objects changed.
+that refuses its new values leaves the update's other objects as they were.
 
 Mitsuba is imported inside the functions: ``import phonglab`` imports this module, and it must
 neither load Mitsuba (about half a second for every ``phonglab`` command, ``--help`` included)

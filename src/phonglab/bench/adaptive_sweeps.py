@@ -24,7 +24,7 @@ the fraction of pixels whose true error exceeds three standard errors (|x − r|
 3√(s² + s_r²): 0.27 % if the error estimate is honest and Gaussian) and the fraction whose
 true relative error exceeds three times its budget e_p* (pixels stopped too early).
 
-**Oracle** (:func:`oracle_row`, issue 28): per scene of :attr:`Config.adaptive_oracle_scenes`,
+**Oracle** (:func:`oracle_row`): per scene of :attr:`Config.adaptive_oracle_scenes`,
 at full depth (unbiased against the cached full-depth reference, so every error is noise), the
 speed-up of the best per-pixel allocation, mean(u)/mean(√u)² (:func:`phonglab.engine.adaptive.
 neyman_gain`) from a converged map of u, the relative variance one sample of each source
@@ -35,7 +35,7 @@ only for a box filter), beside the
 speed-up adaptive sampling achieves at the scene's planner target E (paired with uniform
 renders as above, wall time included).  Targets: achieved >= :data:`ORACLE_SHARE` of the
 cost-aware oracle mean(u)·mean(c)/mean(√(u c))² (c the cost map of
-:meth:`phonglab.engine.wavefront.Wavefront.cost_map`, issue 39) where it is >=
+:meth:`phonglab.engine.wavefront.Wavefront.cost_map`) where it is >=
 :data:`ORACLE_MATTERS`, cost <= :data:`OVERHEAD_TARGET` of uniform where it is 1.
 
 Writes ``adaptive.json``, ``adaptive_error_time.png`` (one panel per scene, Pareto front

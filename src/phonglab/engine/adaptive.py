@@ -116,8 +116,8 @@ def neyman_gain(u: np.ndarray, cost: np.ndarray | None = None) -> float:
 
 def oracle_speedup(variance: np.ndarray, reference: np.ndarray, eps: float = REL_EPS) -> float:
     """The most any per-pixel allocation of samples can gain over uniform sampling, at equal
-    total samples, on phonglab's relative MSE (issue 28: the limit adaptive sampling is
-    measured against).
+    total samples, on phonglab's relative MSE (the limit adaptive sampling is measured
+    against).
 
     ``variance``: (H, W, C) per-sample variance σ²_pc of each pixel value (a converged map:
     stderr² · spp of a high-spp render); ``reference``: (H, W, C) the converged image r.  With

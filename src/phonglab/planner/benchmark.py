@@ -101,7 +101,7 @@ def benchmark_table(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
-#: Targets of issue 28: the planned command never slower than this fraction of the default
+#: The planner's targets: the planned command never slower than this fraction of the default
 #: at equal error, and at least FAST times faster on most rows.
 NEVER_LOSES, FAST = 0.95, 1.5
 #: The error promise: every planned render's achieved error within these fractions of E.

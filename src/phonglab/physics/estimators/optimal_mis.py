@@ -29,7 +29,7 @@ p_l = 0, f = 0 makes its value −α_b/c_b, which is what keeps ∫ p_b = 1 (the
 true, and the "1" cancels in every term above. With f = α·p exactly (a pure lobe inside the
 light, a pure light under a wide lobe) σ² = 0 for every c, so no split is penalized.
 
-Cost (issue 28): the pilot, the 2×2 solves and the main stage are three kernels that run back to
+Cost: the pilot, the 2×2 solves and the main stage are three kernels that run back to
 back on the device, nothing read back between them (the solves are one lane per estimate, by
 Cramer's rule; the main stage gathers its row's n_b and α); a pilot lane draws one sample of
 each strategy and a main-stage lane two samples, which halves what a lane costs besides its
