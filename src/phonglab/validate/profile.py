@@ -20,16 +20,21 @@ Every report carries it (``meta["profile"]``: topic -> record; a sweep sums the 
 records per topic and keeps each point's total in ``meta["sweep"]["runs"]``);
 ``phonglab validate --profile`` prints it as a table.  In variants without a JIT (scalar) only
 the wall time is measured.
+
+The ``cost`` topic of every kind times the plugin against a baseline with
+:func:`interleaved_medians`: each run once first (its kernels compiled), then the two timed
+alternately so that both see the same machine load, the median of each kept.
 """
 
 from __future__ import annotations
 
+import statistics
 import time
 
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["Topic", "add", "table", "total"]
+__all__ = ["Topic", "add", "interleaved_medians", "table", "total"]
 
 FIELDS = ("seconds", "compile_s", "execute_s", "other_s", "kernels", "compiled")
 
@@ -105,3 +110,16 @@ def table(profile: dict, runs=()) -> str:
         for r in timed:
             lines.append(line(point_label(r["point"])[:25], r["profile"]))
     return "\n".join(lines)
+
+
+def interleaved_medians(fa, fb, repeats: int) -> tuple[float, float]:
+    """Median seconds of ``fa(k)`` and ``fb(k)`` over k = 0 .. repeats − 1, timed alternately
+    after one untimed run of each with k = −1 (compiling their kernels)."""
+    fa(-1), fb(-1)
+    ta, tb = [], []
+    for k in range(repeats):
+        for f, out in ((fa, ta), (fb, tb)):
+            t0 = time.perf_counter()
+            f(k)
+            out.append(time.perf_counter() - t0)
+    return statistics.median(ta), statistics.median(tb)

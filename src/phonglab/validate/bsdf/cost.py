@@ -8,27 +8,14 @@ slower; absolute times depend on the machine and its load.
 
 from __future__ import annotations
 
-import statistics
-import time
 
 import mitsuba as mi
 import numpy as np
 
 from ... import probe
 from . import lanes
+from ..profile import interleaved_medians
 from .topics import Row
-
-
-def _median_times(fa, fb, repeats: int) -> tuple[float, float]:
-    """Median seconds of fa and fb, each compiled first, then timed alternately (same load)."""
-    fa(), fb()
-    ta, tb = [], []
-    for _ in range(repeats):
-        for f, out in ((fa, ta), (fb, tb)):
-            t0 = time.perf_counter()
-            f()
-            out.append(time.perf_counter() - t0)
-    return statistics.median(ta), statistics.median(tb)
 
 
 def cost(bsdf, opts) -> list[Row]:
@@ -42,7 +29,8 @@ def cost(bsdf, opts) -> list[Row]:
     rows = []
     for name, fn in (("eval", lambda b: probe.eval(b, wi, wo)),
                      ("sample", lambda b: probe.sample(b, wi, u1, u2))):
-        t_bsdf, t_base = _median_times(lambda: fn(bsdf), lambda: fn(base), opts.cost_repeats)
+        t_bsdf, t_base = interleaved_medians(lambda k: fn(bsdf), lambda k: fn(base),
+                                             opts.cost_repeats)
         ratio = t_bsdf / t_base if t_base > 0 else float("nan")
         ok = np.isfinite(ratio)
         rows.append(Row("cost", f"{name} time relative to diffuse", float(ratio), 1.0, None, None,

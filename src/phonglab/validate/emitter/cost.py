@@ -11,14 +11,13 @@ The ratio is time(emitter) / time(built-in), so > 1 is slower.
 
 from __future__ import annotations
 
-import statistics
-import time
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ... import dispatch
+from ..profile import interleaved_medians
 from .config import rng
 from .setup import Setup, interaction, point2
 from .topics import Row
@@ -55,14 +54,8 @@ def cost(setup: Setup, opts) -> list[Row]:
         dr.eval(ds.pdf, w)
         dr.sync_thread()
 
-    run(setup.emitter), run(base)
-    ta, tb = [], []
-    for _ in range(opts.cost_repeats):
-        for e, out in ((setup.emitter, ta), (base, tb)):
-            t0 = time.perf_counter()
-            run(e)
-            out.append(time.perf_counter() - t0)
-    t_e, t_b = statistics.median(ta), statistics.median(tb)
+    t_e, t_b = interleaved_medians(lambda k: run(setup.emitter), lambda k: run(base),
+                                   opts.cost_repeats)
     ratio = t_e / t_b if t_b > 0 else float("nan")
     return [Row("cost", f"sample_direction time relative to {name}", float(ratio), 1.0, None,
                 None, "pass" if np.isfinite(ratio) else "fail",

@@ -10,13 +10,12 @@ time(path) is > 1 when it is slower.
 
 from __future__ import annotations
 
-import statistics
-import time
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..profile import interleaved_medians
 from . import scenes
 from .agreement import depth_of
 from .setup import Target
@@ -34,14 +33,8 @@ def cost(target: Target, opts) -> list[Row]:
         dr.eval(img)
         dr.sync_thread()
 
-    run(integ, 1), run(ref, 1)
-    ta, tb = [], []
-    for k in range(opts.cost_repeats):
-        for i, out in ((integ, ta), (ref, tb)):
-            t0 = time.perf_counter()
-            run(i, 2 + k)
-            out.append(time.perf_counter() - t0)
-    t_i, t_p = statistics.median(ta), statistics.median(tb)
+    t_i, t_p = interleaved_medians(lambda k: run(integ, 2 + k), lambda k: run(ref, 2 + k),
+                                   opts.cost_repeats)
     ratio = t_i / t_p if t_p > 0 else float("nan")
     n = opts.agreement_res ** 2 * opts.cost_spp
     return [Row("cost", "time per sample relative to path", float(ratio), 1.0, None, None,

@@ -9,14 +9,13 @@ median of each.  The ratio is time(phase function) / time(baseline), so > 1 is s
 
 from __future__ import annotations
 
-import statistics
-import time
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ... import dispatch, probe
+from ..profile import interleaved_medians
 from . import lanes
 from .config import rng
 from .topics import Row
@@ -45,14 +44,7 @@ def cost(phase, opts) -> list[Row]:
         dr.sync_thread()
 
     def median_times(a, b, fn):
-        fn(a), fn(b)
-        ta, tb = [], []
-        for _ in range(opts.cost_repeats):
-            for p, out in ((a, ta), (b, tb)):
-                t0 = time.perf_counter()
-                fn(p)
-                out.append(time.perf_counter() - t0)
-        return statistics.median(ta), statistics.median(tb)
+        return interleaved_medians(lambda k: fn(a), lambda k: fn(b), opts.cost_repeats)
 
     rows = []
     for name, spec in BASELINES:
