@@ -8,7 +8,6 @@ slower; absolute times depend on the machine and its load.
 
 from __future__ import annotations
 
-
 import mitsuba as mi
 import numpy as np
 

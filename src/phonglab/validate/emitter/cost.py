@@ -11,7 +11,6 @@ The ratio is time(emitter) / time(built-in), so > 1 is slower.
 
 from __future__ import annotations
 
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np

@@ -10,7 +10,6 @@ time(path) is > 1 when it is slower.
 
 from __future__ import annotations
 
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np

@@ -9,7 +9,6 @@ median of each.  The ratio is time(phase function) / time(baseline), so > 1 is s
 
 from __future__ import annotations
 
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
