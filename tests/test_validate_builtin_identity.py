@@ -1,0 +1,101 @@
+"""A built-in's documented findings follow it wherever it appears (#56): matched by what is
+loaded (its C++ class and what it was loaded from), not by how it was named, so a type name, a
+dict, an XML file and a scene's material get the same verdict; a wrapper's row that fails
+because of a built-in child's finding reads KNOWN, inherited from that child, only when the
+child judged alone shows it as much.
+
+Before: ``phonglab validate material.xml`` (a Beckmann roughconductor at alpha 0.3) failed
+``normalization`` (0.9973 against 1) and ``gradient`` (eta.value) with no word of the findings
+that make ``phonglab validate roughconductor --set alpha=0.3`` pass; a Python wrapper that
+only tints such a child failed the same two rows, blamed on the wrapper; a scene's material
+could not be validated at all.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from phonglab.cli import main
+from phonglab.validate import validate_bsdf
+
+HERE = Path(__file__).parent
+WRAPPER = HERE / "authors" / "tinted_wrapper.py"
+#: The topics where a Beckmann roughconductor at its default material has findings.
+TOPICS = ["--only", "normalization", "--only", "gradient"]
+
+METAL_XML = ('<bsdf type="roughconductor" version="3.0.0">'
+             '<float name="alpha" value="0.3"/></bsdf>')
+SCENE = """<scene version="3.0.0">
+    <default name="a" value="0.3"/>
+    <bsdf type="roughconductor" id="metal"><float name="alpha" value="$a"/></bsdf>
+    <shape type="rectangle"><ref id="metal"/></shape>
+    <shape type="sphere">
+        <bsdf type="twosided" id="shell">
+            <bsdf type="plastic" id="white_plastic">
+                <float name="int_ior" value="2.5"/>
+                <float name="diffuse_reflectance" value="1"/>
+                <float name="specular_reflectance" value="1"/>
+            </bsdf>
+        </bsdf>
+    </shape>
+</scene>
+"""
+
+
+def test_a_dict_builtin_gets_the_same_verdict_as_by_its_type_name(variant_llvm_rgb):
+    common = dict(quick=True, topics=["normalization", "gradient"], known="builtin")
+    by_dict = validate_bsdf({"type": "roughconductor", "alpha": 0.3}, **common)
+    by_name = validate_bsdf("roughconductor", params={"alpha": 0.3}, **common)
+    verdict = [(r.topic, r.name, r.status, tuple(r.details.get("known_by", ())))
+               for r in by_dict.rows]
+    assert verdict == [(r.topic, r.name, r.status, tuple(r.details.get("known_by", ())))
+                       for r in by_name.rows]
+    assert by_dict.passed and by_dict.meta["builtin"]["type"] == "roughconductor"
+    assert sum(r.status == "KNOWN" for r in by_dict.rows) == 2
+
+
+def test_a_finding_holds_where_the_loaded_parameters_say(variant_llvm_rgb, tmp_path):
+    """``given=`` settings are read from what loaded (a GGX lobe in the file gets no Beckmann
+    finding), ``at=`` conditions from the parameters the XML gives (plastic's F_dr fit at
+    int_ior in [2, 3])."""
+    import mitsuba as mi
+
+    from phonglab.validate import builtin, registry
+    kind = registry.by_name("bsdf")
+
+    def keys(xml_text, topic):
+        xml = tmp_path / "b.xml"
+        xml.write_text(xml_text)
+        ident = builtin.identify(kind, mi.load_file(str(xml)), {"file": str(xml)})
+        return ident, {k.key for k in builtin.findings(kind, ident).get(topic, ())}
+    ident, norm = keys(METAL_XML, "normalization")
+    assert ident.type == "roughconductor" and ident.params["alpha"] == 0.3
+    assert ident.params["distribution"] == "beckmann" and "beckmann-pdf-normalization" in norm
+    _, norm = keys(METAL_XML.replace("/></bsdf>", '/><string name="distribution" '
+                                                  'value="ggx"/></bsdf>'), "normalization")
+    assert "beckmann-pdf-normalization" not in norm
+    ident, _ = keys('<bsdf type="plastic" version="3.0.0"><float name="int_ior" value="2.5"/>'
+                    '</bsdf>', "energy")
+    assert ident.numbers()["int_ior"] == 2.5
+    assert builtin.identify(kind, mi.load_dict({"type": "lambert"})) is None   # a Python plugin
+
+
+def test_the_class_map_names_every_builtin_of_the_table(variant_llvm_rgb):
+    """Every case of the conformance table that loads in the default variant is identified as
+    its own plugin type from the loaded object alone."""
+    import mitsuba as mi
+
+    from phonglab.validate.bsdf.builtins import cases
+    from phonglab.validate.bsdf.identify import builtin_type
+    seen = set()
+    for case in cases():
+        if case.variant is not None or case.plugin in seen:
+            continue
+        seen.add(case.plugin)
+        obj = mi.load_dict(case.spec)
+        expected = None if case.plugin in ("lambert", "phong") else case.plugin
+        assert builtin_type(obj) == expected, case.label
+    assert len(seen) >= 15
