@@ -45,6 +45,33 @@ SCENE = """<scene version="3.0.0">
 """
 
 
+def _rows(tmp_path, *args) -> tuple[int, list[dict]]:
+    out = tmp_path / "r.json"
+    out.unlink(missing_ok=True)
+    rc = main(["validate", *map(str, args), "--quick", "--json", str(out)])
+    return rc, json.loads(out.read_text())["results"] if out.exists() else []
+
+
+def _verdict(rows) -> list[tuple]:
+    """What a verdict is made of: each row's topic, name, status and the findings by name."""
+    return [(r["topic"], r["name"], r["status"], tuple(r["details"].get("known_by", ())))
+            for r in rows]
+
+
+def test_an_xml_builtin_gets_the_same_verdict_as_by_its_type_name(tmp_path):
+    xml = tmp_path / "metal.xml"
+    xml.write_text(METAL_XML)
+    rc_name, by_name = _rows(tmp_path, "roughconductor", "--set", "alpha=0.3", "--no-sweep",
+                             *TOPICS)
+    rc_xml, by_xml = _rows(tmp_path, xml, *TOPICS)
+    assert rc_name == rc_xml == 0
+    assert _verdict(by_xml) == _verdict(by_name)
+    known = {k for r in by_xml for k in r["details"].get("known_by", ())}
+    assert known == {"beckmann-pdf-normalization", "conductor-eta0-gradient"}
+    rc, raw = _rows(tmp_path, xml, *TOPICS, "--no-known")
+    assert rc == 1 and {r["status"] for r in raw} >= {"fail"}
+
+
 def test_a_dict_builtin_gets_the_same_verdict_as_by_its_type_name(variant_llvm_rgb):
     common = dict(quick=True, topics=["normalization", "gradient"], known="builtin")
     by_dict = validate_bsdf({"type": "roughconductor", "alpha": 0.3}, **common)
@@ -99,3 +126,37 @@ def test_the_class_map_names_every_builtin_of_the_table(variant_llvm_rgb):
         expected = None if case.plugin in ("lambert", "phong") else case.plugin
         assert builtin_type(obj) == expected, case.label
     assert len(seen) >= 15
+
+
+def test_a_wrapper_names_its_childs_finding_on_every_row_it_inherits(tmp_path, capsys):
+    args = ["tinted_wrapper", "--plugin", WRAPPER, "--no-sweep"]
+    rc_raw, raw = _rows(tmp_path, *args, "--no-known")
+    failing = {(r["topic"], r["name"]) for r in raw if r["status"] == "fail"}
+    assert rc_raw == 1 and failing == {("normalization", "∫ pdf dω_o = P(sample counted)"),
+                                       ("gradient", "nested.eta.value")}
+    capsys.readouterr()
+    rc, rows = _rows(tmp_path, *args)
+    out = capsys.readouterr().out
+    assert rc == 0
+    inherited = {(r["topic"], r["name"]): r for r in rows if "inherited" in r["details"]}
+    assert set(inherited) == failing                  # every row it inherits, and no other
+    for r in inherited.values():
+        assert r["status"] == "KNOWN"
+        assert r["reason"].startswith("inherited from the child roughconductor (nested): "
+                                      "finding ")
+        assert r["details"]["inherited"]["child"] == "roughconductor"
+    assert {k for r in inherited.values() for k in r["details"]["inherited"]["findings"]} == {
+        "beckmann-pdf-normalization", "conductor-eta0-gradient"}
+    assert "PASSED (2 rows inherited from the child roughconductor (nested), KNOWN)" in out
+
+
+def test_a_wrappers_own_error_is_never_inherited(tmp_path, capsys):
+    """The same wrapper reporting half its child's pdf fails normalization at 0.5, not the
+    child's 0.9973: the row stays a fail and says the child alone is closer."""
+    rc, rows = _rows(tmp_path, "tinted_wrapper", "--plugin", WRAPPER, "--no-sweep",
+                     "--set", "pdf_scale=0.5", "--only", "normalization")
+    (row,) = rows
+    assert rc == 1 and row["status"] == "fail"
+    assert row["details"]["not_inherited"][0]["child"] == "roughconductor"
+    assert "farther than the child" in row["reason"] and "this plugin's own" in row["reason"]
+    assert "FAILED (1 rows)" in capsys.readouterr().out
