@@ -160,3 +160,32 @@ def test_a_wrappers_own_error_is_never_inherited(tmp_path, capsys):
     assert row["details"]["not_inherited"][0]["child"] == "roughconductor"
     assert "farther than the child" in row["reason"] and "this plugin's own" in row["reason"]
     assert "FAILED (1 rows)" in capsys.readouterr().out
+
+
+def test_a_builtin_inside_a_scene_by_its_id(tmp_path, capsys):
+    scene = tmp_path / "scene.xml"
+    scene.write_text(SCENE)
+    rc_name, by_name = _rows(tmp_path, "roughconductor", "--set", "alpha=0.3", "--no-sweep",
+                             *TOPICS)
+    rc, rows = _rows(tmp_path, scene, "--bsdf", "metal", *TOPICS)
+    assert rc == rc_name == 0 and _verdict(rows) == _verdict(by_name)
+    assert "metal (roughconductor) in scene.xml: PASSED" in capsys.readouterr().out
+    # at= from the scene's element (int_ior 2.5): the white plastic's energy gain is KNOWN,
+    # and inherited by the two-sided shell around it
+    rc, rows = _rows(tmp_path, scene, "--bsdf", "white_plastic", "--only", "energy")
+    assert rc == 0 and rows[0]["details"]["known_by"] == ["plastic-fdr-fit-energy"]
+    rc, rows = _rows(tmp_path, scene, "--bsdf", "shell", "--only", "energy")
+    assert rc == 0 and rows[0]["details"]["inherited"]["child"] == "plastic"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--bsdf", "nope"], "no BSDF with id 'nope' on its shapes; its BSDFs with an id: metal, "
+                         "shell, white_plastic"),
+    ([], "is a scene; name the material to validate with --bsdf ID"),
+    (["--bsdf", "metal", "--set", "alpha=0.1"], "--set cannot change a scene's material"),
+])
+def test_a_scene_material_given_wrongly_is_one_sentence(tmp_path, capsys, args, message):
+    scene = tmp_path / "scene.xml"
+    scene.write_text(SCENE)
+    assert main(["validate", str(scene), "--quick", *args]) == 2
+    assert message in capsys.readouterr().err

@@ -33,6 +33,7 @@ EPILOG = """examples:
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate material.xml            # a built-in in a file: its findings as by name
+  phonglab validate scene.xml --bsdf metal  # a scene's material, as the scene loads it
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
   phonglab validate point --quick
   phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
@@ -65,7 +66,11 @@ def add_parser(sub) -> None:
     p.add_argument("bsdf", nargs="?", metavar="PLUGIN",
                    help="plugin type name (a BSDF: diffuse, roughplastic, lambert, ...; an "
                         "emitter: point, area, constant, ...; an integrator: path, direct, ...) "
-                        "or an XML file")
+                        "or an XML file; with --bsdf ID, a scene file")
+    p.add_argument("--bsdf", dest="scene_bsdf", metavar="ID",
+                   help="validate the BSDF with this id of the scene file given as PLUGIN, as "
+                        "the scene loads it (its built-in's findings apply as by name; "
+                        "--plugin files run first)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
@@ -90,7 +95,7 @@ def add_parser(sub) -> None:
     p.add_argument("--no-known", action="store_true",
                    help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
                         "as fails; by default a Mitsuba built-in carries them (by its type name, "
-                        "as an XML file: identified from what is loaded), "
+                        "as an XML file or a scene's material: identified from what is loaded), "
                         "each only inside its own signature, as KNOWN rows, and a row a "
                         "wrapper inherits from a built-in child's finding reads KNOWN with the "
                         "child named")
@@ -132,6 +137,7 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
+    _check_scene(args)
     if args.timeout is not None and not 0 < args.timeout < float("inf"):
         raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     if args.report and not args.report.endswith((".html", ".htm")):
@@ -141,6 +147,24 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
             outputs.check_file(Path(path), what)
             outputs.check_folder(Path(path), what)
     return parse_sets(args.set), topics
+
+
+def _check_scene(args) -> None:
+    """A scene file goes with --bsdf ID, and --bsdf ID with a scene file (no --set)."""
+    from ..validate.inputs import xml_root_tag
+    scene = bool(args.bsdf) and args.bsdf.endswith(".xml") and xml_root_tag(args.bsdf) == "scene"
+    if args.scene_bsdf is None:
+        if scene:
+            raise ValidateError(f"{args.bsdf} is a scene; name the material to validate with "
+                                f"--bsdf ID (the id of one of its <bsdf> elements)")
+        return
+    if args.all_builtins or not scene:
+        raise ValidateError(f"--bsdf {args.scene_bsdf} names a material of a scene: give the "
+                            f"scene file as PLUGIN (phonglab validate scene.xml --bsdf "
+                            f"{args.scene_bsdf})")
+    if args.set:
+        raise ValidateError("--set cannot change a scene's material; edit the scene file, or "
+                            "validate the material by its type name with --set")
 
 
 def sweep_text(report: Report) -> str:
@@ -214,7 +238,7 @@ def builtin_known(args, kind, params: dict) -> dict | str | None:
 
     A kind that can tell a built-in from the loaded object (its ``identify`` part: BSDFs) gets
     :data:`~phonglab.validate.builtin.BUILTIN`: the findings of what is loaded, by type name,
-    or XML file alike, and those its built-in children pass on to a wrapper
+    XML file or scene alike, and those its built-in children pass on to a wrapper
     (:mod:`phonglab.validate.builtin`).  Another kind gets them by its type name only: none
     for an XML file, a run with ``--plugin`` files or phonglab's own plugins."""
     from ..registration import PLUGINS
@@ -287,11 +311,20 @@ def validate_one(args, params: dict):
 
     core.start(args.variant)
     registered = core.load_plugins(args.plugin)
-    kind = registry.detect(args.bsdf, registered)
-    core.check_registered(registered, kind)
+    if args.scene_bsdf is not None:       # a scene's material, as the scene loads it
+        from ..validate.builtin import scene_material
+        kind = registry.by_name("bsdf")
+        found = scene_material(kind, args.bsdf, args.scene_bsdf)
+        target = core.load(kind, found.plugin, None, registered)._replace(
+            label=found.label, origin=found.origin)
+    else:
+        kind = registry.detect(args.bsdf, registered)
+        core.check_registered(registered, kind)
+        target = None
     topics = kind.check_topics(args.only)
     known = builtin_known(args, kind, params)
-    target = core.load(kind, args.bsdf, params, registered)
+    if target is None:
+        target = core.load(kind, args.bsdf, params, registered)
     sweep.check_set(kind, target, args.bsdf, params)   # a --set value outside its range: exit 2
     if args.no_sweep:
         report = core.run(kind, target, topics=topics, seed=args.seed, quick=args.quick,
@@ -305,7 +338,9 @@ def validate_one(args, params: dict):
         text = sweep_text(report)
     label = report.meta.get(kind.name, target.label)
     text += known_note(report, args.bsdf, kind.conformance)
-    text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind, registered)
+    if args.scene_bsdf is None:
+        text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind,
+                             registered)
     return report, label, text
 
 

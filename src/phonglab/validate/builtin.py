@@ -185,3 +185,39 @@ def mark_inherited(rows: list[Row], kids: list[Child], judge: Callable,
                              + ", so the failure is this plugin's own")
     return records
 
+
+def scene_material(kind, path, ident: str):
+    """The BSDF with ``id="ident"`` of the scene file ``path`` as the scene loads it (the
+    variant set, the plugin files run): a :class:`~phonglab.settings.Loaded` whose ``origin``
+    names the scene and the id (its XML element gives the load-time parameters its findings'
+    ``at=`` conditions hold against).  Found on the scene's shapes (``shape.bsdf()``) and
+    inside them (the kind's ``children``: a material nested in a two-sided shell); a missing
+    id is a :class:`~phonglab.validate.inputs.ValidateError` listing the ids there are."""
+    from pathlib import Path
+
+    from ..engine.scenes import load_scene
+    from ..errors import SceneError
+    from ..settings import Loaded
+    from .inputs import ValidateError
+
+    try:
+        scene = load_scene(path)
+    except SceneError as exc:
+        raise ValidateError(str(exc)) from exc
+    nested = kind.part("children") or (lambda plugin: [])
+    found: dict = {}
+    for shape in scene.shapes():
+        top = shape.bsdf()
+        if top is None:
+            continue
+        for obj in [top] + [c for _, c in nested(top)]:
+            found.setdefault(obj.id(), obj)
+    if ident not in found:
+        named = sorted(i for i in found if i and not i.startswith("_"))
+        raise ValidateError(f"{path} has no {kind.word} with id {ident!r} on its shapes; "
+                            + (f"its {kind.word}s with an id: {', '.join(named)}" if named
+                               else f"give a <{kind.tag}> of it an id=\"...\""))
+    plugin = found[ident]
+    name = (identify(kind, plugin) or Identity(type(plugin).__name__, {})).type
+    return Loaded(plugin, f"{ident} ({name}) in {Path(path).name}", None,
+                  origin={"file": str(path), "id": ident})
