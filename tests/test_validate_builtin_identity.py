@@ -46,9 +46,12 @@ SCENE = """<scene version="3.0.0">
 
 
 def _rows(tmp_path, *args) -> tuple[int, list[dict]]:
+    """(exit status, JSON rows) of ``phonglab validate ARGS --quick`` in llvm_ad_rgb (named:
+    a run in this process keeps the variant an earlier test set)."""
     out = tmp_path / "r.json"
     out.unlink(missing_ok=True)
-    rc = main(["validate", *map(str, args), "--quick", "--json", str(out)])
+    rc = main(["validate", *map(str, args), "--quick", "--variant", "llvm_ad_rgb", "--json",
+               str(out)])
     return rc, json.loads(out.read_text())["results"] if out.exists() else []
 
 
