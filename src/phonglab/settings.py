@@ -196,6 +196,9 @@ class Loaded(NamedTuple):
     #: the ``--plugin`` files run before it was loaded (a topic that loads it again elsewhere,
     #: in another variant or process, runs them there too)
     files: tuple = ()
+    #: where a loaded object came from (``{"file": scene, "id": ID}``: a scene's material),
+    #: None when its spec says it
+    origin: dict | None = None
 
 
 def _describe(d: dict) -> dict:

@@ -32,6 +32,8 @@ EPILOG = """examples:
   phonglab validate roughconductor          # Mitsuba's documented findings are KNOWN rows
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
+  phonglab validate material.xml            # a built-in in a file: its findings as by name
+  phonglab validate scene.xml --bsdf metal  # a scene's material, as the scene loads it
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
   phonglab validate point --quick
   phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
@@ -64,7 +66,11 @@ def add_parser(sub) -> None:
     p.add_argument("bsdf", nargs="?", metavar="PLUGIN",
                    help="plugin type name (a BSDF: diffuse, roughplastic, lambert, ...; an "
                         "emitter: point, area, constant, ...; an integrator: path, direct, ...) "
-                        "or an XML file")
+                        "or an XML file; with --bsdf ID, a scene file")
+    p.add_argument("--bsdf", dest="scene_bsdf", metavar="ID",
+                   help="validate the BSDF with this id of the scene file given as PLUGIN, as "
+                        "the scene loads it (its built-in's findings apply as by name; "
+                        "--plugin files run first)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
@@ -92,8 +98,11 @@ def add_parser(sub) -> None:
                         "a time, plus all at minimum and all at maximum; --set pins one)")
     p.add_argument("--no-known", action="store_true",
                    help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
-                        "as fails; by default a Mitsuba built-in named by its type carries them, "
-                        "each only inside its own signature, as KNOWN rows")
+                        "as fails; by default a Mitsuba built-in carries them (by its type name, "
+                        "as an XML file or a scene's material: identified from what is loaded), "
+                        "each only inside its own signature, as KNOWN rows, and a row a "
+                        "wrapper inherits from a built-in child's finding reads KNOWN with the "
+                        "child named")
     p.add_argument("--allow-uncovered", action="store_true",
                    help="exit 0 even when a topic that applies to the plugin judged nothing "
                         "(every row of it skipped, e.g. an integrator whose depth could not be "
@@ -132,6 +141,7 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
+    _check_scene(args)
     if args.timeout is not None and not 0 < args.timeout < float("inf"):
         raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     if args.report and not args.report.endswith((".html", ".htm")):
@@ -141,6 +151,24 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
             outputs.check_file(Path(path), what)
             outputs.check_folder(Path(path), what)
     return parse_sets(args.set), topics
+
+
+def _check_scene(args) -> None:
+    """A scene file goes with --bsdf ID, and --bsdf ID with a scene file (no --set)."""
+    from ..validate.inputs import xml_root_tag
+    scene = bool(args.bsdf) and args.bsdf.endswith(".xml") and xml_root_tag(args.bsdf) == "scene"
+    if args.scene_bsdf is None:
+        if scene:
+            raise ValidateError(f"{args.bsdf} is a scene; name the material to validate with "
+                                f"--bsdf ID (the id of one of its <bsdf> elements)")
+        return
+    if args.all_builtins or not scene:
+        raise ValidateError(f"--bsdf {args.scene_bsdf} names a material of a scene: give the "
+                            f"scene file as PLUGIN (phonglab validate scene.xml --bsdf "
+                            f"{args.scene_bsdf})")
+    if args.set:
+        raise ValidateError("--set cannot change a scene's material; edit the scene file, or "
+                            "validate the material by its type name with --set")
 
 
 def sweep_text(report: Report) -> str:
@@ -207,14 +235,24 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
-def builtin_known(args, kind, params: dict) -> dict | None:
-    """The documented causes of a Mitsuba built-in named by its type (the kind's ``known_for``:
-    its conformance table's findings of that plugin, a BSDF's of the microfacet distribution
-    of ``params``, an area emitter's of the same shape), None for anything else: an XML file,
-    a run with ``--plugin`` files, phonglab's own plugins, or ``--no-known``."""
+def builtin_known(args, kind, params: dict) -> dict | str | None:
+    """The documented causes of a Mitsuba built-in (the kind's ``known_for``: its conformance
+    table's findings of that plugin, a BSDF's of its microfacet distribution, an area
+    emitter's of the same shape); None with ``--no-known``.
+
+    A kind that can tell a built-in from the loaded object (its ``identify`` part: BSDFs) gets
+    :data:`~phonglab.validate.builtin.BUILTIN`: the findings of what is loaded, by type name,
+    XML file or scene alike, and those its built-in children pass on to a wrapper
+    (:mod:`phonglab.validate.builtin`).  Another kind gets them by its type name only: none
+    for an XML file, a run with ``--plugin`` files or phonglab's own plugins."""
     from ..registration import PLUGINS
 
-    if (args.no_known or args.plugin or args.bsdf.endswith(".xml")
+    if args.no_known:
+        return None
+    if kind.part("identify") is not None:
+        from ..validate.builtin import BUILTIN
+        return BUILTIN
+    if (args.plugin or args.bsdf.endswith(".xml")
             or args.bsdf in {name for _, name, _ in PLUGINS}):
         return None
     known_for = kind.part("known_for")
@@ -222,12 +260,43 @@ def builtin_known(args, kind, params: dict) -> dict | None:
 
 
 def known_note(report: Report, label: str, doc: str = "docs/conformance.md") -> str:
-    """The line under a table with KNOWN rows from a built-in's documented findings."""
-    if not any(r.status == "KNOWN" for r in report.rows):
+    """The lines under a table with KNOWN rows from a built-in's documented findings: its own,
+    and those inherited from built-in children (one line each: row, child, findings)."""
+    known = [r for r in report.rows if r.status == "KNOWN"]
+    if not known:
         return ""
-    return (f"\n\nKNOWN rows: documented findings of Mitsuba's {label} ({doc}), "
-            f"each matched by its signature (a lane outside it stays a fail); --no-known "
-            f"reports them as fails")
+    label = (report.meta.get("builtin") or {}).get("type", label)
+    inherited = [r for r in known if "inherited" in r.details]
+    text = ""
+    if len(inherited) < len(known):
+        text += (f"\n\nKNOWN rows: documented findings of Mitsuba's {label} ({doc}), "
+                 f"each matched by its signature (a lane outside it stays a fail); --no-known "
+                 f"reports them as fails")
+    if inherited:
+        text += ("\n\ninherited rows (KNOWN: a documented finding of a Mitsuba built-in "
+                 "child, which the child judged alone shows as much: not this plugin's to "
+                 "fix; --no-known reports them as fails):")
+        seen = set()
+        for r in inherited:
+            inh = r.details["inherited"]
+            line = (f"  {r.topic}: {r.name} <- the child {inh['child']} ({inh['path']}): "
+                    f"finding {', '.join(inh['findings'])}")
+            if line not in seen:
+                seen.add(line)
+                text += "\n" + line
+    return text
+
+
+def verdict_counts(report: Report) -> str:
+    """The verdict's words for the inherited rows ("2 rows inherited from the child
+    roughconductor (nested), KNOWN"), "" for none."""
+    inherited = [r.details["inherited"] for r in report.rows
+                 if r.status == "KNOWN" and "inherited" in r.details]
+    if not inherited:
+        return ""
+    kids = ", ".join(dict.fromkeys(f"{i['child']} ({i['path']})" for i in inherited))
+    return (f"{len(inherited)} row{'s' * (len(inherited) != 1)} inherited from the child "
+            f"{kids}, KNOWN")
 
 
 def which_plugin(name: str, kind, registered) -> str:
@@ -246,11 +315,20 @@ def validate_one(args, params: dict):
 
     core.start(args.variant)
     registered = core.load_plugins(args.plugin)
-    kind = registry.detect(args.bsdf, registered)
-    core.check_registered(registered, kind)
+    if args.scene_bsdf is not None:       # a scene's material, as the scene loads it
+        from ..validate.builtin import scene_material
+        kind = registry.by_name("bsdf")
+        found = scene_material(kind, args.bsdf, args.scene_bsdf)
+        target = core.load(kind, found.plugin, None, registered)._replace(
+            label=found.label, origin=found.origin)
+    else:
+        kind = registry.detect(args.bsdf, registered)
+        core.check_registered(registered, kind)
+        target = None
     topics = kind.check_topics(args.only)
     known = builtin_known(args, kind, params)
-    target = core.load(kind, args.bsdf, params, registered)
+    if target is None:
+        target = core.load(kind, args.bsdf, params, registered)
     sweep.check_set(kind, target, args.bsdf, params)   # a --set value outside its range: exit 2
     if args.no_sweep:
         report = core.run(kind, target, topics=topics, seed=args.seed, quick=args.quick,
@@ -268,7 +346,9 @@ def validate_one(args, params: dict):
         text += "\n\n" + profile.table(report.meta.get("profile", {}),
                                         report.meta.get("sweep", {}).get("runs", ()))
     text += known_note(report, args.bsdf, kind.conformance)
-    text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind, registered)
+    if args.scene_bsdf is None:
+        text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind,
+                             registered)
     return report, label, text
 
 
@@ -294,14 +374,16 @@ def run(args) -> int:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)
     failing, uncovered = report.failing, report.not_covered
+    inherited = verdict_counts(report)
     if failing:
-        verdict = f"FAILED ({len(failing)} rows)"
+        verdict = (f"FAILED ({len(failing)} rows"
+                   + (f" to fix in this plugin; {inherited}" if inherited else "") + ")")
     elif uncovered:
         verdict = (f"NOT COVERED: {', '.join(uncovered)} judged nothing (every row skipped; "
                    f"see their reasons)" + ("; accepted by --allow-uncovered"
                                             if args.allow_uncovered else ""))
     else:
-        verdict = "PASSED"
+        verdict = "PASSED" + (f" ({inherited})" if inherited else "")
     if failing and uncovered:
         verdict += f"; not covered: {', '.join(uncovered)}"
     print(f"\n{label}: {verdict} in {report.meta['seconds']:.1f} s")

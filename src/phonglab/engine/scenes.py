@@ -384,16 +384,58 @@ def _integrator_dict(integ: ET.Element | None) -> tuple[dict[str, Any] | None, s
     d: dict[str, Any] = {"type": integ.get("type", "path")}
     for c in integ:
         name, value = c.get("name"), c.get("value")
-        if c.tag in _VALUE_TYPES and name and value is not None:
-            try:
-                d[name] = _VALUE_TYPES[c.tag](value)
-            except ValueError:
-                return None, f"its <{c.tag} name={name!r}> has the value {value!r}"
+        try:
+            plain = _plain(c)
+        except ValueError:
+            return None, f"its <{c.tag} name={name!r}> has the value {value!r}"
+        if plain is not None:
+            d[name] = plain
         elif c.tag == "rgb" and name and value is not None:
             d[name] = {"type": "rgb", "value": _floats(value)}
         else:
             return None, f"it holds a <{c.tag}> element that phonglab does not rebuild"
     return d, ""
+
+
+def plugin_element(path: str | Path, tag: str, ident: str | None = None) -> ET.Element | None:
+    """The ``<tag>`` element of an XML file: its root (``ident`` None) or the one with
+    ``id="ident"`` anywhere in it (a scene's material), ``$name``\\ s substituted from the
+    file's ``<default>`` entries; None when there is no such element (or a ``$name`` has no
+    default).  ``<include>``\\ d files are not searched."""
+    path = Path(path)
+    root = parse_xml(path)
+    values = {d.get("name"): d.get("value") for d in root.iter("default") if d.get("name")}
+    try:
+        _substitute(root, values, path)
+    except SceneError:
+        return None
+    if ident is None:
+        return root if root.tag == tag else None
+    return next((el for el in root.iter(tag) if el.get("id") == ident), None)
+
+
+def element_parameters(el: ET.Element) -> dict[str, Any]:
+    """The plain parameters an element gives its plugin: each ``<float>``, ``<integer>``,
+    ``<boolean>`` and ``<string>`` child as its value (a value that does not parse, a nested
+    plugin, a colour or a reference is left out)."""
+    out: dict[str, Any] = {}
+    for c in el:
+        try:
+            plain = _plain(c)
+        except ValueError:
+            continue
+        if plain is not None:
+            out[c.get("name")] = plain
+    return out
+
+
+def _plain(c: ET.Element) -> Any:
+    """The value of a named ``<float>``/``<integer>``/``<boolean>``/``<string>`` element, None
+    for any other element; ValueError when its value does not parse."""
+    name, value = c.get("name"), c.get("value")
+    if c.tag in _VALUE_TYPES and name and value is not None:
+        return _VALUE_TYPES[c.tag](value)
+    return None
 
 
 def integrator_with_depth(info: SceneInfo, max_depth: int):

@@ -70,7 +70,9 @@ def _face(kind):
         + "".join(f", and so is ``{o}``" for o in kind.load_options)
         + ".  ``plugins``: Python files that call ``" + kind.register + "``, run once after "
         "``variant`` is set.  ``known``: topic -> documented causes (a failing row is KNOWN "
-        "when every failing lane lies in a cause's signature).  ``sweep``: every point of the "
+        "when every failing lane lies in a cause's signature), or ``\"builtin\"``: the "
+        "findings of the Mitsuba built-in that is loaded, however it was given, and those a "
+        "wrapper inherits from its built-in children (:mod:`phonglab.validate.builtin`).  ``sweep``: every point of the "
         "parameter sweep (:mod:`phonglab.validate.sweep`; ``params`` pinned, ``runner`` says "
         "where the points run), not the given point alone.  ``topics``, ``seed``, ``quick``, "
         "``family``, ``sizes``: :func:`phonglab.validate.core.run`.  Bad input raises "

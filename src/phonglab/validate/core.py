@@ -43,6 +43,7 @@ import mitsuba as mi
 import numpy as np
 
 from .. import dispatch, registration, stats
+from . import builtin
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
 from .inputs import ValidateError, check_plugin_file, check_topics
@@ -406,14 +407,7 @@ def mark_known(rows: list[Row], known, values: dict | None = None) -> None:
         if r.status != "fail" or not causes:
             continue
         n = _failing_count(r)
-        covered = np.zeros(n, bool)
-        used = []
-        for k in causes:
-            mask = np.ones(n, bool) if k.region is None else k.region.covers(r)
-            if mask is None or len(mask) != n or not np.any(mask):
-                continue
-            covered |= np.asarray(mask, bool)
-            used.append(k)
+        covered, used = _coverage(r, causes)
         if covered.all():
             r.status = "KNOWN"
             r.reason = f"{'; '.join(k.cause for k in used)} ({r.reason})"
@@ -429,6 +423,28 @@ def mark_known(rows: list[Row], known, values: dict | None = None) -> None:
         r.details["outside_signature"] = {
             "lanes": outside, "of": n, "findings": [k.key or k.cause[:80] for k in causes],
             "first": {k: _lane_value(v, first) for k, v in (r.failing_lanes or {}).items()}}
+
+
+def _coverage(row: Row, causes) -> tuple[np.ndarray, list]:
+    """Which failing lanes of ``row`` lie in the signature of one of ``causes``, and the
+    causes that cover any."""
+    n = _failing_count(row)
+    covered = np.zeros(n, bool)
+    used = []
+    for k in causes:
+        mask = np.ones(n, bool) if k.region is None else k.region.covers(row)
+        if mask is None or len(mask) != n or not np.any(mask):
+            continue
+        covered |= np.asarray(mask, bool)
+        used.append(k)
+    return covered, used
+
+
+def covered_by(row: Row, causes) -> tuple[bool, list]:
+    """(every failing lane of ``row`` lies in a signature of ``causes``, the causes used): the
+    rule :func:`mark_known` applies."""
+    covered, used = _coverage(row, causes)
+    return bool(covered.all()), used
 
 
 def _lane_value(values, i):
@@ -523,7 +539,20 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
                         reason=f"{why.reason} (while the run was planned, before any topic)")
                 for topic in topics]
     rows.sort(key=lambda r: kind.topics.index(r.topic))
-    mark_known(rows, known, parameter_values(kind, target))
+    values = parameter_values(kind, target)
+    identity, inherited = None, []
+    auto = isinstance(known, str) and known == builtin.BUILTIN
+    if auto:            # the loaded built-in's findings, then its built-in children's
+        identity = builtin.identify(kind, target.plugin, target.spec, target.origin)
+        known = builtin.findings(kind, identity)
+        values.update(identity.numbers() if identity is not None else {})
+    mark_known(rows, known, values)
+    if auto and any(r.status == "fail" for r in rows):
+        kids = builtin.children(kind, target.plugin, kind.part("values") or (lambda p: {}))
+        opts_child = {"seed": seed, "quick": quick, "family": family, "sizes": sizes}
+        inherited = builtin.mark_inherited(
+            rows, kids, lambda kid, topic: _child_rows(kind, kid, topic, opts_child),
+            covered_by)
     meta = {kind.name: target.label, "kind": kind.word, "plugin": target.label,
             "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
@@ -532,11 +561,32 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
             "not_covered": not_covered(kind, topics, rows),
             "known": {t: [k.describe() for k in known_entries(v)]
                       for t, v in (known or {}).items()}}
+    if identity is not None:
+        meta["builtin"] = identity.to_dict()
+    if inherited:
+        meta["inherited"] = inherited
     if family != 1:
         meta["family"] = family
     if sizes:
         meta["sizes"] = dict(sizes)
     return Report(meta, rows)
+
+
+#: The rows of built-in children judged alone (:func:`_child_rows`), per process.
+_CHILD_RUNS: dict = {}
+
+
+def _child_rows(kind: Kind, kid, topic: str, opts: dict) -> list[Row]:
+    """The rows of a plugin's built-in child judged alone on ``topic`` with its own findings
+    (``known=BUILTIN``), at the plugin's seed, sizes and family; each once per process."""
+    key = (kind.name, mi.variant(), kid.identity.type, str(kid.plugin), topic, repr(opts))
+    if key not in _CHILD_RUNS:
+        if len(_CHILD_RUNS) >= 64:
+            _CHILD_RUNS.clear()
+        target = Loaded(kid.plugin, kid.identity.type, None)
+        _CHILD_RUNS[key] = run(kind, target, topics=(topic,), known=builtin.BUILTIN,
+                               **opts).rows
+    return _CHILD_RUNS[key]
 
 
 def session(kind: Kind):

@@ -21,6 +21,11 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
 ``values``          target -> {parameter: value} a documented cause's ``at`` is held against
 ``known_for``       (type name, params) -> {topic: causes}: the conformance table's findings
                     of a Mitsuba built-in named by its type
+``identify``        (plugin, spec, origin) -> (type name, params) of the Mitsuba built-in a
+                    loaded object is, None for any other (:mod:`.builtin`: a built-in's
+                    findings follow what is loaded, not how it was named)
+``children``        plugin -> [(path, child)]: the plugins of the kind it holds (a wrapper's
+                    nested BSDF), whose findings its rows may inherit (:mod:`.builtin`)
 ``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
 ``returns``         (plugin, label) -> None: the types its Python methods return, checked on
                     one lane right after the default load (:mod:`.returns`); a mismatch is a
@@ -54,7 +59,7 @@ class ValidateError(PhonglabError):
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
 PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "domain", "values",
-         "known_for", "catalogue", "returns", "session")
+         "known_for", "identify", "children", "catalogue", "returns", "session")
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost
 from .energy import energy
 from .gradient import gradient
+from .identify import children, identify   # noqa: F401 (the kind's parts)
 from .identities import component, eval_pdf, finite, weight_and_pdf
 from .normalization import normalization
 from . import intensity as intensity_topic
