@@ -187,7 +187,7 @@ def test_cli_detects_an_emitter(tmp_path):
     data = json.loads(out.read_text())
     assert data["meta"]["emitter"] == "point"
     assert {r["topic"] for r in data["results"]} == set(TOPICS)
-    assert "phonglab validate: point" in (tmp_path / "p.html").read_text()
+    assert "phonglab validate: emitter point" in (tmp_path / "p.html").read_text()
 
 
 def test_cli_runs_a_defect_plugin_and_fails_it(tmp_path):

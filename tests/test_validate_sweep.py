@@ -335,3 +335,17 @@ def test_a_set_outside_the_domain_is_bad_input_for_every_kind(variant_llvm_rgb, 
     assert main(["validate", *args]) == 2
     err = capsys.readouterr().err
     assert message in err and "phonglab.validate." in err and "Traceback" not in err
+
+
+def test_an_identity_of_a_bound_topic_fails_at_every_point_never_advice(variant_llvm_rgb):
+    """A point light falling off as I/r breaks the inverse-square law at every intensity; it
+    was advice ("a physical bound exceeded outside the declared domain") at intensity 10⁴."""
+    from phonglab.validate import validate_emitter
+    plugin = Path(__file__).parent / "defects_emitter" / "point_inverse_r.py"
+    report = validate_emitter("defect_point_inverse_r", plugins=[plugin], quick=True,
+                              topics=["power"], sweep=True)
+    law = [r for r in report.rows if r.name.startswith("intensity law")
+           and (r.point or {}).get("intensity", 1.0) > 0]          # I = 0: 0 = 0 holds
+    assert len(law) >= 2 and all(r.status == "fail" for r in law)
+    assert any((r.point or {}).get("intensity") == 10000 for r in law)
+    assert not report.meta["sweep"]["advice"]

@@ -245,13 +245,13 @@ def load_plugin(spec, params: dict | None = None, *, kind: type, word: str,
 
 
 def _check_bitmaps(d: dict, word: str, type_name: str, path: str = "") -> None:
-    """A ``bitmap`` node with neither ``filename`` nor ``data`` is refused before Mitsuba sees
-    it: Mitsuba 3.9.1's bitmap texture crashes the process (SIGSEGV, exit 139) loading one
+    """A ``bitmap`` node with none of ``filename``, ``data``, ``bitmap`` is refused before
+    Mitsuba sees it: Mitsuba 3.9.1's bitmap texture crashes the process (SIGSEGV, exit 139) loading one
     (``mi.load_dict({"type": "bitmap"})``), where a missing file is an ordinary error."""
     for key, v in d.items():
         if isinstance(v, dict):
             _check_bitmaps(v, word, type_name, f"{path}{key}.")
-    if d.get("type") == "bitmap" and "filename" not in d and "data" not in d:
+    if d.get("type") == "bitmap" and not {"filename", "data", "bitmap"} & set(d):
         where = path.rstrip(".") or "it"
         raise PluginError(f"cannot load {word} {type_name!r}: the bitmap texture {where} has no "
                           f"filename (Mitsuba 3.9.1 crashes loading a bitmap without one); give "

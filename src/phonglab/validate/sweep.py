@@ -21,9 +21,12 @@ by chance with probability α = :data:`phonglab.stats.ALPHA`.
 
 Identities everywhere, physical bounds in the domain.  The consistency topics (finite,
 weight, pdf, chi2, normalization, reciprocity, component, gradient, the polarized ones) are
-judged at every point the plugin accepts.  A kind's physical bounds (``Kind.bounds``: a BSDF's
-``energy``, albedo ≤ 1; an emitter's ``power``) are judged only inside the declared
-(``PARAMETER_RANGES``) or documented (Mitsuba's ``BUILTIN`` tables) domain: at the given
+judged at every point the plugin accepts, and so are the identities of a bound topic (an
+emitter's Φ = mean sample_ray weight, the inverse-square and irradiance laws: a point light
+falling off as I/r is wrong at every intensity).  A physical bound (a row of a
+``Kind.bounds`` topic whose relation is "<=": a BSDF's albedo ≤ 1, :func:`is_bound`) is
+judged only inside the declared (``PARAMETER_RANGES``), documented (Mitsuba's ``BUILTIN``
+tables) or name-inferred (``NAMED``) domain: at the given
 point and at points that vary only parameters with such a range.  A point that sets a probed
 parameter (a plain float the plugin accepts up to 10⁴) is outside it: a bound that fails there
 becomes an ``advice`` row (not a fail) saying which value is accepted and what it measures
@@ -221,15 +224,22 @@ def outside(point: dict, swept) -> list[str]:
     return [name for name in point if name in probed]
 
 
+def is_bound(row: Row, bounds) -> bool:
+    """Whether ``row`` holds a physical bound (an albedo ≤ 1: its details' relation is "<=")
+    of a bound topic, which depends on the domain, rather than an identity (Φ = mean weight,
+    the inverse-square law), which holds at every value the plugin accepts."""
+    return row.topic in bounds and (row.details or {}).get("relation") == "<="
+
+
 def advise(rows: list[Row], swept, bounds) -> list[dict]:
-    """Turn each failing row of a physical-bound topic (``bounds``) at a point outside the
+    """Turn each failing bound row (:func:`is_bound`) at a point outside the
     domain (:func:`outside`) into an ``advice`` row, in place; the advice per parameter and
     topic: the accepted value nearest the given one where the bound is exceeded (where it
     starts), the farthest, and what the row measured at each."""
     given = {p.name: p.value for p in swept}
     found: dict[tuple, list] = {}
     for r in rows:
-        names = outside(r.point or {}, swept) if r.topic in bounds else []
+        names = outside(r.point or {}, swept) if is_bound(r, bounds) else []
         if r.status != "fail" or not names:
             continue
         values = ", ".join(f"{n} = {r.point[n]:g}" for n in names)
