@@ -309,38 +309,20 @@ def which_plugin(name: str, kind, registered) -> str:
 
 
 def validate_one(args, params: dict):
-    """(report, label, text) of the plugin ``args.bsdf``: variant, plugin files once, its kind,
-    one load, its sweep (or the given point with --no-sweep)."""
-    from ..validate import core, sweep   # lazy: Mitsuba loads only for a run
+    """(report, label, text) of the plugin ``args.bsdf``: the one pipeline
+    (:func:`phonglab.validate.pipeline.validate`), then the text of its report."""
+    from ..validate import pipeline   # lazy: Mitsuba loads only for a run
+    from ..validate.builtin import BUILTIN
 
-    core.start(args.variant)
-    registered = core.load_plugins(args.plugin)
-    if args.scene_bsdf is not None:       # a scene's material, as the scene loads it
-        from ..validate.builtin import scene_material
-        kind = registry.by_name("bsdf")
-        found = scene_material(kind, args.bsdf, args.scene_bsdf)
-        target = core.load(kind, found.plugin, None, registered)._replace(
-            label=found.label, origin=found.origin)
-    else:
-        kind = registry.detect(args.bsdf, registered)
-        core.check_registered(registered, kind)
-        target = None
-    topics = kind.check_topics(args.only)
-    known = builtin_known(args, kind, params)
-    if target is None:
-        target = core.load(kind, args.bsdf, params, registered)
-    sweep.check_set(kind, target, args.bsdf, params)   # a --set value outside its range: exit 2
-    if args.no_sweep:
-        report = core.run(kind, target, topics=topics, seed=args.seed, quick=args.quick,
-                          known=known)
-        text = report.table()
-    else:
-        with runner_from_args(args) as runner:
-            report = sweep.run(kind, target, args.bsdf, params=params, topics=topics,
-                               seed=args.seed, quick=args.quick, known=known,
-                               plugins=args.plugin, runner=runner)
-        text = sweep_text(report)
-    label = report.meta.get(kind.name, target.label)
+    with runner_from_args(args) as runner:
+        report = pipeline.validate(args.bsdf, variant=args.variant, params=params,
+                                   plugins=args.plugin, topics=args.only, seed=args.seed,
+                                   quick=args.quick, known=None if args.no_known else BUILTIN,
+                                   sweep=not args.no_sweep, runner=runner,
+                                   scene_bsdf=args.scene_bsdf)
+    kind = registry.by_name(report.meta["kind"])
+    text = report.table() if args.no_sweep else sweep_text(report)
+    label = report.meta["plugin"]
     if getattr(args, "profile", False):
         from ..validate import profile
         text += "\n\n" + profile.table(report.meta.get("profile", {}),
@@ -348,7 +330,7 @@ def validate_one(args, params: dict):
     text += known_note(report, args.bsdf, kind.conformance)
     if args.scene_bsdf is None:
         text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind,
-                             registered)
+                             report.meta.get("registered", ()))
     return report, label, text
 
 

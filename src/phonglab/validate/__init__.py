@@ -36,29 +36,21 @@ def validate(spec, *, variant=None, params=None, plugins=(), sweep=True, runner=
     """Validate ``spec`` as the plugin kind it is (:func:`~.registry.detect`): the variant
     set, the ``plugins`` files run once, the plugin loaded once, then checked across its
     kind's parameter sweep (``sweep=False``: at the given point).  ``options``: topics, seed,
-    quick, known, family, sizes (:func:`phonglab.validate.core.run`)."""
-    from . import core, sweep as sweep_  # lazy: imports Mitsuba
+    quick, known, family, sizes, progress (:func:`phonglab.validate.pipeline.validate`)."""
+    from . import pipeline  # lazy: imports Mitsuba
 
-    core.start(variant)
-    registered = core.load_plugins(plugins)
-    kind = detect(spec, registered)
-    core.check_registered(registered, kind)
-    target = core.load(kind, spec, params, registered)
-    topics = kind.check_topics(options.pop("topics", None))
-    if not sweep:
-        return core.run(kind, target, topics=topics, **options)
-    return sweep_.run(kind, target, spec, params=params, topics=topics, plugins=plugins,
-                      runner=runner, **options)
+    return pipeline.validate(spec, variant=variant, params=params, plugins=plugins,
+                             sweep=sweep, runner=runner, **options)
 
 
 def _face(kind):
     """``validate_<kind>``: one plugin of ``kind`` on every topic of its kind."""
 
     def validate_kind(spec, *, params=None, sweep=False, **options) -> Report:
-        from . import sweep as sweep_  # lazy: imports Mitsuba
+        from . import pipeline  # lazy: imports Mitsuba
 
         params = kind.with_load_options(params, options)
-        return sweep_.validate(kind, spec, params=params, sweep=sweep, **options)
+        return pipeline.validate(spec, kind=kind, params=params, sweep=sweep, **options)
 
     validate_kind.__name__ = validate_kind.__qualname__ = kind.function
     validate_kind.__doc__ = (

@@ -24,7 +24,7 @@ table topic -> runner).  What is the same for every kind lives here:
   records the plugin, variant, seed, sizes, m, α and the timings;
 * :func:`not_covered`: the applicable topics of a run that judged nothing (the report's
   ``meta["not_covered"]``; the command line does not call such a run a pass);
-* :func:`validate`: the topics checked, then both.
+* the one pipeline that conducts these steps for every caller: :mod:`.pipeline`.
 """
 
 from __future__ import annotations
@@ -46,12 +46,12 @@ from .. import dispatch, registration, stats
 from . import builtin
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
-from .inputs import ValidateError, check_plugin_file, check_topics
+from .inputs import ValidateError, check_plugin_file
 from . import profile as profile_
 from .kind import Kind
 
 __all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
-           "topic_timeout", "validate"]
+           "topic_timeout"]
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
@@ -553,7 +553,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         inherited = builtin.mark_inherited(
             rows, kids, lambda kid, topic: _child_rows(kind, kid, topic, opts_child),
             covered_by)
-    meta = {kind.name: target.label, "kind": kind.word, "plugin": target.label,
+    meta = {kind.name: target.label, "kind": kind.name, "plugin": target.label,
             "spec": target.spec, "variant": mi.variant(), "seed": seed,
             "quick": quick, "topics": list(topics), "statistical_tests": m, "alpha": stats.ALPHA,
             "seconds": round(time.perf_counter() - t_all, 3), "topic_seconds": seconds,
@@ -594,12 +594,3 @@ def session(kind: Kind):
     run; nested sessions share the outermost's), or a block that does nothing."""
     part = kind.part("session")
     return part() if part is not None else contextlib.nullcontext()
-
-
-def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0, quick=False,
-             known=None, plugins=(), family=1, sizes=None) -> Report:
-    """Validate one plugin of ``kind`` on every topic (or ``topics``): check, prepare, run."""
-    topics = check_topics(topics, kind.topics)
-    target = prepare(kind, spec, variant=variant, params=params, plugins=plugins)
-    return run(kind, target, topics=topics, seed=seed, quick=quick, known=known, family=family,
-               sizes=sizes)

@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 
 from ..engine.outputs import write_text  # noqa: E402
 from ..verdict import Report, cells, evidence, header, point_label  # noqa: E402
+from . import registry  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6",
            "advice": "#dce8f8"}
@@ -118,8 +119,8 @@ def render(report: Report) -> str:
     """The HTML text of ``report``."""
     m = report.meta
     name = m.get("plugin", m.get("bsdf", "?"))       # reports written before "plugin": a BSDF's
-    title = (f"phonglab validate: {m['kind'] + ' ' if 'kind' in m else ''}{name} "
-             f"({m.get('variant', '?')})")
+    word = registry.by_name(m["kind"]).word + " " if m.get("kind") in registry.names() else ""
+    title = f"phonglab validate: {word}{name} ({m.get('variant', '?')})"
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failing)} rows)"
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
              f"</title><style>{STYLE}</style></head><body>",

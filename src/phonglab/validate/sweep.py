@@ -93,29 +93,6 @@ def sweepable(spec) -> bool:
     return isinstance(spec, dict) or (isinstance(spec, str) and not spec.endswith(".xml"))
 
 
-def validate(kind: Kind, spec, *, variant=None, params=None, topics=None, seed=0,
-             quick=False, known=None, plugins=(), family=1, sizes=None, runner=None,
-             progress=None, sweep=True) -> Report:
-    """Validate ``spec`` at every point of its sweep; one Report whose rows carry their point.
-
-    ``params`` are pinned (kept at every point); ``runner``: where the points run (serially
-    here by default); ``progress(point_label, report)`` is called as each point finishes;
-    ``sweep=False``: the given point alone (:func:`phonglab.validate.core.validate`).
-    Bad input (the plugin at its given point) raises :class:`ValidateError` before any work.
-    """
-    if not sweep:
-        return core.validate(kind, spec, variant=variant, params=params, topics=topics,
-                             seed=seed, quick=quick, known=known, plugins=plugins,
-                             family=family, sizes=sizes)
-    topics = check_topics(topics, kind.topics)
-    t0 = time.perf_counter()
-    base = core.prepare(kind, spec, variant=variant, params=params, plugins=plugins)
-    check_set(kind, base, spec, params)
-    return run(kind, base, spec, params=params, topics=topics, seed=seed, quick=quick,
-               known=known, plugins=plugins, family=family, sizes=sizes, runner=runner,
-               progress=progress, t0=t0)
-
-
 def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False, known=None,
         plugins=(), family=1, sizes=None, runner=None, progress=None, t0=None) -> Report:
     """The sweep of a plugin already prepared at its given point (``base``, a
