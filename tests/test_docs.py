@@ -69,7 +69,8 @@ def test_a_reports_rows_link_their_topics_page(variant_llvm_rgb, tmp_path, monke
     assert all(r["doc"] == f"topics/bsdf/{r['topic']}.html" for r in rows)
     page = out_html.read_text()
     for topic in ("weight", "cost"):
-        assert f'<a href="https://example.org/phonglab/topics/bsdf/{topic}.html">{topic}</a>' in page
+        url = f"https://example.org/phonglab/topics/bsdf/{topic}.html"
+        assert f'<a href="{url}">{topic}</a>' in page
     report = validate_phase("hg", quick=True, topics=["weight"])    # another kind, from Python
     assert report.rows and all(r.doc == "topics/phase/weight.html" for r in report.rows)
     assert all(r.to_dict()["doc"] == r.doc for r in report.rows)

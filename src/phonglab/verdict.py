@@ -91,9 +91,10 @@ class Row:
     #: JSON has no ``point`` key.
     point: dict | None = None
     #: The page of the docs site that explains the row's topic, relative to the site's root
-    #: (``topics/bsdf/energy.html``; set by the validator, :func:`phonglab.validate.kind.topic_page`,
-    #: linked against :data:`phonglab.validate.kind.DOCS_URL`); None for rows of other harnesses,
-    #: and then the row's JSON has no ``doc`` key.
+    #: (``topics/bsdf/energy.html``; set by the validator:
+    #: :func:`phonglab.validate.kind.topic_page`, linked against
+    #: :data:`phonglab.validate.kind.DOCS_URL`); None for rows of other harnesses, and then the
+    #: row's JSON has no ``doc`` key.
     doc: str | None = None
 
     #: The inputs of the row's failing lanes (name -> array with one entry per failing lane, or

@@ -61,7 +61,7 @@ def _docs_url() -> str | None:
     url = os.environ.get("PHONGLAB_DOCS_URL")
     if url:
         return url.rstrip("/") + "/"
-    root = Path(__file__).resolve().parents[3]
+    root = Path(__file__).resolve().parent.parent.parent.parent  # above src/ in a checkout
     if (root / "docs" / "conf.py").is_file():
         return (root / "build" / "docs").as_uri() + "/"
     return None
