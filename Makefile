@@ -6,7 +6,7 @@ PYTEST_ARGS ?=
 # The default tier runs on every core (pytest-xdist); PYTEST_WORKERS=0 runs it in one process.
 PYTEST_WORKERS ?= auto
 
-.PHONY: setup demo test test-slow test-all bench check clean classic-figure
+.PHONY: setup demo test test-slow test-all bench check clean classic-figure docs docs-setup
 
 $(STAMP): pyproject.toml constraints.txt scripts/setup.sh
 	bash scripts/setup.sh
@@ -44,6 +44,17 @@ classic-figure: setup
 
 check: setup
 	$(BIN)/phonglab check --json out/checks.json
+
+# The docs site (docs/conf.py: Sphinx, MyST, the notebooks as stored, the command reference from
+# the argparse parsers, the API reference from the docstrings) into build/docs/, every warning
+# an error. docs-setup installs the `docs` extra into .venv when Sphinx is missing.
+DOCS_IMPORTS := sphinx, myst_parser, myst_nb, sphinxarg, furo
+docs-setup: setup
+	@$(BIN)/python -c "import $(DOCS_IMPORTS)" 2>/dev/null || \
+		$(BIN)/python -m pip install -q -c constraints.txt -e ".[docs]"
+
+docs: docs-setup
+	$(BIN)/sphinx-build -W --keep-going -b html docs build/docs
 
 clean:
 	rm -rf out .pytest_cache build src/*.egg-info

@@ -1,6 +1,7 @@
 r"""Lambertian BSDF (``lambert``): the ideal diffuse reflector, written in Python/Dr.Jit.
 
 .. list-table::
+
    * - reflectance
      - |spectrum| or |texture|
      - Diffuse reflectance ρ in [0, 1] (default 0.5). Exposed, differentiable.

@@ -1,6 +1,7 @@
 r"""Modified Phong BSDF (``phong``): energy-normalized, reciprocal, written in Python/Dr.Jit.
 
 .. list-table::
+
    * - diffuse_reflectance
      - |spectrum| or |texture|
      - k_d in [0, 1] (default 0.5). Exposed, differentiable.

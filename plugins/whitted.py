@@ -1,6 +1,7 @@
 r"""Whitted-style integrator (``whitted``): the seed lecture's complete lighting equation.
 
 .. list-table::
+
    * - units
      - |string|
      - ``graphics`` (default): the seed's formula literally. ``radiance``: the same light

@@ -18,11 +18,12 @@ from phonglab.validate import TOPICS, validate_bsdf
 from phonglab.validate.bsdf.topics import Row
 from phonglab.validate.gradient import unconverged
 from phonglab.validate.inputs import ValidateError
+from phonglab.validate.kind import topic_page, topic_url
 from phonglab.verdict import STATUSES, Report
 
 DEFECTS = Path(__file__).parent / "defects"
 ROW_FIELDS = {"topic", "name", "measured", "expected", "stderr", "tolerance", "status", "reason",
-              "details"}
+              "details", "doc"}
 
 
 def _check_schema(d: dict) -> None:
@@ -165,9 +166,12 @@ def test_cli_pass_json_and_html(variant_llvm_rgb, tmp_path, capsys):
     _check_schema(json.loads(out_json.read_text()))
     page = out_html.read_text()
     assert page.startswith("<!DOCTYPE html>") and "data:image/png;base64," in page
-    # self-contained: no external resource of any kind
-    assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:)", page)
-    assert "http://" not in page and "https://" not in page
+    # self-contained: no external resource of any kind; its only links are the topics' pages
+    links = re.findall(r'<a href="([^"]*)">', page)
+    assert set(links) <= {topic_url(topic_page("bsdf", t)) for t in TOPICS}
+    rest = re.sub(r'<a href="[^"]*">', "", page)
+    assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:)", rest)
+    assert "http://" not in rest and "https://" not in rest
 
 
 def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys):

@@ -30,7 +30,8 @@ without it states its comparison in ``reason``.
 
 JSON (:meth:`Report.to_json`; :func:`phonglab.engine.outputs.write_json` writes a report's
 :meth:`~Report.to_dict` to a file): ``{"meta": {...}, "results": [row, ...]}``
-with each row's fields exactly those of :class:`Row` (``point`` only on a sweep's rows), made
+with each row's fields exactly those of :class:`Row` (``point`` only on a sweep's rows, ``doc``
+only on a validator's), made
 strict-JSON-safe by
 :func:`jsonable` (numpy scalars and arrays to Python numbers and lists, NaN/Inf to strings,
 paths to strings).  Text: :func:`table`; the HTML report (:mod:`phonglab.validate.html`)
@@ -89,6 +90,12 @@ class Row:
     #: (parameter -> value, ``{}`` for the given point); None otherwise, and then the row's
     #: JSON has no ``point`` key.
     point: dict | None = None
+    #: The page of the docs site that explains the row's topic, relative to the site's root
+    #: (``topics/bsdf/energy.html``; set by the validator:
+    #: :func:`phonglab.validate.kind.topic_page`, linked against
+    #: :data:`phonglab.validate.kind.DOCS_URL`); None for rows of other harnesses, and then the
+    #: row's JSON has no ``doc`` key.
+    doc: str | None = None
 
     #: The inputs of the row's failing lanes (name -> array with one entry per failing lane, or
     #: a list of failing cells' records), set by the harness that made the row, so that a
@@ -102,15 +109,16 @@ class Row:
 
     def to_dict(self) -> dict:
         d = jsonable(asdict(self))
-        if self.point is None:
-            del d["point"]
+        for key in ("point", "doc"):
+            if d[key] is None:
+                del d[key]
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "Row":
         return cls(**{k: d.get(k) for k in ("topic", "name", "measured", "expected", "stderr",
                                              "tolerance", "status", "reason")},
-                   details=d.get("details") or {}, point=d.get("point"))
+                   details=d.get("details") or {}, point=d.get("point"), doc=d.get("doc"))
 
 
 def format_number(x, digits: int = 4) -> str:

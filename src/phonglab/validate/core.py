@@ -48,7 +48,7 @@ from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
 from .inputs import ValidateError, check_plugin_file
 from . import profile as profile_
-from .kind import Kind
+from .kind import Kind, topic_page
 
 __all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
            "topic_timeout"]
@@ -569,6 +569,8 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         meta["family"] = family
     if sizes:
         meta["sizes"] = dict(sizes)
+    for r in rows:
+        r.doc = topic_page(kind.name, r.topic)
     return Report(meta, rows)
 
 

@@ -3,8 +3,9 @@
 Contents: the table of rows (status coloured), the directional albedo against θ_i with its
 band (from the ``energy`` row's details), lobe slices (eval and pdf in the plane of incidence),
 and for each failing χ² cell the histogram beside the integrated pdf and the residual map
-(obs − exp)/√exp on a diverging colour scale with symmetric limits.  Figures are matplotlib
-PNGs embedded as base64 ``data:`` URIs; the file references nothing outside itself.
+(obs − exp)/√exp on a diverging colour scale with symmetric limits.  Each row's topic links its
+page of the docs site (the row's ``doc`` against :data:`.kind.DOCS_URL`).  Figures are matplotlib
+PNGs embedded as base64 ``data:`` URIs; the file loads nothing from outside itself.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np  # noqa: E402
 from ..engine.outputs import write_text  # noqa: E402
 from ..verdict import Report, cells, evidence, header, point_label  # noqa: E402
 from . import registry  # noqa: E402
+from .kind import topic_url  # noqa: E402
 
 COLOURS = {"pass": "#d8f0d8", "fail": "#f6d0d0", "KNOWN": "#f6ecc8", "skipped": "#e6e6e6",
            "advice": "#dce8f8"}
@@ -43,6 +45,13 @@ def _img(uri: str, alt: str) -> str:
     return f'<p><img alt="{html.escape(alt)}" src="{uri}"></p>'
 
 
+def _topic_link(row, text) -> str:
+    """The topic cell: a link to the topic's page of the docs site (:func:`.kind.topic_url`)."""
+    url = topic_url(row.doc)
+    text = html.escape(str(text))
+    return f'<a href="{html.escape(url)}">{text}</a>' if url else text
+
+
 def _table(report: Report) -> str:
     swept = any(r.point is not None for r in report.rows)
     rows = ["<tr>" + "".join(f"<th>{h}</th>" for h in ("point",) * swept + header()
@@ -50,7 +59,8 @@ def _table(report: Report) -> str:
     for r in report.rows:
         rows.append(f'<tr style="background:{COLOURS.get(r.status, "#fff")}">'
                     + (f"<td>{html.escape(point_label(r.point))}</td>" if swept else "")
-                    + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells(r))
+                    + "".join(f"<td>{_topic_link(r, c) if i == 1 else html.escape(str(c))}</td>"
+                              for i, c in enumerate(cells(r)))
                     + f'<td class="reason">{html.escape(r.reason)}'
                     + (f"<br><b>{html.escape(evidence(r))}</b>" if r.status == "fail"
                        and evidence(r) else "") + "</td></tr>")

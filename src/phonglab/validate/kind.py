@@ -46,8 +46,11 @@ A field given on the record itself (a test's toy kind) takes the place of the mo
 from __future__ import annotations
 
 import importlib
+import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable
+from urllib.parse import urljoin
 
 from .. import verdict
 from ..errors import PhonglabError
@@ -55,6 +58,34 @@ from ..errors import PhonglabError
 
 class ValidateError(PhonglabError):
     """A plugin, plugin file, parameter or topic the validator cannot use."""
+
+
+def _docs_url() -> str | None:
+    """``$PHONGLAB_DOCS_URL``; else, run from a source checkout, the folder ``make docs`` builds
+    the site into (``build/docs/``, as a ``file:`` URL); else None."""
+    url = os.environ.get("PHONGLAB_DOCS_URL")
+    if url:
+        return url.rstrip("/") + "/"
+    root = Path(__file__).resolve().parent.parent.parent.parent  # above src/ in a checkout
+    if (root / "docs" / "conf.py").is_file():
+        return (root / "build" / "docs").as_uri() + "/"
+    return None
+
+
+#: The docs site's root, which a row's :attr:`~phonglab.verdict.Row.doc` page is relative to
+#: (:func:`_docs_url`): the HTML report links each row's topic to its page there.
+DOCS_URL = _docs_url()
+
+
+def topic_page(kind: str, topic: str) -> str:
+    """The page of the docs site on ``topic`` of the kind named ``kind``, relative to its root
+    (docs/topics/KIND/TOPIC.md builds it): what a validator row carries as ``doc``."""
+    return f"topics/{kind}/{topic}.html"
+
+
+def topic_url(page: str | None) -> str | None:
+    """``page`` (a row's ``doc``) against :data:`DOCS_URL`; None when either is unknown."""
+    return urljoin(DOCS_URL, page) if page and DOCS_URL else None
 
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
