@@ -118,16 +118,25 @@ def _eta(plugin) -> float | None:
         return None
 
 
-class _Collect(mi.TraversalCallback):
-    """A traversal callback that keeps the objects a plugin puts, by name."""
+_COLLECT: dict = {}
 
-    def __init__(self):
-        super().__init__()
-        self.objects: list[tuple[str, object]] = []
 
-    def put(self, name, value, flags=None):
-        if isinstance(value, mi.BSDF):
-            self.objects.append((str(name), value))
+def _collector():
+    """A traversal callback that keeps the BSDFs a plugin puts, by name (its class is made per
+    variant: ``mi.TraversalCallback`` exists only once a variant is set)."""
+    variant = mi.variant()
+    if variant not in _COLLECT:
+        class Collect(mi.TraversalCallback):
+            def __init__(self):
+                super().__init__()
+                self.objects: list[tuple[str, object]] = []
+
+            def put(self, name, value, flags=None):
+                if isinstance(value, mi.BSDF):
+                    self.objects.append((str(name), value))
+
+        _COLLECT[variant] = Collect
+    return _COLLECT[variant]()
 
 
 def children(plugin, _prefix: str = "", _seen=None) -> list[tuple[str, object]]:
@@ -135,7 +144,7 @@ def children(plugin, _prefix: str = "", _seen=None) -> list[tuple[str, object]]:
     object once, under the first name it is found by."""
     seen = _seen if _seen is not None else [plugin]
     found: list[tuple[str, object]] = []
-    cb = _Collect()
+    cb = _collector()
     try:
         plugin.traverse(cb)
     except Exception:
