@@ -30,14 +30,29 @@ PHYSICS = {"bsdf": {"weight", "chi2", "energy", "reciprocity", "component"},
            "integrator": {"bias", "agreement"}}
 
 
-def validate(tmp_path, name: str, *extra):
-    """(exit code, JSON report or None, stderr) of the author's command on a corpus plugin."""
-    out = tmp_path / f"{name}.json"
-    r = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", name, "--plugin",
-                        str(CORPUS / CATALOG[name]["file"]), "--quick", "--json", str(out),
-                        *extra], capture_output=True, text=True, timeout=600,
-                       env={**os.environ, "PYTHONPATH": str(SRC)}, cwd=tmp_path)
-    return r.returncode, (json.loads(out.read_text()) if out.exists() else None), r.stderr
+#: (name, extra arguments) -> (exit code, JSON report or None, stderr, HTML report or None):
+#: one run of a command per test process, shared by the tests that read it.
+_RUNS: dict = {}
+
+
+def validate(tmp_path_factory, name: str, *extra):
+    """(exit code, JSON report or None, stderr) of the author's command on a corpus plugin
+    (with ``--report``: its HTML as :func:`html_of` gives it)."""
+    key = (name, extra)
+    if key not in _RUNS:
+        where = tmp_path_factory.mktemp(name)
+        out, html = where / f"{name}.json", where / f"{name}.html"
+        r = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", name, "--plugin",
+                            str(CORPUS / CATALOG[name]["file"]), "--quick", "--json", str(out),
+                            "--report", str(html), *extra], capture_output=True, text=True,
+                           timeout=600, env={**os.environ, "PYTHONPATH": str(SRC)}, cwd=where)
+        _RUNS[key] = (r.returncode, json.loads(out.read_text()) if out.exists() else None,
+                      r.stderr, html.read_text() if html.exists() else None)
+    return _RUNS[key][:3]
+
+
+def html_of(name: str, *extra) -> str | None:
+    return _RUNS[(name, extra)][3]
 
 
 def test_the_catalog_lists_every_corpus_file_and_at_least_15():
@@ -52,11 +67,11 @@ CONTROLS = [n for n, c in CATALOG.items() if c["bug"] is None]
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "aov_depth"
                                   else n for n in CONTROLS])
-def test_a_control_passes_with_its_physics_judged(tmp_path, name):
+def test_a_control_passes_with_its_physics_judged(tmp_path_factory, name):
     """Before: the tutorial-style BSDFs and phase function failed every topic with
     "missing 1 required positional argument: 'active'"; the Python environment light exited 3
     (power judged nothing); the AOV integrator passed on ``finite`` alone."""
-    rc, report, err = validate(tmp_path, name)
+    rc, report, err = validate(tmp_path_factory, name)
     assert rc == 0, err[-2000:]
     assert report["meta"]["not_covered"] == []
     rows = report["results"]
@@ -89,9 +104,9 @@ def test_every_defect_of_the_catalog_has_a_test():
 
 
 @pytest.mark.parametrize("name", sorted(DEFECTS))
-def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path, name):
+def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path_factory, name):
     topic, word, extra = DEFECTS[name]
-    rc, report, err = validate(tmp_path, name, *extra)
+    rc, report, err = validate(tmp_path_factory, name, *extra)
     assert rc == 1, err[-2000:]
     failing = [r for r in report["results"] if r["status"] == "fail"]
     mine = [r for r in failing if r["topic"] == topic and word in r["name"]]
@@ -99,10 +114,11 @@ def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path, name):
     assert all(r["measured"] is not None for r in mine)      # a finding, not a crash
 
 
-def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path):
+def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path_factory):
     """Before: "no parameter swept" for a BSDF whose parameters are mi.Textures, so its energy
     gain at small roughness (albedo 1.2 at 0.1) was invisible."""
-    rc, report, _ = validate(tmp_path, "textured_plastic_gain", "--only", "energy")
+    rc, report, _ = validate(tmp_path_factory, "textured_plastic_gain",
+                             *DEFECTS["textured_plastic_gain"][2])
     assert rc == 1
     swept = {p["name"]: p for p in report["meta"]["sweep"]["parameters"]}
     assert swept["roughness"]["source"] == "named" and swept["roughness"]["hi"] == 1.0
@@ -111,27 +127,27 @@ def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path):
     assert gains and all(r["measured"] > 1 for r in gains)
 
 
-def test_a_traverse_that_raises_is_one_sentence_with_the_plugins_file_and_line(tmp_path):
+def test_a_traverse_that_raises_is_one_sentence_with_the_plugins_file_and_line(tmp_path_factory):
     """Before: a raw traceback, exit 1."""
-    rc, report, err = validate(tmp_path, "traverse_renamed_api")
+    rc, report, err = validate(tmp_path_factory, "traverse_renamed_api")
     assert rc == 2 and report is None
     assert "traverse() of the BSDF 'traverse_renamed_api' raised AttributeError" in err
     assert "put_parameter" in err and "traverse_renamed_api.py:" in err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(tmp_path):
-    rc, report, _ = validate(tmp_path, "unimplemented_pdf", "--no-sweep")
+def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(tmp_path_factory):
+    rc, report, _ = validate(tmp_path_factory, "unimplemented_pdf", "--no-sweep")
     assert rc == 1
     failing = [r for r in report["results"] if r["status"] == "fail"]
     assert failing and all(r["reason"].startswith("not implemented: pdf") for r in failing)
     assert all(r["details"]["not_implemented"] == "pdf" for r in failing)
 
 
-def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path):
+def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path_factory):
     """Before: Dr.Jit's "error while performing a custom differentiable operation. (see
     above)" in every row, the plugin's message in the JSON's traceback alone."""
-    rc, report, _ = validate(tmp_path, "sample_name_error", "--no-sweep")
+    rc, report, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
     assert rc == 1
     for r in report["results"]:
         assert "see above" not in r["reason"]
@@ -140,11 +156,10 @@ def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path
         assert where["file"].endswith("sample_name_error.py") and where["function"] == "sample"
 
 
-def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(tmp_path):
+def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(tmp_path_factory):
     """Before: an integrator's report was titled "phonglab validate: ? (...)"."""
-    html = tmp_path / "r.html"
-    rc, _, _ = validate(tmp_path, "sample_name_error", "--no-sweep", "--report", str(html))
-    text = html.read_text()
+    rc, _, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
+    text = html_of("sample_name_error", "--no-sweep")
     assert rc == 1
     assert "<title>phonglab validate: integrator sample_name_error (llvm_ad_rgb)" in text
     source = (CORPUS / "sample_name_error.py").read_text().splitlines()
