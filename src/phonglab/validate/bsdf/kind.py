@@ -76,9 +76,6 @@ values = ranges.traversed
 #: What a run keeps across its points: the unpolarized reference process of ``intensity``.
 session = intensity_topic.session
 
-#: The BSDF kind (declared by the package, whose parts this module holds).
-BSDF = KIND
-
 
 def known_for(name: str, params: dict | None) -> dict:
     """The conformance table's findings of the Mitsuba built-in BSDF ``name``, for the

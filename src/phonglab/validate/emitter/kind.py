@@ -12,7 +12,6 @@ from __future__ import annotations
 import mitsuba as mi
 
 from ...settings import Loaded, load_plugin
-from .. import core
 from ..conformance import known_of
 from ..inputs import ValidateError
 from . import KIND, ranges
@@ -47,8 +46,6 @@ def runners(target, opts, topics, m: int) -> dict:
     }
 
 
-#: The emitter kind (declared by the package, whose parts this module holds).
-EMITTER = KIND
 
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.
 parameters = ranges.parameters
@@ -73,13 +70,6 @@ def load(spec, params, hint) -> Loaded:
         spec_meta = {**(spec_meta or {}), "shape": target.shape_name}
     return Loaded(target, loaded.label, spec_meta)
 
-
-def prepare(spec, *, variant=None, params=None, plugins=(), shape=None) -> Loaded:
-    """Set the variant, run the plugin files, load the emitter attached to ``shape``
-    (:func:`phonglab.validate.core.prepare`)."""
-    params = EMITTER.with_load_options(params, {"shape": shape})
-    return core.prepare(EMITTER, spec, variant=variant, params=params,
-                        plugins=plugins)
 
 
 def _shape_key(shape: dict | None) -> dict:
@@ -110,5 +100,3 @@ def catalogue():
     """The emitter conformance table (:mod:`.builtins`)."""
     from .builtins import CATALOGUE
     return CATALOGUE
-
-

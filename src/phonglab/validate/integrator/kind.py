@@ -12,7 +12,6 @@ from __future__ import annotations
 import mitsuba as mi
 
 from ...settings import Loaded, load_plugin
-from .. import core
 from ..conformance import known_of
 from . import KIND
 from . import agreement as agreement_
@@ -54,8 +53,6 @@ def runners(target, opts, topics, m: int) -> dict:
     }
 
 
-#: The integrator kind (declared by the package, whose parts this module holds).
-INTEGRATOR = KIND
 
 #: The sweep's parameters, the ranges a ``--set`` must lie in and the values a documented
 #: cause's ``at`` is held against.
@@ -73,11 +70,6 @@ def load(spec, params, hint) -> Loaded:
     meta = {**(loaded.spec or {}), "depth": target.depth_note}
     return Loaded(target, loaded.label, meta)
 
-
-def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
-    """Set the variant, run the plugin files, load the integrator
-    (:func:`phonglab.validate.core.prepare`)."""
-    return core.prepare(INTEGRATOR, spec, variant=variant, params=params, plugins=plugins)
 
 
 def known_for(name: str, params: dict | None) -> dict:

@@ -14,8 +14,6 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from ...settings import Loaded
-from .. import core
 from ..conformance import known_of
 from . import KIND, lanes, ranges
 from ..returns import check_phase as returns   # noqa: F401 (the kind's part "returns")
@@ -58,24 +56,11 @@ def values(phase) -> dict:
     return out
 
 
-#: The phase-function kind (declared by the package, whose parts this module holds): its
-#: plugin is the ``mi.PhaseFunction`` itself; every topic builds its own MediumInteraction3f
-#: (:mod:`.lanes`).
-PHASE = KIND
 
 #: The sweep's parameters and the ranges a ``--set`` must lie in.
 parameters = ranges.parameters
 domain = ranges.domain
 
-
-def prepare(spec, *, variant=None, params=None, plugins=()) -> Loaded:
-    """Set the variant, run the ``--plugin`` files, load the phase function
-    (:func:`phonglab.validate.core.prepare`); bad input raises
-    :class:`~phonglab.validate.inputs.ValidateError`.  Its plugin is the ``mi.PhaseFunction``;
-    the topics place it at ``lanes.interaction(wi)`` (a MediumInteraction3f with wi and
-    sh_frame = Frame3f(wi)) with ``lanes.context()`` (a PhaseFunctionContext without a
-    sampler)."""
-    return core.prepare(PHASE, spec, variant=variant, params=params, plugins=plugins)
 
 
 def known_for(name: str, params: dict | None = None) -> dict:
