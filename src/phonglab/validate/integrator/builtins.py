@@ -60,7 +60,7 @@ FINDINGS: tuple[Finding, ...] = (
             "rr_depth 1, 9.9991 ± 0.0024 at rr_depth 1000 (roulette off)",
             "Le (1 - rho^D)/(1 - rho) = 10", "tests/repro/volpathmis_rr_mis.py",
             excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
-            rows=("enclosure ρ=0.8 D=64",)),
+            rows=("enclosure ρ=0.8 D=64",), at=(("rr_depth", (1, 62)),)),
     Finding("direct-delta-emitter-samples", "bias", ("direct",),
             "src/integrators/direct.cpp:180",
             "the emitter strategy's weight is dr::select(ds.delta, 1, mis_weight(...) * "
@@ -96,7 +96,7 @@ FINDINGS: tuple[Finding, ...] = (
             "rr_depth 1, 3.5000 ± 0.0007 at rr_depth 2",
             "Le (1 - rho^D)/(1 - rho) = 3.5", "tests/repro/volpathmis_rr_mis.py",
             excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
-            rows=("enclosure ρ=0.5 D=3",), at=(("rr_depth", (1, 2)),)),
+            rows=("enclosure ρ=0.5 D=3",), at=(("rr_depth", 1),)),
     Finding("volpathmis-roulette-mis-agreement", "agreement", ("volpathmis",),
             "src/integrators/volpathmis.cpp:240",
             "the same roulette MIS weight (volpathmis-roulette-mis): in the agreement box (an "
@@ -109,7 +109,7 @@ FINDINGS: tuple[Finding, ...] = (
             "0.0011 for 3.875 at rr_depth 3, 3.8745 ± 0.0008 at rr_depth 4",
             "the block means of path (max_depth 5)", "tests/repro/volpathmis_rr_mis.py",
             excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
-            rows=("block means against path (max_depth 5)",), at=(("rr_depth", (1, 4)),)),
+            rows=("block means against path (max_depth 5)",), at=(("rr_depth", (1, 3)),)),
     Finding("prbvolpath-depth-limit", "bias", ("prbvolpath",),
             "src/python/python/ad/integrators/prbvolpath.py:192",
             "`active &= depth < self.max_depth` (line 192) masks `active` and the medium "
