@@ -100,6 +100,24 @@ def test_markdown_renders_a_given_json():
         assert f"* `{name}`:" in md
 
 
+def test_markdown_lists_a_finding_only_under_the_rows_it_explains():
+    # roughdielectric/polarized (eta 1.5): its normalization row is Beckmann's, never the
+    # index-matched finding's (eta in [0.999, 1.001]), though both name the case (#52)
+    label = "roughdielectric/polarized"
+    case = next(c for c in CASES if c.label == label)
+    rows = [Row("normalization", "∫ pdf dω_o = P(sample counted)", 0.998, 1.0, 1e-5, 1e-4,
+                "KNOWN", "why", {"known_by": ["beckmann-pdf-normalization"]})]
+    report = Report({"case": label, "variant": "llvm_ad_rgb", "note": case.note,
+                     "spec": case.spec}, rows).to_dict()
+    md = markdown.render_markdown({"meta": {"options": {}}, "reports": [report]})
+    section = md.split(f"### `{label}`")[1].split("## Findings")[0]
+    assert "(#beckmann-pdf-normalization)" in section
+    assert "index-matched" not in section
+    explained, idle = md.split("## Findings that explain no row of this run")
+    assert "### beckmann-pdf-normalization" in explained
+    assert "### roughdielectric-index-matched-normalization" in idle
+
+
 def test_cell_status_order():
     rows = [{"status": s} for s in ("pass", "skipped", "KNOWN")]
     assert markdown.cell_status(rows) == "KNOWN"

@@ -57,6 +57,58 @@ def test_findings_name_cases_source_lines_and_reproducers(cat):
             assert f.key in {k.key for k in known[label][f.topic]}
 
 
+def test_volpathmis_signatures_hold_exactly_where_roulette_meets_a_counted_hit(variant_llvm_rgb):
+    """volpathmis.cpp: roulette runs at depth > rr_depth (line 238), an emitter hit counts at
+    depth < max_depth (line 244): the bias needs rr_depth <= D - 2, and each signature holds
+    there and nowhere else (#52); a point that leaves rr_depth unset has its default, 5."""
+    import types
+
+    import mitsuba as mi
+
+    from phonglab.validate.integrator import ranges
+
+    found = {f.key: f for f in registry.catalogue("integrator").findings}
+    for key, depth in (("volpathmis-roulette-mis", 64), ("volpathmis-roulette-mis-shallow", 3),
+                       ("volpathmis-roulette-mis-agreement", 5)):
+        k = found[key].known()
+        assert all(k.holds_at({"rr_depth": rr}) for rr in range(1, depth - 1)), key
+        assert not any(k.holds_at({"rr_depth": rr}) for rr in (depth - 1, depth, 1000)), key
+    target = types.SimpleNamespace(spec={"type": "volpathmis"},
+                                   integrator=mi.load_dict({"type": "volpathmis"}))
+    assert ranges.values(target) == {"rr_depth": 5.0}
+    target.spec = {"type": "direct", "emitter_samples": 4}
+    target.integrator = mi.load_dict(target.spec)
+    assert ranges.values(target) == {"emitter_samples": 4.0, "bsdf_samples": 1.0}
+
+
+def test_sun_rim_lanes_are_the_findings_never_a_tolerance(variant_llvm_rgb):
+    """sunsky.h:430 counts a sun sample as a sun hit untested, 946 tests it: on the cone's rim
+    the same ds.d is sun to one, sky to the other.  No sensitivity allowance absorbs those
+    lanes; the findings explain them, timed_sunsky's too (its sun read back from its own
+    sample_direction, bit for bit sunsky's where both are known) (#52)."""
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+
+    from phonglab.validate import batch
+    from phonglab.validate.emitter import setup
+
+    sky = mi.load_dict({"type": "sunsky", "latitude": 0.0})
+    _, sun, cos_half = setup.sun_cone(sky)
+    read = setup._sampled_sun(sky, cos_half)
+    assert np.array_equal(np.array(dr.ravel(sun)), np.array(dr.ravel(read)))
+    assert setup.sun_cone(mi.load_dict({"type": "timed_sunsky"})) is not None
+    d = batch.run_case("timed_sunsky", {"kind": "emitter", "seed": 0, "quick": False,
+                                        "topics": ["weight", "pdf"]})
+    rows = {r["name"]: r for r in d["results"]}
+    for name, key in (("weight x ds.pdf = eval_direction(ds)", "sunsky-sun-rim-weight"),
+                      ("weight x ds.pdf = eval at the traced point", "sunsky-sun-rim-weight"),
+                      ("ds.pdf = pdf_direction(ds)", "sunsky-sun-rim-pdf")):
+        assert rows[name]["status"] == "KNOWN", name
+        assert rows[name]["details"]["known_by"] == [key]
+        assert rows[name]["measured"] > 2 * rows[name]["tolerance"]   # absorbed: 0.999 of 1
+
+
 def test_whitted_and_sphere_findings_are_in_the_tables(variant_llvm_rgb):
     emitters = {c.label: c for c in registry.catalogue("emitter").cases()}
     keys = {k.key for k in emitters["area (sphere, flip_normals)"].known["pdf"]}

@@ -108,8 +108,8 @@ def test_sunsky_equator_rows_are_known_by_the_sun_rim_and_a_lane_off_it_stays_a_
         variant_llvm_rgb):
     """At latitude 0, sun samples drawn on the sun cone's rim round 1-2 float32 steps outside
     hit_sun's test (sunsky.h:430/946): the three rows they fail are KNOWN by the finding, each
-    failing lane inside its signature; a lane planted 5 steps outside (or inside the cone)
-    keeps the row a fail."""
+    failing lane inside its signature (within 4 steps of the rim); a lane planted 5 steps
+    outside or inside the cone keeps the row a fail."""
     import numpy as np
 
     from phonglab.validate import validate_emitter
@@ -124,8 +124,8 @@ def test_sunsky_equator_rows_are_known_by_the_sun_rim_and_a_lane_off_it_stays_a_
         row = rows[name]
         assert row.status == "KNOWN" and row.details["known_by"] == [key], name
         steps = row.failing_lanes["sun_rim_ulps"]
-        assert len(steps) and np.all((steps < 0) & (steps >= -2)), (name, steps)
-    for planted in (-5.0, 3.0):
+        assert len(steps) and np.all(np.abs(steps) <= 4) and np.any(steps < 0), (name, steps)
+    for planted in (-5.0, 5.0):
         row = rows["ds.pdf = pdf_direction(ds)"]
         row.status = "fail"
         row.failing_lanes = {k: np.append(v, v[:1], axis=0) for k, v in row.failing_lanes.items()}
@@ -135,15 +135,15 @@ def test_sunsky_equator_rows_are_known_by_the_sun_rim_and_a_lane_off_it_stays_a_
         row.failing_lanes = {k: v[:-1] for k, v in row.failing_lanes.items()}
 
 
-def test_sun_rim_signature_covers_a_few_steps_outside_the_cone_only():
+def test_sun_rim_signature_covers_a_few_steps_about_the_rim_only():
     import numpy as np
 
     from phonglab.validate.emitter.signatures import SunConeRim
     from phonglab.validate.emitter.topics import Row
 
     row = Row("pdf", "ds.pdf = pdf_direction(ds)", 1.0, 0.0, None, 1.0, "fail", "", {})
-    row.failing_lanes = {"sun_rim_ulps": np.array([-1.0, -4.0, -5.0, 0.0, 2.0])}
-    assert SunConeRim().covers(row).tolist() == [True, True, False, False, False]
+    row.failing_lanes = {"sun_rim_ulps": np.array([-1.0, -4.0, -5.0, 0.0, 2.0, 4.0, 5.0])}
+    assert SunConeRim().covers(row).tolist() == [True, True, False, True, True, True, False]
     row.failing_lanes = {"u": np.zeros((2, 2))}                   # no sun recorded: no claim
     assert SunConeRim().covers(row) is None
 

@@ -2,8 +2,8 @@
 
 The unpolarized branch multiplies (1 - R(cos_theta_o)) (1 - R(cos_theta_i)) directly
 (src/bsdfs/pplastic.cpp:429-432) and is reciprocal to float32 precision.  The polarized branch
-gets the second transmission from the internally refracted direction: line 375-377 refracts
-wi_hat inside and evaluates mueller::specular_transmission(|cos(wi_hat_p)|, 1/eta) there.  For
+gets the second transmission from the internally refracted direction: line 375 refracts
+wi_hat inside and line 376 evaluates mueller::specular_transmission(|cos(wi_hat_p)|, 1/eta) there.  For
 grazing wi the internal direction is near the critical angle, where 1 - eta^2 sin^2 cancels
 in float32, so the intensity of f(wi, wo) and f(wo, wi) differ by ~1 % at cos = 0.0019, while
 the unpolarized variant agrees to 2e-8.

@@ -5,8 +5,8 @@ eval (= f cos_theta_o), i.e. f = 0.25 clearcoat Fcc D G, while the specular lobe
 f = F D G / (4 cos_i cos_o) and Burley's reference code folds that denominator into its
 smithG_GGX (Mitsuba's clearcoat_G, principledhelpers.h:79, multiplies plain G1s).  At normal
 incidence any microfacet lobe with weight 0.25 and F0 = 0.04 reflects at most 0.25 x 0.04 =
-0.01 (integral of D cos_h = 1, G <= 1); the clearcoat adds 0.035, and a white metal under a full
-clearcoat has albedo 1.025.
+0.01 (integral of D cos_h = 1, G <= 1); the clearcoat adds 0.035, and a white metal (roughness
+0.2) under a full clearcoat has albedo 1.033.
 
 Run: python tests/repro/principled_clearcoat_energy.py -> exit 1 while present.
 """

@@ -9,6 +9,8 @@ permutation (wi on an axis: mitsuba's own chi2 test, src/phase/tests/test_sggx.p
 wi = (0, 0, 1) only) and differ otherwise: eval_pdf (sggx.cpp:116, from sggx_pdf, no frame)
 is right, the sampled directions are not distributed by it, and a volumetric path tracer's
 phase sampling of an anisotropic sggx medium is biased (its weight assumes eval_pdf's density).
+Reported upstream as mitsuba3 issue #1728 (open): "erasing the transpose [line 84] solves
+this".
 
 Check: the mean scattered direction E[wo] of 2^20 samples against ∫ wo pdf dω (a 2M-point
 Fibonacci sphere), at an oblique wi; exit 1 while they differ by more than 6 standard errors.

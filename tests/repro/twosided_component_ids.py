@@ -1,14 +1,16 @@
 """Mitsuba 3.9.1 twosided with two different BSDFs: samples from the back keep bsdf_1's own
 component index.
 
-src/bsdfs/twosided.cpp numbers the components bsdf_0's first (FrontSide), then bsdf_1's
-(BackSide, offset by bsdf_0->component_count(): the constructor's two loops), and a restricted
-context on the back side subtracts that offset.  But sample() returns bsdf_1's sample as is
-(`m_brdf[1]->sample(ctx, si, ...)` for the back_side lanes, line 143 of the source read), so a
+src/bsdfs/twosided.cpp (tag v3.9.1) numbers the components bsdf_0's first (FrontSide), then
+bsdf_1's (BackSide, offset by bsdf_0->component_count(): the constructor's two loops, lines
+90-100), and a restricted context on the back side subtracts that offset (lines 137-138).  But
+sample() returns bsdf_1's sample as is (`m_brdf[1]->sample(ctx, si, ...)` for the back_side
+lanes, lines 141-142), so a
 sample for ω_i below the surface reports bsdf_1's LOCAL index: diffuse in front (component 0)
 and roughconductor behind (blend component 1) reports component 0 with type GlossyReflection,
 which flags(0) = DiffuseReflection | FrontSide does not contain.  (A context restricted to
-component 0 also wraps to (uint32_t) -1, every component, on the back side (line 139):
+component 0 also wraps to (uint32_t) -1, every component, on the back side (eval() at
+lines 171-172):
 Σ_k eval_k is twice eval there.)  Only ω_i below
 the surface shows it, which phonglab's identity topics draw since #36.
 

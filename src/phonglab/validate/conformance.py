@@ -13,7 +13,8 @@ emitter's shape).  Each kind's table is its ``catalogue`` part
 (:func:`phonglab.validate.registry.catalogue`).
 
 A :class:`Finding` pins a row that fails in Mitsuba to its source line (``file:line`` at tag
-v3.9.1, commit :data:`MITSUBA_COMMIT`), one sentence of cause, what the probe measures, what a
+v3.9.1, commit :data:`MITSUBA_COMMIT`) and a short excerpt of the code there (which
+scripts/check_citations.py checks against a v3.9.1 source tree), one sentence of cause, what the probe measures, what a
 correct plugin gives and a reproducer in ``tests/repro/`` that exits 1 while the behaviour is
 present; :func:`known_causes` turns findings into the ``known`` entries of the cases (their
 rows are reported as KNOWN).  A :class:`ValidatorIssue` is a row traced to the validator (it
@@ -60,6 +61,11 @@ class Finding:
     #: ``distribution``): validated away from the table, it explains nothing where the user's
     #: settings differ (() -- whatever they are)
     given: tuple[tuple[str, str], ...] = ()
+    #: a short, distinctive fragment of the code at :attr:`source` (whitespace runs count as
+    #: one space), e.g. ``opacity = sample_transmission ? 1.f : 0.f``: scripts/check_citations.py
+    #: checks that the cited line holds it, in a v3.9.1 source tree (or, for the headers, the
+    #: ones the mitsuba wheel ships)
+    excerpt: str = ""
 
     def known_text(self) -> str:
         """The ``known`` entry of a case: ``file:line: cause``."""

@@ -109,8 +109,8 @@ def _case_section(report: dict, cat: Catalogue) -> list[str]:
         out.append(f"{where}| {r['status']} | {r['topic']} | {_md(r['name'])} "
                    f"| {_num(r['measured'])} | {_num(r['expected'])} | {_num(r['tolerance'])} "
                    f"| {_md(r['reason'])} |")
-    causes = [f for f in cat.findings
-              if label in f.labels and any(r["topic"] == f.topic for r in bad)]
+    explaining = _explaining(report)
+    causes = [f for f in cat.findings if f.key in explaining]
     for f in causes:
         out.append("")
         out.append(f"* {f.topic}: [{f.key}](#{f.key}) -- {_source_link(f.source)}, reproducer "
@@ -126,6 +126,21 @@ def _case_section(report: dict, cat: Catalogue) -> list[str]:
         out += ["", f"* **Unexplained fail** ({', '.join(unexplained)}): no documented cause "
                 f"in `{_findings_name(cat)}` yet."]
     return out + [""]
+
+
+def _explaining(report: dict) -> set[str]:
+    """The findings that explain rows of one report: those its KNOWN rows name
+    (``details.known_by``) and those whose signature a failing row was held against
+    (``details.outside_signature.findings``).  A finding that names the case but whose
+    signature or parameter values keep it off every row is not one of them."""
+    out = set()
+    for r in report["results"]:
+        details = r.get("details") or {}
+        if r["status"] == "KNOWN":
+            out.update(details.get("known_by") or ())
+        elif r["status"] == "fail":
+            out.update((details.get("outside_signature") or {}).get("findings") or ())
+    return out
 
 
 def _findings_name(cat: Catalogue) -> str:
@@ -149,18 +164,37 @@ def _findings_section(data: dict, cat: Catalogue) -> list[str]:
            "lanes (or χ² cells) lies in the signature of a finding; a lane outside keeps it a "
            "fail.  The *measured* lines are what the reproducer (or the named mi.chi2 run) "
            "prints; the rows above are the JSON's.", ""]
+    explained = {}
+    for rep in data["reports"]:
+        for key in _explaining(rep):
+            explained.setdefault(key, set()).add(_label(rep))
+    idle = []
     for f in cat.findings:
-        labels = [label for label in f.labels if label in seen]
+        labels = [label for label in f.labels if label in explained.get(f.key, ())]
         if not labels:
+            if any(label in seen for label in f.labels):
+                idle.append(f)
             continue
-        kind = "bug" if f.bug else "by design"
-        out += [f"### {f.key}", "",
-                f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
-                f"* measured: {f.measured}", f"* expected: {f.expected}",
-                f"* reproducer: `{f.reproducer}`",
-                f"* signature: {_signature(f)}",
-                f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
+        out += _finding(f, f"* cases: {', '.join(f'`{x}`' for x in labels)}")
+    if idle:
+        out += ["## Findings that explain no row of this run", "",
+                "Each names cases of this table, but no row above is theirs: they hold at "
+                "other parameter values than the points run here (their `at`; the sweep of "
+                "docs/validate.md finds them) or describe what no row here counts.  They are "
+                "listed for the cases' users, not as causes of the rows above.", ""]
+        for f in idle:
+            labels = [label for label in f.labels if label in seen]
+            out += _finding(f, f"* cases it names: {', '.join(f'`{x}`' for x in labels)}")
     return out
+
+
+def _finding(f, cases: str) -> list[str]:
+    kind = "bug" if f.bug else "by design"
+    return [f"### {f.key}", "",
+            f"*{f.topic}, {kind}* -- {_source_link(f.source)}: {f.cause}.", "",
+            f"* measured: {f.measured}", f"* expected: {f.expected}",
+            f"* reproducer: `{f.reproducer}`",
+            f"* signature: {_signature(f)}", cases, ""]
 
 
 def _signature(f) -> str:

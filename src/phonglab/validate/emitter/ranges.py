@@ -15,8 +15,9 @@ two scales (``sun_scale``, ``sky_scale``, as an emitted quantity); where and whe
 stands (``latitude``, ``longitude``, ``timezone``, the date and hours, ``sun_direction``) is
 its placement, like a point light's position, and not swept.  (Probed, the placement found a
 real inconsistency: at latitude 0 sunsky's ``ds.pdf`` differs from ``pdf_direction`` and
-``weight·pdf`` from ``eval_direction`` on most sampled lanes, while χ² passes; it is open,
-not yet pinned to a source line: ``validate sunsky --set latitude=0 --no-sweep``.)  An emitter's position and transform are where it sits, not its physics: not swept.
+``weight·pdf`` from ``eval_direction`` on the sun samples at the rim of the sun's cone, while
+χ² passes: findings sunsky-sun-rim-pdf and -weight, sunsky.h:430, in the table as
+``sunsky (equator)``.)  An emitter's position and transform are where it sits, not its physics: not swept.
 """
 
 from __future__ import annotations

@@ -144,24 +144,90 @@ def build(emitter, shape_spec: dict | None = None) -> Setup:
 
 
 def sun_cone(emitter) -> tuple | None:
-    """(to_world⁻¹, sun direction, cos θ_sun) of Mitsuba's ``sunsky`` (None for any other
-    emitter, timed_sunsky included: its sun moves with the time and no parameter exposes it),
-    in float32 as include/mitsuba/render/sunsky.h (v3.9.1) tests a direction against the sun:
-    ``hit_sun`` (line 946) is dot(sph_to_dir(m_sun_angles), normalize(to_world⁻¹ d)) ≥
-    cos(m_sun_half_aperture), m_sun_angles = dir_to_sph(to_world⁻¹ sun_direction)
-    (src/emitters/sunsky.cpp:257), m_sun_half_aperture = deg_to_rad(sun_aperture / 2)
-    (sunsky.h:205; the aperture read back from the plugin's description)."""
-    if emitter.class_name() != "SunskyEmitter":
+    """(to_world⁻¹, sun direction, cos θ_sun) of Mitsuba's ``sunsky`` or ``timed_sunsky``
+    (None for any other emitter), in float32 as include/mitsuba/render/sunsky.h (v3.9.1) tests
+    a direction against the sun: ``hit_sun`` (line 946) is dot(sph_to_dir(sun_angles),
+    normalize(to_world⁻¹ d)) ≥ cos(m_sun_half_aperture), m_sun_half_aperture =
+    deg_to_rad(sun_aperture / 2) (sunsky.h:205; the aperture read back from the plugin's
+    description).  sunsky's sun_angles = dir_to_sph(to_world⁻¹ sun_direction)
+    (src/emitters/sunsky.cpp:257); timed_sunsky's move with the time (timed_sunsky.cpp:321-336)
+    and no parameter exposes them: its sun at the validator's time 0 is read back from
+    sample_direction (:func:`_sampled_sun`)."""
+    name = emitter.class_name()
+    if name not in ("SunskyEmitter", "TimedSunskyEmitter"):
         return None
     params = mi.traverse(emitter)
-    if "sun_direction" not in params.keys() or "to_world" not in params.keys():
+    if "to_world" not in params.keys():
         return None
     found = re.search(r"Sun aperture = ([0-9.eE+-]+)", str(emitter))
     aperture = float(found.group(1)) if found else 0.5358
     inv = params["to_world"].inverse()
-    angles = mi.dir_to_sph(inv @ params["sun_direction"])
     cos_half = dr.cos(dr.deg2rad(mi.Float(0.5) * mi.Float(aperture)))
+    if name == "TimedSunskyEmitter":
+        sun = _sampled_sun(emitter, cos_half)
+        return None if sun is None else (inv, inv @ sun, cos_half)
+    if "sun_direction" not in params.keys():
+        return None
+    angles = mi.dir_to_sph(inv @ params["sun_direction"])
     return inv, mi.sph_to_dir(angles.x, angles.y), cos_half
+
+
+def _sampled_sun(emitter, cos_half) -> mi.Vector3f | None:
+    """The world direction of the sun's centre as the emitter's sample_direction draws it at
+    time 0 (sunsky.h:405-411: sample.x ≥ the sky's sampling weight w picks the sun, whose
+    sample ((x − w)/(1 − w), y) warp::square_to_uniform_cone maps to the cone's axis at
+    (0.5, 0.5), and Frame3f(sph_to_dir(sun_angles)).to_world gives that axis back exactly,
+    line 902).  A sample x draws the sun when its directions at y = 0.25 and 0.75 and the
+    one at x = 1 − 2⁻²⁴ all lie within the sun's cone of each other (a sky sample moves far
+    with y); w is the least such float32 x, found by bisection on the float32 values (w is
+    within 4e-5 of 1 for timed_sunsky's low sun at turbidity 10).  None when no sample reaches
+    the sun."""
+    cos2 = math.cos(2.2 * math.acos(float(np.ravel(cos_half)[0])))   # twice the cone, and some
+
+    def draw(x: np.ndarray, y: float):
+        it = dr.zeros(mi.Interaction3f, len(x))
+        ds, _ = emitter.sample_direction(it, point2(np.stack([x, np.full_like(x, y)], 1)))
+        return ds, probe.to_numpy(ds.d, len(x)).astype(np.float64)
+
+    top = draw(np.array([1 - 2.0 ** -24], np.float32), 0.5)[1][0]
+    if not np.all(np.isfinite(top)) or np.linalg.norm(top) == 0:
+        return None
+
+    def sun(x: np.ndarray) -> np.ndarray:
+        a, b = draw(x, 0.25)[1], draw(x, 0.75)[1]
+        return ((np.sum(a * b, 1) >= cos2) & (a @ top >= cos2) & (b @ top >= cos2))
+
+    # bisection on the float32 bit patterns (ordered like the values for x >= 0)
+    lo, hi = np.float32(0).view(np.int32), np.float32(1 - 2.0 ** -24).view(np.int32)
+    if not sun(np.array([hi], np.int32).view(np.float32))[0]:
+        return None
+    if sun(np.array([lo], np.int32).view(np.float32))[0]:
+        hi = lo
+    while hi - lo > 1:                                # sun(hi), not sun(lo)
+        mid = lo + (hi - lo) // 2
+        if sun(np.array([mid], np.int32).view(np.float32))[0]:
+            hi = mid
+        else:
+            lo = mid
+    w = np.array([hi], np.int32).view(np.float32)[0]
+    one, half = np.float32(1), np.float32(0.5)
+    centre = np.float32(w + half * (one - w))
+    up, down = [centre], [centre]
+    for _ in range(8):
+        up.append(np.nextafter(up[-1], np.float32(2)))
+        down.append(np.nextafter(down[-1], np.float32(-1)))
+    tries = np.array(down[::-1] + up[1:], np.float32)
+    remapped = (tries - w) / (one - w)               # float32, as sunsky.h:411 divides
+    x = tries[int(np.argmin(np.abs(remapped.astype(np.float64) - 0.5)))]
+    ds, d = draw(np.array([x], np.float32), 0.5)
+    # the check that x draws the centre of a cone of the sun's aperture: (x, 0) and
+    # (x, 1 − 2⁻²⁴) land on its rim on either side (a sky sample near the zenith, where y
+    # moves nothing, passes the test above when no sample draws the sun: sun_scale 0)
+    rim = np.concatenate([draw(np.array([x], np.float32), y)[1] for y in (0.0, 1 - 2.0 ** -24)])
+    one_minus = 1.0 - float(np.ravel(cos_half)[0])
+    ok = (np.all(np.abs((1.0 - rim @ d[0]) / one_minus - 1.0) < 0.05)
+          and abs((1.0 - rim[0] @ rim[1]) / (4.0 * one_minus) - 1.0) < 0.1)
+    return ds.d if ok else None
 
 
 def sun_rim_ulps(sun: tuple, d: np.ndarray) -> np.ndarray:

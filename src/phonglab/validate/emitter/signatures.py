@@ -56,19 +56,26 @@ class NegativeOnly:
 
 
 class SunConeRim:
-    """Lanes whose ds.d lies just outside a sunsky's sun cone by sunsky.h's own float32
-    test (hit_sun, line 946): dot(sun, d) − cos θ_sun in [−:attr:`limit`, 0) steps of 2⁻²⁴
-    (``sun_rim_ulps``), where sample_direction's sun samples on the cone's rim land
-    (warp::square_to_uniform_cone at the disk's edge, line 903) and which it counts as sun
-    hits without the test (line 430)."""
+    """Lanes whose ds.d lies within :attr:`limit` float32 steps (2⁻²⁴) of the rim of a
+    sunsky's sun cone by sunsky.h's own test (hit_sun, line 946, on normalize(to_world⁻¹ d)
+    as pdf_direction and eval apply it: ``sun_rim_ulps``): sample_direction decides whether
+    its sample hits the sun by another test (line 430): none for a sun sample, drawn from
+    the exact cone (warp::square_to_uniform_cone, line 903) and rounded up to 3 steps outside,
+    and hit_sun on the unnormalized sample_dir for a sky sample, up to 4 steps from the
+    normalized direction's -- so the two disagree only within 4 steps of the rim, on either
+    side."""
 
     limit = 4
-    text = ("ds.d outside the sun's cone by at most 4 float32 steps of sunsky.h's own test "
-            "(−4·2^-24 ≤ dot(sun, d) − cos θ_sun < 0)")
+    text = ("ds.d within 4 float32 steps of the rim of the sun's cone by sunsky.h's own test "
+            "(|dot(sun, d) − cos θ_sun| ≤ 4·2^-24)")
 
     def covers(self, row):
         lanes = row.failing_lanes or {}
         if "sun_rim_ulps" not in lanes:
             return None
-        m = np.asarray(lanes["sun_rim_ulps"], np.float64)
-        return (m >= -self.limit) & (m < 0.0)
+        return on_rim(np.asarray(lanes["sun_rim_ulps"], np.float64))
+
+
+def on_rim(steps: np.ndarray) -> np.ndarray:
+    """:class:`SunConeRim`'s band of ``sun_rim_ulps``."""
+    return np.abs(steps) <= SunConeRim.limit

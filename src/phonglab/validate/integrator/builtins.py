@@ -26,13 +26,17 @@ FINDINGS: tuple[Finding, ...] = (
             "next event estimation' (its docstring): light reaches the camera only where a "
             "BSDF-sampled ray hits an emitter, so a point light (a delta emitter no ray can "
             "hit) contributes nothing; a render of a scene lit by point, spot or directional "
-            "lights is black", "image mean 0 on the plane under a point light",
-            "0.424923 (rho I Omega/(pi A))", "tests/repro/prb_basic_point_light.py", bug=False,
+            "lights is black",
+            "image mean 0.0000 on a diffuse plane under a point light (reproducer; path 0.2826)",
+            "path's image; the table's plane: 0.424923 (rho I Omega/(pi A))",
+            "tests/repro/prb_basic_point_light.py", bug=False,
+            excerpt="Basic Path Replay Backpropagation-style integrator *without* next event",
             rows=(_PLANE,)),
     Finding("prb_basic-no-emitter-sampling-convergence", "convergence", ("prb_basic",),
             "src/python/python/ad/integrators/prb_basic.py:28",
             "the same: the plane's image is 0 at every spp, a constant error (slope 0)",
             "slope 0", "-1/2", "tests/repro/prb_basic_point_light.py", bug=False,
+            excerpt="Basic Path Replay Backpropagation-style integrator *without* next event",
             rows=_SLOPES),
     Finding("volpathmis-roulette-mis", "bias", ("volpathmis",),
             "src/integrators/volpathmis.cpp:240",
@@ -47,13 +51,16 @@ FINDINGS: tuple[Finding, ...] = (
             "keeps its weight p_nee / (p_nee + p_bsdf) (lines 410-415), so the two weights sum "
             "to less than one; hits by camera rays and specular chains take mis_weight(p_over_f) "
             "alone (count_direct, line 384); no iteration up to rr_depth is affected, and "
-            "volpath is not.  In the closed enclosure of albedo 0.8 (Le = 2, "
-            "max_depth 64, every pixel sees 10) the image is -2.1 % with the default rr_depth "
-            "5 and -3.3 % with rr_depth 1",
-            "9.791 ± 0.004 for 10 (enclosure rho 0.8, D 64, rr_depth 5); reproducer (the same "
-            "enclosure): 9.674 ± 0.035 at rr_depth 1, 9.999 ± 0.002 with roulette off",
+            "an emitter hit is handled only while depth < max_depth (line 244), so the bias "
+            "needs rr_depth <= max_depth - 2; volpath is not affected.  In the closed "
+            "enclosure of albedo 0.8 (Le = 2, max_depth 64, every pixel sees 10) the image is "
+            "-2.1 % with the default rr_depth 5 (the table's row: 9.791 ± 0.004) and -3.3 % "
+            "with rr_depth 1",
+            "the enclosure of albedo 0.8, max_depth 64 (reproducer): 9.6742 ± 0.0352 for 10 at "
+            "rr_depth 1, 9.9991 ± 0.0024 at rr_depth 1000 (roulette off)",
             "Le (1 - rho^D)/(1 - rho) = 10", "tests/repro/volpathmis_rr_mis.py",
-            rows=("enclosure ρ=0.8 D=64",)),
+            excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
+            rows=("enclosure ρ=0.8 D=64",), at=(("rr_depth", (1, 62)),)),
     Finding("direct-delta-emitter-samples", "bias", ("direct",),
             "src/integrators/direct.cpp:180",
             "the emitter strategy's weight is dr::select(ds.delta, 1, mis_weight(...) * "
@@ -62,35 +69,47 @@ FINDINGS: tuple[Finding, ...] = (
             "spot, directional) adds its whole contribution once per emitter sample: the "
             "image is emitter_samples times the exact one (mitsuba3 issue #1861, fix "
             "proposed in PR #1863)",
-            "1.700 at emitter_samples 4 (4.000 x 0.4249)", "0.424923 (rho I Omega/(pi A))",
-            "tests/repro/direct_delta_emitter_samples.py", rows=(_PLANE,),
+            "image mean 0.2826 at emitter_samples 1, 1.1303 at 4: ratio 4.000 (reproducer: a "
+            "diffuse plane under a point light)",
+            "the same image at every emitter_samples (ratio 1); the table's plane: 0.424923 "
+            "(rho I Omega/(pi A))",
+            "tests/repro/direct_delta_emitter_samples.py",
+            excerpt="Float mis = dr::select(ds.delta, Float(1.f), mis_weight(",
+            rows=(_PLANE,),
             at=(("emitter_samples", (2, 1e9)),)),
     Finding("direct-delta-emitter-samples-convergence", "convergence", ("direct",),
             "src/integrators/direct.cpp:180",
             "the same: the plane's image converges to emitter_samples times the exact value, "
             "so its error against the exact pixels stops falling (slope 0)",
-            "slope 0", "-1/2", "tests/repro/direct_delta_emitter_samples.py", rows=_SLOPES,
+            "slope 0", "-1/2", "tests/repro/direct_delta_emitter_samples.py",
+            excerpt="Float mis = dr::select(ds.delta, Float(1.f), mis_weight(",
+            rows=_SLOPES,
             at=(("emitter_samples", (2, 1e9)),)),
     Finding("volpathmis-roulette-mis-shallow", "bias", ("volpathmis",),
             "src/integrators/volpathmis.cpp:240",
             "the same roulette MIS weight (volpathmis-roulette-mis): with rr_depth 1 roulette "
             "runs from the second iteration (depth > rr_depth, line 238), so the emitter hits "
-            "of the third vertex are under-weighted and a depth-3 scene shows it; at the "
-            "default rr_depth 5 no iteration of a depth-3 path runs roulette and the row passes",
-            "3.372 for 3.5 (enclosure rho 0.5, D 3, rr_depth 1, --quick sizes)",
+            "of the third vertex are under-weighted and a depth-3 scene shows it; from rr_depth "
+            "2 on no iteration of a depth-3 path both runs roulette and counts an emitter hit "
+            "(depth < max_depth, line 244) and the row passes",
+            "the enclosure of albedo 0.5, max_depth 3 (reproducer): 3.3676 ± 0.0012 for 3.5 at "
+            "rr_depth 1, 3.5000 ± 0.0007 at rr_depth 2",
             "Le (1 - rho^D)/(1 - rho) = 3.5", "tests/repro/volpathmis_rr_mis.py",
-            rows=("enclosure ρ=0.5 D=3",), at=(("rr_depth", (1, 2)),)),
+            excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
+            rows=("enclosure ρ=0.5 D=3",), at=(("rr_depth", 1),)),
     Finding("volpathmis-roulette-mis-agreement", "agreement", ("volpathmis",),
             "src/integrators/volpathmis.cpp:240",
-            "the same roulette MIS weight (volpathmis-roulette-mis): with rr_depth 1 roulette "
-            "runs from the second iteration, so in the agreement box (an area light, max_depth "
-            "5) every emitter hit a BSDF-sampled ray finds after the first bounce is "
-            "under-weighted; at the default rr_depth 5 no iteration of a depth-5 path runs "
-            "roulette and the row passes",
-            "worst block 0.0080754 ± 2.6e-05 against path 0.0083742 ± 2.6e-05 (-3.6 %; "
-            "Welch p = 9e-10, 64 blocks, rr_depth 1)",
+            "the same roulette MIS weight (volpathmis-roulette-mis): in the agreement box (an "
+            "area light, max_depth 5) roulette runs in the iterations with depth > rr_depth "
+            "(line 238), and the emitter hits of BSDF-sampled rays counted there (depth < 5, "
+            "line 244) are under-weighted: with rr_depth 1 every hit from the third vertex on, "
+            "with rr_depth 3 those of the fifth; from rr_depth 4 on no such iteration is left "
+            "and the row passes",
+            "the enclosure of albedo 0.5 at the box's max_depth 5 (reproducer): 3.8213 ± "
+            "0.0011 for 3.875 at rr_depth 3, 3.8745 ± 0.0008 at rr_depth 4",
             "the block means of path (max_depth 5)", "tests/repro/volpathmis_rr_mis.py",
-            rows=("block means against path (max_depth 5)",), at=(("rr_depth", (1, 4)),)),
+            excerpt="update_weights(p_over_f, dr::detach(q), 1.0f, channel, perform_rr);",
+            rows=("block means against path (max_depth 5)",), at=(("rr_depth", (1, 3)),)),
     Finding("prbvolpath-depth-limit", "bias", ("prbvolpath",),
             "src/python/python/ad/integrators/prbvolpath.py:192",
             "`active &= depth < self.max_depth` (line 192) masks `active` and the medium "
@@ -99,8 +118,10 @@ FINDINGS: tuple[Finding, ...] = (
             "(MIS-weighted) emission its ray hits and samples once more, so max_depth D "
             "renders part of vertex D + 1: +32 % at D = 1, +11 % at D = 2, +4.8 % at D = 3 in "
             "the albedo-0.5 enclosure; nothing once roulette has ended the paths (D = 64)",
-            "2.646, 3.336, 3.669 at D = 1, 2, 3", "2, 3, 3.5 (path: 2.0000, 2.9995)",
+            "the enclosure of albedo 0.5 (reproducer): 2.6441 at max_depth 1, 3.3311 at 2",
+            "2, 3 (path: 2.0000, 2.9995)",
             "tests/repro/prbvolpath_depth_limit.py",
+            excerpt="active &= depth < self.max_depth",
             rows=("enclosure ρ=0.5 D=1", "enclosure ρ=0.5 D=2", "enclosure ρ=0.5 D=3")),
     Finding("whitted-model-scope", "bias", ("whitted/radiance",), "plugins/whitted.py:48",
             "phonglab's Whitted model lights surfaces by point, spot and directional emitters "
@@ -109,14 +130,19 @@ FINDINGS: tuple[Finding, ...] = (
             "term stands in for them): in the emitting enclosure it returns Le at every "
             "depth.  Where its model is exact (point lights, max_depth 2, radiance units) it "
             "is Mitsuba's path term for term and passes (the plane's bias and convergence)",
-            "enclosure rho 0.5: Le = 2 at D = 2 and 3", "Le (1 - rho^D)/(1 - rho): 3, 3.5",
+            "the enclosure of albedo 0.5 at max_depth 2 (reproducer): whitted 2.0000, path "
+            "3.0034", "Le (1 - rho^D)/(1 - rho): 3 at D = 2, 3.5 at D = 3",
             "tests/repro/whitted_area_light.py", bug=False,
+            excerpt="Area and environment emitters do not",
             rows=("enclosure ρ=0.5 D=2", "enclosure ρ=0.5 D=3")),
     Finding("whitted-model-scope-agreement", "agreement", ("whitted/radiance",),
             "plugins/whitted.py:48",
             "the same scope: the agreement box is lit by an area light, which the Whitted "
-            "model never lets reach a diffuse wall", "the box's walls are dark",
+            "model never lets reach a diffuse wall (the box's walls are dark)",
+            "the enclosure of albedo 0.5 at max_depth 2 (reproducer): whitted 2.0000, path "
+            "3.0034",
             "path's image at depth 5", "tests/repro/whitted_area_light.py", bug=False,
+            excerpt="Area and environment emitters do not",
             rows=("block means against path (max_depth 5)",)),
 )
 

@@ -25,6 +25,8 @@ probed; undeclared, it is checked at its given point and the report says so.
 
 from __future__ import annotations
 
+import re
+
 import mitsuba as mi
 
 from ..ranges import Range, domain as _domain, parameters as _parameters, traversed
@@ -46,8 +48,18 @@ def parameters(target, spec, pinned=()) -> list:
 
 
 def values(target) -> dict[str, float]:
-    """The integrator's traversed parameter values (a documented cause's ``at``)."""
-    return traversed(target.integrator)
+    """The integrator's parameter values a documented cause's ``at`` is held against: its
+    traversed ones, and the swept controls of a built-in (:data:`BUILTIN`: ``rr_depth``,
+    ``emitter_samples``, ``bsdf_samples``) as its description prints them -- Mitsuba does not
+    traverse them, and at a point that does not set one (the case's own) it has its default
+    (rr_depth 5, one sample of each strategy)."""
+    out = traversed(target.integrator)
+    spec = target.spec if isinstance(target.spec, dict) else {}
+    for name in BUILTIN.get(spec.get("type"), {}):
+        m = re.search(rf"\b{name} = (\d+)\b", str(target.integrator))
+        if name not in out and m:
+            out[name] = float(m.group(1))
+    return out
 
 
 def domain(target, spec) -> tuple[dict, str]:

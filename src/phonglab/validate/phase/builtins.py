@@ -1,15 +1,15 @@
 r"""Mitsuba 3.9.1's built-in phase functions as validation cases, and the findings that explain
 their failing rows (matched by signature).
 
-Finding ``hg-small-g-sampling`` (src/phase/hg.cpp:77 at 478e193a): sample() inverts the HG CDF
+Finding ``hg-small-g-sampling`` (src/phase/hg.cpp:78 at 478e193a): sample() inverts the HG CDF
 as cos θ = (1 + g² − sqr_term²)/(2g), a difference of two numbers near 1 divided by 2g; the
 isotropic fallback (line 81) takes over only for |g| < 2⁻²⁴, so for small non-zero |g| the
 sampled cos θ is off by ~u/g (1.2e-3 at g = 1e-4, 1e-2 with a mean bias of −2.9e-3 at
 g = 1e-5; reproducer tests/repro/hg_small_g_sampling.py) and χ² rejects it at g = 1e-5.
 
-Finding ``sggx-sample-frame-transposed`` (include/mitsuba/render/microflake.h:83): sggx_sample
-projects S into the frame of wi as Rᵀ S R instead of R S Rᵀ (Dr.Jit's Matrix3f takes rows and
-the code transposes them); right when wi lies on an axis (Mitsuba's own χ² test samples at
+Finding ``sggx-sample-frame-transposed`` (include/mitsuba/render/microflake.h:84; mitsuba3
+issue #1728, open: "erasing the transpose solves this"): sggx_sample projects S into the frame
+of wi as Rᵀ S R instead of R S Rᵀ (Dr.Jit's Matrix3f takes rows and the code transposes them); right when wi lies on an axis (Mitsuba's own χ² test samples at
 wi = (0, 0, 1) only), wrong otherwise: the mean sampled direction at wi = (0.48, −0.36, 0.8)
 is −(the mean under eval_pdf) (reproducer tests/repro/sggx_sample_frame_transposed.py).
 
@@ -62,33 +62,42 @@ _SGGX = ("sggx (0.15, 1, 0.8)",)
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the phase-function table.
 FINDINGS: tuple[Finding, ...] = (
-    Finding("hg-small-g-sampling", "chi2", ("hg (g = 1e-05)",), "src/phase/hg.cpp:77",
+    Finding("hg-small-g-sampling", "chi2", ("hg (g = 1e-05)",), "src/phase/hg.cpp:78",
             "sample() computes cos θ = (1 + g² − sqr_term²)/(2g) (lines 77-78): float32 "
             "cancellation divided by 2g, the isotropic fallback (line 81) only for |g| < 2^-24; "
-            "for small non-zero |g| the sampled directions do not follow eval_pdf",
-            "cos θ off by up to 1.0e-2 (mean −2.9e-3) against the float64 inversion of the "
-            "same u at g = 1e-5 (1.2e-3 at g = 1e-4); χ² p = 2e-80 at --quick sizes",
+            "for small non-zero |g| the sampled directions do not follow eval_pdf (the table's χ² "
+            "p = 2e-80 at g = 1e-5, --quick sizes; cos θ is off by ~1.2e-3 at g = 1e-4)",
+            "at g = 1e-5: cos θ off by up to 0.0103 (mean error −0.00286) against the float64 "
+            "inversion of the same u",
             "sampled cos θ within float32 round-off of the inverse CDF",
-            "tests/repro/hg_small_g_sampling.py", rows=(CHI2_ROW,), at=(("g", (-1e-3, 1e-3)),)),
+            "tests/repro/hg_small_g_sampling.py",
+            excerpt="cos_theta = (1.f + dr::square(m_g) - dr::square(sqr_term)) / (2.f * m_g);",
+            rows=(CHI2_ROW,), at=(("g", (-1e-3, 1e-3)),)),
     Finding("sggx-sample-frame-transposed", "chi2", _SGGX,
-            "include/mitsuba/render/microflake.h:83",
-            "sggx_sample builds Matrix3f(s, t, n) (rows), transposes it and forms "
-            "s2 = m S mᵀ = Rᵀ S R, where the visible-normal sampling needs S in wi's frame, "
-            "R S Rᵀ; the two agree only when wi lies on an axis (Mitsuba's test samples at "
-            "wi = (0, 0, 1))",
-            "mean sampled direction (0.314, 0.122, −0.131) against (−0.312, −0.123, 0.135) "
-            "under eval_pdf at wi = (0.48, −0.36, 0.8), 400-1300 standard errors; χ² p = 0 at "
-            "both oblique incidences, p = 0.69 at wi = (0, 0, 1)",
+            "include/mitsuba/render/microflake.h:84",
+            "sggx_sample builds Matrix3f(s, t, n) (rows, line 83), transposes it (line 84) and "
+            "forms s2 = m S mᵀ = Rᵀ S R (line 88), where the visible-normal sampling needs S in "
+            "wi's frame, R S Rᵀ; the two agree only when wi lies on an axis (Mitsuba's test "
+            "samples at wi = (0, 0, 1)); reported upstream as mitsuba3 issue #1728 (open: "
+            "'erasing the transpose solves this'); the table's χ² gives p = 0 at both oblique "
+            "incidences, p = 0.69 at wi = (0, 0, 1)",
+            "at wi = (0.48, −0.36, 0.8): mean sampled direction (0.3139, 0.1217, −0.1309) "
+            "against (−0.3119, −0.1232, 0.135) under eval_pdf (∫ pdf = 1.00000), 407-1323 "
+            "standard errors",
             "sampled directions distributed by eval_pdf at every wi",
-            "tests/repro/sggx_sample_frame_transposed.py", rows=(CHI2_ROW,),
+            "tests/repro/sggx_sample_frame_transposed.py", excerpt="m = dr::transpose(m);",
+            rows=(CHI2_ROW,),
             region=OffAxisIncidence()),
     Finding("sggx-eval-forward-nan", "finite", _SGGX, "src/phase/sggx.cpp:116",
             "eval_pdf evaluates sggx_pdf(normalize(wo + wi)): at wo = −wi the half vector is "
             "zero and the value and pdf are NaN; sample() returns wo = −wi at its corner "
-            "sample values along axis-aligned wi",
-            "NaN at wo = −wi = (−1, 0, 0); 2 of 8192 sampled lanes (wi on the x and y axes)",
+            "sample values along axis-aligned wi (2 of the table's 8192 sampled lanes, wi on "
+            "the x and y axes)",
+            "eval_pdf at wo = −wi = (−1, 0, 0): pdf = NaN",
             "a finite value (the limit through edge-on flakes)",
-            "tests/repro/sggx_eval_forward_nan.py", rows=(SAMPLED_EVAL_ROW,),
+            "tests/repro/sggx_eval_forward_nan.py",
+            excerpt="sggx_pdf(dr::normalize(wo + mi.wi), s)",
+            rows=(SAMPLED_EVAL_ROW,),
             region=ForwardScattering()),
 )
 
