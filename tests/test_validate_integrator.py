@@ -52,7 +52,11 @@ def test_plane_values_are_the_solid_angle():
 
 
 def test_depth_detection(variant_llvm_rgb):
-    from phonglab.validate.integrator.kind import prepare
+    from phonglab.validate import core, registry
+    kind = registry.by_name("integrator")
+
+    def prepare(spec):
+        return core.prepare(kind, spec)
 
     t = {n: prepare(n).plugin for n in ("path", "direct", "direct_projective", "ptracer")}
     assert t["path"].depth == "settable"

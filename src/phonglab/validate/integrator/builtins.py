@@ -123,7 +123,7 @@ FINDINGS: tuple[Finding, ...] = (
             "tests/repro/prbvolpath_depth_limit.py",
             excerpt="active &= depth < self.max_depth",
             rows=("enclosure ρ=0.5 D=1", "enclosure ρ=0.5 D=2", "enclosure ρ=0.5 D=3")),
-    Finding("whitted-model-scope", "bias", ("whitted/radiance",), "plugins/whitted.py:48",
+    Finding("whitted-model-scope", "bias", ("whitted/radiance",), "plugins/whitted.py:49",
             "phonglab's Whitted model lights surfaces by point, spot and directional emitters "
             "only; area and environment emitters are seen directly or through delta "
             "reflections and refractions, never as light on a diffuse surface (the ambient "
@@ -136,7 +136,7 @@ FINDINGS: tuple[Finding, ...] = (
             excerpt="Area and environment emitters do not",
             rows=("enclosure ρ=0.5 D=2", "enclosure ρ=0.5 D=3")),
     Finding("whitted-model-scope-agreement", "agreement", ("whitted/radiance",),
-            "plugins/whitted.py:48",
+            "plugins/whitted.py:49",
             "the same scope: the agreement box is lit by an area light, which the Whitted "
             "model never lets reach a diffuse wall (the box's walls are dark)",
             "the enclosure of albedo 0.5 at max_depth 2 (reproducer): whitted 2.0000, path "
