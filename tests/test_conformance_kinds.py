@@ -158,7 +158,7 @@ def test_markdown_renders_emitter_and_integrator_json():
                                      "KNOWN", "model")])]}
     md = markdown.render_markdown(data, integ)
     assert "built-in integrators" in md and "--quick" in md
-    assert "(../plugins/whitted.py#L48)" in md        # phonglab's own source, linked relatively
+    assert "(../plugins/whitted.py#L49)" in md        # phonglab's own source, linked relatively
 
 
 def test_kind_options_reach_the_runner(variant_llvm_rgb):
