@@ -13,9 +13,9 @@ ray's time and wavelengths, then t, p = ray(t), mint.  The majorant is queried a
 function queries it (line 62): with the interaction *before* t and p are set, so p = (0, 0, 0)
 and t = 0 whatever the ray: :func:`majorant`.
 
-The probe (:class:`Probe`, :func:`probe`): rays with origins uniform in the box
-[−box, box]³ (:attr:`~.config.Options.box`) and uniform directions, each clipped to where it
-leaves the box; ``intersect_aabb`` of each ray, with the rule ``sample_interaction`` applies
+The probe (:class:`Probe`, :func:`probe`): rays with uniform directions and origins uniform in
+the box [−box, box]³ (:attr:`~.config.Options.box`; a quarter of them) or in the part of the box
+around where those met the medium's bounds (the rest), each clipped to where it leaves the box; ``intersect_aabb`` of each ray, with the rule ``sample_interaction`` applies
 (line 54: a ray whose two bounds are both infinite misses); one point uniform on the part of
 the ray inside the medium's bounds, one uniform on the part outside them (both inside the
 box), and the interaction ``sample_interaction`` itself samples on the ray.
@@ -189,20 +189,42 @@ _CACHE: dict = {}
 
 def probe(medium, opts) -> Probe:
     """The probe of ``medium`` at ``opts``' seed and sizes (built once per run and shared by
-    the topics; the last one is kept)."""
-    key = (id(medium), opts.seed, opts.n_rays, opts.box, mi.variant())
-    if _CACHE.get("key") == key:
+    the topics; the last one is kept, with its medium, so an id is never reused)."""
+    key = (opts.seed, opts.n_rays, opts.box, mi.variant())
+    if _CACHE.get("medium") is medium and _CACHE.get("key") == key:
         return _CACHE["probe"]
     p = _build(medium, opts)
-    _CACHE.update(key=key, probe=p)
+    _CACHE.update(medium=medium, key=key, probe=p)
     return p
+
+
+def _focused(medium, r, n: int, box: float):
+    """n rays: a quarter with origins uniform in the box, the rest with origins uniform in
+    the box around what the first quarter found inside the bounds (grown by half its size on
+    each side, within the box), all with uniform directions."""
+    n1 = max(1, n // 4)
+    o = (2.0 * r.random((n1, 3)) - 1.0) * box
+    d = sphere(r, n1)
+    exit_ = box_exit(o, d, box)
+    hit, mint, maxt = intersect(medium, o, d)
+    a = np.clip(np.nan_to_num(mint, nan=0.0), 0.0, exit_)
+    b = np.clip(np.nan_to_num(maxt, nan=0.0), 0.0, exit_)
+    inside = hit & (b > a)
+    lo, hi = np.full(3, -box), np.full(3, box)
+    if inside.any():
+        ends = np.concatenate([o[inside] + a[inside, None] * d[inside],
+                               o[inside] + b[inside, None] * d[inside]])
+        lo, hi = ends.min(axis=0), ends.max(axis=0)
+        grow = 0.5 * (hi - lo)
+        lo, hi = np.maximum(lo - grow, -box), np.minimum(hi + grow, box)
+    o2 = lo + (hi - lo) * r.random((n - n1, 3))
+    return np.concatenate([o, o2]), np.concatenate([d, sphere(r, n - n1)])
 
 
 def _build(medium, opts) -> Probe:
     r = rng(opts.seed, "probe")
     n, box = opts.n_rays, opts.box
-    o = (2.0 * r.random((n, 3)) - 1.0) * box
-    d = sphere(r, n)
+    o, d = _focused(medium, r, n, box)
     exit_ = box_exit(o, d, box)
     hit, mint, maxt = intersect(medium, o, d)
     a = np.where(hit, np.clip(np.nan_to_num(mint, nan=0.0), 0.0, exit_), 0.0)

@@ -60,7 +60,8 @@ def _differ(a, b) -> np.ndarray:
     """Per lane: whether two (N, ...) arrays differ beyond 2^-10 relative (inf = inf)."""
     a = a.reshape(len(a), -1)
     b = b.reshape(len(b), -1)
-    same = (a == b) | (np.abs(a - b) <= REL_TOL * np.maximum(np.abs(a), np.abs(b)))
+    with np.errstate(invalid="ignore"):
+        same = (a == b) | (np.abs(a - b) <= REL_TOL * np.maximum(np.abs(a), np.abs(b)))
     return ~np.all(same, axis=1)
 
 
