@@ -1,11 +1,12 @@
 r"""Mitsuba 3.9.1's built-in media as validation cases, and the findings that explain their
 failing rows (matched by signature).
 
-Finding ``heterogeneous-grid-clamp-outside-bounds`` (src/media/heterogeneous.cpp:200, by
-design): ``intersect_aabb`` is the grid's box, where ``sample_interaction`` stops, but the
-gridvolume's default ``clamp`` wrap (src/volumes/grid.cpp:175) gives the edge voxels' σ_t
-everywhere outside it; a grid whose outer voxels are not 0 reports a medium the integrators
-cut at the box (reproducer tests/repro/heterogeneous_grid_clamp_outside_bounds.py).
+Finding ``heterogeneous-volume-outside-bounds`` (src/media/heterogeneous.cpp:200, by
+design): ``intersect_aabb`` is the σ_t volume's box, where ``sample_interaction`` stops, but a
+constvolume (heterogeneous's default σ_t) has its value everywhere and a gridvolume, under its
+default ``clamp`` wrap (src/volumes/grid.cpp:175), its edge voxels' outside the box: the
+medium reports σ_t > 0 where the integrators never sample it, i.e. it is cut at the box
+(reproducer tests/repro/heterogeneous_volume_outside_bounds.py).
 
 Finding ``heterogeneous-microflake-majorant`` (src/media/heterogeneous.cpp:163): the majorant
 is scale·max σ_t, without the microflake projected area σ_t is multiplied by (190-191); with an
@@ -58,16 +59,19 @@ def through_medium(key: str, labels: tuple[str, ...]) -> Finding:
 
 #: Every Mitsuba 3.9.1 behaviour behind a failing row of the medium table.
 FINDINGS: tuple[Finding, ...] = (
-    Finding("heterogeneous-grid-clamp-outside-bounds", "bounds",
-            ("heterogeneous (constant grid)",), "src/media/heterogeneous.cpp:200",
-            "intersect_aabb returns the grid volume's bounding box, where sample_interaction "
-            "stops (src/render/medium.cpp:53-60), but the gridvolume's default wrap mode clamp "
-            "(src/volumes/grid.cpp:175) returns the edge voxels' σ_t at every point outside "
-            "it: the medium rendered is the grid cut at its box",
-            "σ_t = 2 (the edge voxels') at points outside the unit cube, on rays "
-            "intersect_aabb reports as missing it",
-            "σ_t = 0 outside the bounds (a grid with zero outer voxels, or wrap_mode giving 0)",
-            "tests/repro/heterogeneous_grid_clamp_outside_bounds.py", bug=False,
+    Finding("heterogeneous-volume-outside-bounds", "bounds",
+            ("heterogeneous", "heterogeneous (constant grid)"),
+            "src/media/heterogeneous.cpp:200",
+            "intersect_aabb returns the σ_t volume's bounding box (the unit cube mapped by its "
+            "to_world, include/mitsuba/render/volume.h:99-107), where sample_interaction stops "
+            "(src/render/medium.cpp:53-60), but the volume has values outside it: a "
+            "constvolume everywhere, a gridvolume its edge voxels' under the default wrap mode "
+            "clamp (src/volumes/grid.cpp:175); the medium rendered is the volume cut at its box",
+            "σ_t = 1 (constvolume) or 2 (the grid's edge voxels) at points outside the unit "
+            "cube, on rays intersect_aabb reports as missing it",
+            "σ_t = 0 outside the bounds (a grid with zero outer voxels), or bounds that "
+            "enclose every point with σ_t > 0",
+            "tests/repro/heterogeneous_volume_outside_bounds.py", bug=False,
             rows=("σ_t = 0 outside intersect_aabb's bounds",)),
     Finding("heterogeneous-microflake-majorant", "majorant", (HET_SGGX_LARGE,),
             "src/media/heterogeneous.cpp:163",
@@ -173,6 +177,8 @@ def catalogue_cases() -> list[KindCase]:
         KindCase(HOM_SGGX_VARYING,
                  {"type": "homogeneous", "sigma_t": 2.0, "phase": sggx(varying_s())}, None, {},
                  "SGGX S from flakes facing z at x = 0 to flakes facing x at x = 1"),
+        KindCase("heterogeneous", {"type": "heterogeneous"}, None, {},
+                 "its defaults: constvolume σ_t = 1 over the unit cube, albedo 0.75"),
         KindCase("heterogeneous (constant grid)",
                  {"type": "heterogeneous", "sigma_t": grid(np.full((4, 4, 4), 2.0))}, None,
                  {}, "a 4³ grid of 2 over [0, 1]³: majorant = σ_t, σ_n = 0"),
