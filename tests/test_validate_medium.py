@@ -188,3 +188,25 @@ def test_assert_medium_valid_and_a_loaded_medium(variant_llvm_rgb):
     report = assert_medium_valid(Agreeing(mi.Properties()), quick=True, topics=["overrides"])
     (row,) = report.rows
     assert row.status == "pass" and "changes nothing" in row.reason
+
+
+def test_catalogue_covers_3_9_1_and_its_findings_are_pinned(variant_llvm_rgb):
+    """src/media/*.cpp at v3.9.1: homogeneous and heterogeneous; every finding names cases of
+    the table, a source line, an existing reproducer, and reaches its cases as a signature."""
+    import re
+
+    from phonglab.validate import registry
+
+    cat = registry.catalogue("medium")
+    cases = cat.cases()
+    labels = [c.label for c in cases]
+    assert len(labels) == len(set(labels))
+    assert {"homogeneous", "heterogeneous"} <= {c.plugin for c in cases} | set(cat.left_out)
+    source = re.compile(r"^(src|include)/[\w/]+\.(cpp|h|py):\d+$")
+    known = {c.label: c.known for c in cases}
+    for f in cat.findings:
+        assert set(f.labels) <= set(labels) and f.topic in cat.topics and f.rows, f.key
+        assert source.match(f.source) and (HERE.parent / f.reproducer).is_file(), f.key
+        for label in f.labels:
+            assert f.key in {k.key for k in known[label][f.topic]}
+    assert cat.markdown == "docs/conformance-media.md" and (HERE.parent / cat.markdown).is_file()

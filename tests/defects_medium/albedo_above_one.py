@@ -28,7 +28,8 @@ class AlbedoAboveOne(mi.Medium):
 
     def get_scattering_coefficients(self, mei, active=True):
         sigma_t = density(mei.p) * mi.UnpolarizedSpectrum(*TINT)
-        return sigma_t * mi.UnpolarizedSpectrum(0.9, 1.2, 0.8), mi.UnpolarizedSpectrum(PEAK) - sigma_t, sigma_t
+        sigma_s = sigma_t * mi.UnpolarizedSpectrum(0.9, 1.2, 0.8)
+        return sigma_s, mi.UnpolarizedSpectrum(PEAK) - sigma_t, sigma_t
 
     def to_string(self):
         return "AlbedoAboveOne[]"

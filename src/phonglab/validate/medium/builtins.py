@@ -84,6 +84,17 @@ FINDINGS: tuple[Finding, ...] = (
             "σ_n ≥ 0: a majorant scaled by the largest projected area (sqrt of S's largest "
             "eigenvalue)", "tests/repro/heterogeneous_microflake_majorant.py",
             rows=("σ_n ≥ 0",)),
+    Finding("heterogeneous-microflake-majorant/transmittance", "transmittance",
+            (HET_SGGX_LARGE,), "src/media/heterogeneous.cpp:163",
+            "the majorant leaves out the microflake projected area (see "
+            "heterogeneous-microflake-majorant): where σ_t exceeds it, σ_n < 0, the null "
+            "probability mean(σ_n/σ̄) (src/integrators/volpath.cpp:238) is below 0 and every "
+            "collision is real, drawn at the majorant's rate, fewer than σ_t's",
+            "delta tracking transmittance 0.296 ± 0.020 against exp(−∫σ_t) = 0.223 at default "
+            "sizes (3 of 24 rays off)", "the tracking estimates within their standard error of "
+            "exp(−∫σ_t)", "tests/repro/heterogeneous_microflake_majorant.py",
+            rows=("delta tracking (volpath's free flight) = exp(−∫σ_t)",
+                  "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)")),
     Finding("homogeneous-microflake-majorant-at-origin", "majorant", (HOM_SGGX_VARYING,),
             "src/media/homogeneous.cpp:164", _ORIGIN,
             "σ_t + σ_n off the majorant by up to 68 % of it (σ_t 0.63 against the origin's "
@@ -135,11 +146,11 @@ def sggx(s) -> dict:
 
 
 def varying_s() -> np.ndarray:
-    """A 4³ SGGX grid: flakes facing z at x = 0 turning to flakes facing x at x = 1."""
-    s = np.zeros((4, 4, 4, 6), np.float32)
-    for i in range(4):
-        f = i / 3
-        s[:, :, i, 0], s[:, :, i, 1], s[:, :, i, 2] = 0.1 + 0.9 * f, 0.1, 1.0 - 0.9 * f
+    """A 1 × 1 × 4 SGGX grid over [0, 1]³: flakes facing z at x = 0 turning to flakes facing
+    x at x = 1."""
+    f = np.linspace(0.0, 1.0, 4)
+    s = np.zeros((1, 1, 4, 6), np.float32)
+    s[0, 0, :, 0], s[0, 0, :, 1], s[0, 0, :, 2] = 0.1 + 0.9 * f, 0.1, 1.0 - 0.9 * f
     return s
 
 

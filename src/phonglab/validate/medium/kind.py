@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from ..conformance import known_of
 from ..returns import _checked, _defines
@@ -47,7 +48,6 @@ def runners(medium, opts, topics, m: int) -> dict:
 
 def values(medium) -> dict:
     """The medium's scalar parameters (``scale``, ``sigma_t.value.value``, ...)."""
-    import numpy as np
     out = {}
     params = mi.traverse(medium)
     for k in params.keys():

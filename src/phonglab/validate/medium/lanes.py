@@ -15,10 +15,11 @@ and t = 0 whatever the ray: :func:`majorant`.
 
 The probe (:class:`Probe`, :func:`probe`): rays with uniform directions and origins uniform in
 the box [−box, box]³ (:attr:`~.config.Options.box`; a quarter of them) or in the part of the box
-around where those met the medium's bounds (the rest), each clipped to where it leaves the box; ``intersect_aabb`` of each ray, with the rule ``sample_interaction`` applies
-(line 54: a ray whose two bounds are both infinite misses); one point uniform on the part of
-the ray inside the medium's bounds, one uniform on the part outside them (both inside the
-box), and the interaction ``sample_interaction`` itself samples on the ray.
+around where those met the medium's bounds (the rest), each clipped to where it leaves the
+box; ``intersect_aabb`` of each ray, with the rule ``sample_interaction`` applies (line 54: a
+ray whose two bounds are both infinite misses); one point uniform on the part of the ray
+inside the medium's bounds, one uniform on the part outside them (both inside the box), and
+the interaction ``sample_interaction`` itself samples on the ray.
 """
 
 from __future__ import annotations

@@ -55,6 +55,12 @@ CANDIDATES = 16
 RARE = 30
 
 
+def _short(x):
+    """A number or an array as 6 significant digits (the ray records of the JSON)."""
+    a = np.asarray(x, np.float64)
+    return float(f"{float(a):.6g}") if a.ndim == 0 else [float(f"{v:.6g}") for v in a.ravel()]
+
+
 def statistical_tests(opts) -> int:
     return opts.tracking_rays * 2 * lanes.channels()
 
@@ -239,9 +245,9 @@ def transmittance(medium, opts, m_tests: int) -> list[Row]:
         excess = dev / tol
         bad_ray = np.any(excess > 1.0, axis=1)
         ri, ci = np.unravel_index(int(np.argmax(excess)), excess.shape)
-        records = [{"o": o[i].tolist(), "d": d[i].tolist(), "a": float(a[i]), "L": float(L[i]),
-                    "tau": tau_2k[i].tolist(), "tau_error": np.abs(tau_2k[i] - tau_k[i]).tolist(),
-                    "T": T[i].tolist(), "estimate": mean[i].tolist(), "stderr": se[i].tolist(),
+        records = [{"o": _short(o[i]), "d": _short(d[i]), "a": _short(a[i]), "L": _short(L[i]),
+                    "tau": _short(tau_2k[i]), "tau_error": _short(np.abs(tau_2k[i] - tau_k[i])),
+                    "T": _short(T[i]), "estimate": _short(mean[i]), "stderr": _short(se[i]),
                     "status": "fail" if bad_ray[i] else "pass"} for i in range(R)]
         ok = not bad_ray.any() and stuck == 0
         reason = (f"mean of {K} walks per ray against exp(−τ) at {R} rays × {c} channels "
