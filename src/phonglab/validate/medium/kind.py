@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from ..conformance import known_of
+from ..phase.kind import values  # noqa: F401 (the kind's part "values": every scalar traversed)
 from ..returns import _checked, _defines
 from . import KIND, lanes
 from .coefficients import albedo, bounds, finite, flags, majorant
@@ -44,20 +44,6 @@ def runners(medium, opts, topics, m: int) -> dict:
         "phase": lambda: phase(medium, opts, m),
         "cost": lambda: cost(medium, opts),
     }
-
-
-def values(medium) -> dict:
-    """The medium's scalar parameters (``scale``, ``sigma_t.value.value``, ...)."""
-    out = {}
-    params = mi.traverse(medium)
-    for k in params.keys():
-        try:
-            a = np.array(params[k], dtype=np.float64).ravel()
-        except Exception:
-            continue
-        if a.size == 1:
-            out[k] = float(a[0])
-    return out
 
 
 def returns(plugin, name: str = "medium") -> None:
