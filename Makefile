@@ -103,7 +103,8 @@ validate-false-failures: setup
 
 # docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
 # (phonglab.validate.bsdf.builtins); docs/conformance-emitters.* and docs/conformance-integrators.*:
-# the built-in emitters and integrators, docs/conformance-phase.*: the phase functions
+# the built-in emitters and integrators, docs/conformance-phase.*: the phase functions,
+# docs/conformance-media.*: the participating media
 # (phonglab.validate.registry.catalogue(kind));
 # CONFORMANCE_ARGS=--quick for the fast sizes.  Each run resumes from its .partial.jsonl.
 # The emitter, integrator and phase tables run every case through its parameter sweep
@@ -116,3 +117,4 @@ conformance: setup
 	$(BIN)/python scripts/conformance.py --kind emitter --sweep $(CONFORMANCE_ARGS) --json docs/conformance-emitters.json --markdown docs/conformance-emitters.md
 	$(BIN)/python scripts/conformance.py --kind integrator --sweep $(CONFORMANCE_ARGS) --json docs/conformance-integrators.json --markdown docs/conformance-integrators.md
 	$(BIN)/python scripts/conformance.py --kind phase --sweep $(CONFORMANCE_ARGS) --json docs/conformance-phase.json --markdown docs/conformance-phase.md
+	$(BIN)/python scripts/conformance.py --kind medium --sweep $(CONFORMANCE_ARGS) --json docs/conformance-media.json --markdown docs/conformance-media.md

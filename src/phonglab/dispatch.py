@@ -51,6 +51,9 @@ METHODS = {
                 "sample_position", "pdf_position", "eval", "sample_wavelengths"),
     "SamplingIntegrator": ("sample",),
     "Texture": ("eval", "eval_1", "eval_3"),
+    "Medium": ("intersect_aabb", "get_majorant", "get_scattering_coefficients",
+               "sample_interaction", "transmittance_eval_pdf", "phase_function",
+               "is_homogeneous", "has_spectral_extinction", "use_emitter_sampling"),
 }
 
 

@@ -53,7 +53,7 @@ def _kinds_text() -> str:
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "validate", help="check any Mitsuba BSDF, emitter, integrator or phase function: "
+        "validate", help=f"check any Mitsuba plugin of these kinds, {registry.accepted()}: "
                          "finiteness, weights, pdf, chi2, energy, reciprocity, gradients, cost",
         description="Validate a Mitsuba 3 plugin (a registered plugin type, a Python plugin "
                     "registered by --plugin, or an XML file holding one) on every topic of "

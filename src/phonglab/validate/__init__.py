@@ -16,7 +16,9 @@ kind's folder brings its topics:
 * integrators (:mod:`.integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
   ``gradient``, ``cost``;
 * phase functions (:mod:`.phase`): ``finite``, ``weight``, ``pdf``, ``chi2``,
-  ``normalization``, ``reciprocity``, ``gradient``, ``cost``.
+  ``normalization``, ``reciprocity``, ``gradient``, ``cost``;
+* participating media (:mod:`.medium`): ``finite``, ``majorant``, ``albedo``,
+  ``transmittance``, ``bounds``, ``flags``, ``overrides``, ``phase``, ``cost``.
 
 Rows and reports: :mod:`phonglab.verdict`; user input: :mod:`.inputs` and
 :mod:`phonglab.settings`; Mitsuba's built-ins and their findings: each kind's ``builtins`` module; many

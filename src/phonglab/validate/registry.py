@@ -15,12 +15,12 @@ imports no Mitsuba; :func:`detect` needs the variant set.
 
 from __future__ import annotations
 
-from . import bsdf, emitter, integrator, phase
+from . import bsdf, emitter, integrator, medium, phase
 from .inputs import xml_root_tag
 from .kind import Kind, ValidateError
 
 #: Every plugin kind, in the order the command line's help lists them.
-KINDS: tuple[Kind, ...] = (bsdf.KIND, emitter.KIND, integrator.KIND, phase.KIND)
+KINDS: tuple[Kind, ...] = (bsdf.KIND, emitter.KIND, integrator.KIND, phase.KIND, medium.KIND)
 
 
 def by_name(name: str) -> Kind:

@@ -1,0 +1,37 @@
+"""The control with its density written PEAK·sqrt(1 − r²/R²)⁴: the same inside the ball, NaN
+outside it (the square root of a negative number), where the box still reaches (topic finite).
+"""
+import drjit as dr
+import mitsuba as mi
+
+PEAK = 4.0
+TINT = (1.0, 0.7, 0.4)
+
+
+def density(p):
+    r2 = dr.squared_norm(p - mi.Point3f(0.5, 0.5, 0.5)) / (0.45 * 0.45)
+    return PEAK * dr.sqrt(1.0 - r2) ** 4
+
+
+class NanDensity(mi.Medium):
+    def __init__(self, props):
+        mi.Medium.__init__(self, props)
+        self.m_is_homogeneous = False
+        self.m_has_spectral_extinction = True
+        self.bbox = mi.BoundingBox3f(mi.Point3f(0.0, 0.0, 0.0), mi.Point3f(1.0, 1.0, 1.0))
+
+    def intersect_aabb(self, ray):
+        return self.bbox.ray_intersect(ray)
+
+    def get_majorant(self, mei, active=True):
+        return mi.UnpolarizedSpectrum(PEAK)
+
+    def get_scattering_coefficients(self, mei, active=True):
+        sigma_t = density(mei.p) * mi.UnpolarizedSpectrum(*TINT)
+        return 0.8 * sigma_t, mi.UnpolarizedSpectrum(PEAK) - sigma_t, sigma_t
+
+    def to_string(self):
+        return "NanDensity[]"
+
+
+mi.register_medium("defect_nan_density", lambda props: NanDensity(props))
