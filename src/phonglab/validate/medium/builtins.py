@@ -72,7 +72,8 @@ FINDINGS: tuple[Finding, ...] = (
             "σ_t = 0 outside the bounds (a grid with zero outer voxels), or bounds that "
             "enclose every point with σ_t > 0",
             "tests/repro/heterogeneous_volume_outside_bounds.py", bug=False,
-            rows=("σ_t = 0 outside intersect_aabb's bounds",)),
+            rows=("σ_t = 0 outside intersect_aabb's bounds",),
+            excerpt="return m_sigmat->bbox().ray_intersect(ray);"),
     Finding("heterogeneous-microflake-majorant", "majorant", (HET_SGGX_LARGE,),
             "src/media/heterogeneous.cpp:163",
             "m_max_density = m_scale · m_sigmat->max() is the majorant (line 181), but "
@@ -83,7 +84,7 @@ FINDINGS: tuple[Finding, ...] = (
             "against a majorant of 2 at a constant density 2)",
             "σ_n ≥ 0: a majorant scaled by the largest projected area (sqrt of S's largest "
             "eigenvalue)", "tests/repro/heterogeneous_microflake_majorant.py",
-            rows=("σ_n ≥ 0",)),
+            rows=("σ_n ≥ 0",), excerpt="m_max_density = dr::opaque<Float>(m_scale * m_sigmat->max());"),
     Finding("heterogeneous-microflake-majorant/transmittance", "transmittance",
             (HET_SGGX_LARGE,), "src/media/heterogeneous.cpp:163",
             "the majorant leaves out the microflake projected area (see "
@@ -94,13 +95,14 @@ FINDINGS: tuple[Finding, ...] = (
             "sizes (3 of 24 rays off)", "the tracking estimates within their standard error of "
             "exp(−∫σ_t)", "tests/repro/heterogeneous_microflake_majorant.py",
             rows=("delta tracking (volpath's free flight) = exp(−∫σ_t)",
-                  "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)")),
+                  "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)"),
+            excerpt="m_max_density = dr::opaque<Float>(m_scale * m_sigmat->max());"),
     Finding("homogeneous-microflake-majorant-at-origin", "majorant", (HOM_SGGX_VARYING,),
             "src/media/homogeneous.cpp:164", _ORIGIN,
             "σ_t + σ_n off the majorant by up to 68 % of it (σ_t 0.63 against the origin's "
             "2.0 at x = 1)", "σ_t + σ_n = the majorant of the ray at every point",
             "tests/repro/homogeneous_microflake_majorant_at_origin.py",
-            rows=("σ_t + σ_n = majorant",)),
+            rows=("σ_t + σ_n = majorant",), excerpt="return eval_sigmat(mi, active) & active;"),
     Finding("homogeneous-microflake-majorant-at-origin/transmittance", "transmittance",
             (HOM_SGGX_VARYING,), "src/media/homogeneous.cpp:164",
             _ORIGIN + "; every collision is real, at the origin's rate",
@@ -108,7 +110,8 @@ FINDINGS: tuple[Finding, ...] = (
             "the tracking estimates within their standard error of exp(−∫σ_t)",
             "tests/repro/homogeneous_microflake_majorant_at_origin.py",
             rows=("delta tracking (volpath's free flight) = exp(−∫σ_t)",
-                  "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)")),
+                  "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)"),
+            excerpt="return eval_sigmat(mi, active) & active;"),
     Finding("homogeneous-microflake-majorant-at-origin/flags", "flags", (HOM_SGGX_VARYING,),
             "src/media/homogeneous.cpp:138",
             "m_is_homogeneous = true whatever the phase function, while σ_t = σ_t · "
@@ -116,7 +119,8 @@ FINDINGS: tuple[Finding, ...] = (
             + ")", "σ_t off the ray's majorant by up to 2.2 times the majorant",
             "is_homogeneous only where σ_t is the ray's majorant",
             "tests/repro/homogeneous_microflake_majorant_at_origin.py",
-            rows=("is_homogeneous only where σ_n = 0 and σ_t = majorant",)),
+            rows=("is_homogeneous only where σ_n = 0 and σ_t = majorant",),
+            excerpt="m_is_homogeneous = true;"),
     through_medium("sggx-sample-frame-transposed", SGGX_CASES),
     through_medium("sggx-eval-forward-nan", SGGX_CASES),
 )
