@@ -11,6 +11,10 @@ cosine-weighted hemisphere), the lobe chosen by u < w_s, and a reflected directi
 horizon is rejected (weight 0).  So ∫pdf dω_o = (1 − w_s) + w_s·P_s(θ_i), P_s the fraction of
 the Blinn-Phong lobe's reflections above the horizon: exactly the fraction counted.
 
+``pdf_scale`` (default 1, not traversed, so never swept): a test knob that plants a pdf off
+by that factor (pdf and bs.pdf scaled, weight = eval/bs.pdf, so only the normalization sees
+it), as tests/defects/pdf_scaled_1pct.py does for a Lambert.
+
 k_d + k_s ≤ 1 (a point above is refused at load, as phonglab's phong does).  The declared
 ranges start at 1e-4, so that the sweep, --quick's ends included, reaches w_s = 2e-4
 (k_s = 1e-4, k_d = 0.5) and w_s = 1 − 2e-4 (k_d = 1e-4) beside the exponents 1e3 .. 1e4.
@@ -33,6 +37,7 @@ class NarrowBroadMixture(mi.BSDF):
             raise ValueError(f"diffuse_reflectance + specular_reflectance = {kd + ks} > 1")
         self.kd, self.ks = mi.Float(kd), mi.Float(ks)
         self.exponent = mi.Float(props.get("exponent", 2000.0))
+        self.pdf_scale = float(props.get("pdf_scale", 1.0))
         dr.make_opaque(self.kd, self.ks, self.exponent)
         diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
         glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
@@ -90,7 +95,7 @@ class NarrowBroadMixture(mi.BSDF):
         d, cos_h = self._half(si, wo)
         p = (1 - w_s) * mi.warp.square_to_cosine_hemisphere_pdf(wo)
         p += w_s * d / (4 * dr.maximum(cos_h, 1e-30))
-        return dr.select(self._ok(si, wo), p, 0.0)
+        return dr.select(self._ok(si, wo), self.pdf_scale * p, 0.0)
 
     def eval(self, ctx, si, wo, active=True):
         return mi.Spectrum(self._eval(ctx, si, wo))
