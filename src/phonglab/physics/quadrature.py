@@ -52,8 +52,55 @@ def lobe_width(p: float) -> float:
     return 1.0 / math.sqrt(p + 2.0)
 
 
+#: A ``refine`` lobe of width w (the 10 % quantile of its samples' angles, 0.46 σ for a
+#: Gaussian lobe) is resolved by a panel at most RESOLVED·w ≈ 1.8 σ wide, whatever its Gauss-
+#: Legendre order from 8 on; a wider panel of the rule there is graded down towards it.
+RESOLVED = 4.0
+
+
+def _panel(edges: np.ndarray, x: float) -> float:
+    """Width of the panel of sorted ``edges`` that contains x."""
+    j = int(np.clip(np.searchsorted(edges, x), 1, len(edges) - 1))
+    return float(edges[j] - edges[j - 1])
+
+
+def _refinement_edges(points, frame, alpha_edges: np.ndarray, phi_edges: np.ndarray,
+                      symmetric: bool) -> tuple[set, set]:
+    """(α edges, φ edges) graded towards each (polar angle, azimuth, width) of ``points`` in
+    the rule's frame ``frame`` = (R, T1, T2, rotation about the normal), where the rule's own
+    panels there (``alpha_edges``, ``phi_edges``) are wider than :data:`RESOLVED` widths:
+    α_k ± (w/4)·2^j and φ_k ± (w/4)·2^j / sin α_k, j = 0, 1, ..., up to twice that panel's
+    width (:func:`lobe_quadrature`'s ``refine``)."""
+    R, T1, T2, turn = frame
+    out_alpha, out_phi = set(), set()
+    two_pi = 2.0 * math.pi
+    for theta, phi, width in points:
+        v = np.array([math.sin(theta) * math.cos(phi - turn),
+                      math.sin(theta) * math.sin(phi - turn), math.cos(theta)])
+        a = math.acos(min(1.0, max(-1.0, float(v @ R))))
+        f = math.atan2(float(v @ T2), float(v @ T1)) % two_pi
+        if symmetric and f > math.pi:
+            f = two_pi - f
+        reach_a = _panel(alpha_edges, a)
+        if reach_a > RESOLVED * width:
+            e = width / 4.0
+            while e < 2.0 * reach_a:
+                out_alpha |= {x for x in (a - e, a + e) if 0.0 < x < math.pi}
+                e *= 2.0
+        arc = math.sin(a)
+        reach_f = _panel(phi_edges, f) * arc
+        if arc > width and reach_f > RESOLVED * width:   # nearer the pole: the polar panels
+            e = width / 4.0
+            while e < 2.0 * reach_f and e / arc < math.pi:
+                out_phi |= {(f + e / arc) % two_pi, (f - e / arc) % two_pi}
+                e *= 2.0
+    if symmetric:
+        out_phi = {x for x in out_phi if x <= math.pi}
+    return out_alpha, out_phi
+
+
 def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = math.pi,
-                    symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                    symmetric: bool = True, refine=()) -> tuple[np.ndarray, np.ndarray]:
     r"""Nodes and weights for ∫_{H+} g(ω) dω, refined around the mirror direction R(ω_i).
 
     ``theta_i`` is the incidence angle (radians, ω_i in the xz-plane at φ = 0), ``width`` the
@@ -65,6 +112,16 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     ``symmetric=False`` integrates the whole circle φ ∈ [0, 2π] around it instead of doubling
     the half φ ∈ [0, π] (which assumes g symmetric about the plane through the centre and the
     normal).
+
+    ``refine``: further lobes (polar angle, azimuth, width) in the same frame as the centre,
+    away from it (a broad lobe beside the narrow one the rule is centred on, or a narrow one
+    off the centre): where the rule's own α or φ panel there is wider than
+    :data:`RESOLVED` widths, its edges are graded towards the lobe as they are towards the
+    centre, α_k ± (w/4)·2^j and φ_k ± (w/4)·2^j / sin α_k, so that the cells near
+    (α_k, φ_k) are no larger than their distance to it and the lobe is resolved as the
+    centred one is (a cos^3000 lobe 1.3 rad off the centre: 1 to 1e-9 by 8, 12 and 16 nodes,
+    against 0.88 to 1.10 unrefined).  The edges apply to every φ (α edges) and every α
+    (φ edges): a product rule, refined towards a point in both coordinates.
 
     Returns:
         (wo (M, 3), weights (M,)) in float64.
@@ -78,6 +135,13 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     half = {0.0, math.pi, math.pi / 2} | {math.pi / 2 - e for e in side} | \
         {math.pi / 2 + e for e in side}
     phi_edges = np.array(sorted(half if symmetric else half | {2 * math.pi - e for e in half}))
+    edges = np.array([0.0] + sorted(set(_geometric_edges(0.0, math.pi, width / 4.0))
+                                    | {math.pi / 2}) + [math.pi])
+    if refine:
+        extra_alpha, extra_phi = _refinement_edges(refine, (R, T1, T2, azimuth - math.pi),
+                                                   edges, phi_edges, symmetric)
+        edges = np.unique(np.concatenate([edges, sorted(extra_alpha)]))
+        phi_edges = np.unique(np.concatenate([phi_edges, sorted(extra_phi)]))
     fold = 2.0 if symmetric else 1.0
     x, w = np.polynomial.legendre.leggauss(n)
     # φ nodes: composite Gauss-Legendre over the φ panels.
@@ -86,8 +150,6 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     wphi = (h[:, None] * w).ravel()
     alpha_h = np.arctan2(c, s * np.cos(phi))                          # horizon, per φ node
     # α panels: fixed edges clipped to [0, α_h(φ)]; panels past the horizon get zero width.
-    edges = np.array([0.0] + sorted(set(_geometric_edges(0.0, math.pi, width / 4.0))
-                                    | {math.pi / 2}) + [math.pi])
     lo = np.minimum(edges[None, :-1], alpha_h[:, None])               # (φ, panel)
     hi = np.minimum(edges[None, 1:], alpha_h[:, None])
     ha = 0.5 * (hi - lo)

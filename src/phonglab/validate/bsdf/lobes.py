@@ -23,6 +23,24 @@ the broad lobe is still covered.  Each rule covers the whole
 circle around its centre (``symmetric=False``), so anisotropy and azimuth φ_i ≠ 0 are covered.
 Only the panels depend on the samples: the value is Σ_k w_k g(ω_k), independent of ``sample``.
 
+Lobes that ``sample`` rarely picks (``layout(components=True, extra=...)``, the
+``normalization`` topic).  The mixture's most probable samples find the lobe that dominates
+it, not a narrow one it picks with probability 10⁻⁴: a normalized Blinn-Phong lobe of
+exponent 2000 at w_s = 2e-4 beside a Lambertian one (tests/authors/narrow_broad_mixture.py,
+issue #55) had ~0.4 of the 2048 placing samples, the rule was centred on the Lambertian lobe
+(width 0.3 rad), and at cos θ_i ≤ 0.15 the narrow lobe fell between the nodes of all three
+rules: ∫pdf 0.99980 = 1 − w_s with |Q16 − Q8| = 3e-7 against 1 counted.  So each non-delta
+component is also sampled alone (``ctx.component = k``, :func:`_component_lobes`), and the
+caller's own samples are grouped by (sampled_component, sampled_type) (:func:`group_lobes`,
+for a plugin that ignores ``ctx.component``; a group needs :data:`MIN_GROUP` samples in a
+hemisphere, and a lobe whose mass exceeds the normalization band z²/(√2 N) has ≈ z²/√2 ≈ 9 of
+N).  Per hemisphere the rule is centred on the narrowest lobe and refined towards each other
+one that its panels do not already resolve (:func:`arrange`;
+:func:`phonglab.physics.quadrature.lobe_quadrature`'s ``refine``): every lobe has panels
+graded to its own width, so the coarser rules resolve it too and their differences measure
+convergence, not a lobe all of them miss.  A plugin that neither honours ``ctx.component``
+nor labels its lobes' samples gives one group: its placement is the mixture's, as before.
+
 Error.  :func:`integrate` returns Q(n) per cell; ``energy`` estimates the error as
 |Q(n) − Q(n/2)| (Gauss-Legendre converges fast, so Q(n) is far closer than that).
 :func:`integrate_with_error` takes the larger difference to TWO coarser rules, n/2 and 3n/4
@@ -56,6 +74,19 @@ FALLBACK_WIDTH = 0.5
 SPIKE = 16.0
 SPIKE_SHARE = 0.01
 
+#: A lobe of one component (or of one group of samples with the same sampled_component and
+#: sampled_type) is placed from at least this many live samples in a hemisphere
+#: (:func:`group_lobes`).
+MIN_GROUP = 8
+#: A lobe whose centre lies within REACH of its own widths of a narrower lobe's centre is
+#: resolved by that lobe's panels (at distance d from it they are at most d wide): no panels
+#: of its own (:func:`arrange`).
+REACH = 2.0
+#: At most this many lobes refine one hemisphere's rule besides its centre (the narrowest kept).
+MAX_REFINE = 4
+#: At most this many components are sampled one at a time by :func:`layout`.
+MAX_COMPONENTS = 8
+
 #: Narrowest lobe width resolved: twice the float32 spacing 2^-24 of a unit vector's components.
 MIN_WIDTH = 2.0 ** -23
 
@@ -72,10 +103,13 @@ FLOOR = 1e-5
 Lobe = tuple
 
 
-def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
+def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray, minimum: int = 16,
+           spike: bool = True) -> Lobe:
     """(polar angle, azimuth, width) of a lobe from its samples (upper-hemisphere frame); the
-    ``fallback`` direction and :data:`FALLBACK_WIDTH` when there are fewer than 16 samples."""
-    if len(wo) < 16:
+    ``fallback`` direction and :data:`FALLBACK_WIDTH` when there are fewer than ``minimum``.
+    ``spike``: look for a spike among the samples (:data:`SPIKE`); not for the samples of one
+    lobe (:func:`group_lobes`), whose most probable 1 % are its own peak."""
+    if len(wo) < minimum:
         c, width = fallback, FALLBACK_WIDTH
     else:
         top = wo[pdf >= np.quantile(pdf, 0.9)]
@@ -85,7 +119,7 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
         width = np.quantile(sphere_bins.angle(unit, c), 0.1)
         peak = unit[pdf >= np.quantile(pdf, 1.0 - SPIKE_SHARE)]
         c1 = peak.mean(axis=0)
-        if len(peak) >= 8 and np.linalg.norm(c1) > 1e-6:
+        if spike and len(peak) >= 8 and np.linalg.norm(c1) > 1e-6:
             c1 = c1 / np.linalg.norm(c1)
             spike = np.quantile(sphere_bins.angle(peak, c1), 0.1)
             if spike * SPIKE < width:
@@ -94,25 +128,100 @@ def centre(wo: np.ndarray, pdf: np.ndarray, fallback: np.ndarray) -> Lobe:
     return math.acos(float(np.clip(c[2], 0.0, 1.0))), math.atan2(c[1], c[0]), width
 
 
+def _live(s: probe.Sample, sl=slice(None)) -> np.ndarray:
+    """Samples that carry a density: weight ≠ 0, not a delta lobe, finite wo and pdf."""
+    wo, pdf = s.wo[sl], s.pdf[sl]
+    live = np.any(s.weight[sl] != 0, axis=1) & ~lanes.delta_mask(s.sampled_type[sl])
+    return live & np.all(np.isfinite(wo), axis=1) & np.isfinite(pdf)
+
+
+def group_lobes(wo: np.ndarray, pdf: np.ndarray, keys: np.ndarray,
+                cap: int = LAYOUT_SAMPLES) -> tuple[list, list]:
+    """(upper lobes, lower lobes in the mirrored frame) of live samples grouped by ``keys``
+    (a component index, or sampled_component and sampled_type): each group's lobe in each
+    hemisphere where it has :data:`MIN_GROUP` samples (the first ``cap`` of them: iid)."""
+    up, down = [], []
+    for key in np.unique(keys):
+        group = keys == key
+        for side, flip, out in ((wo[:, 2] > 0, 1.0, up), (wo[:, 2] < 0, -1.0, down)):
+            idx = np.flatnonzero(group & side)[:cap]
+            if len(idx) >= MIN_GROUP:
+                out.append(centre(wo[idx] * np.array([1.0, 1.0, flip]), pdf[idx], None,
+                                  minimum=MIN_GROUP, spike=False))
+    return up, down
+
+
+def _direction(lobe: Lobe) -> np.ndarray:
+    return probe.direction(lobe[0], lobe[1])
+
+
+def arrange(main: Lobe, others) -> tuple[Lobe, tuple]:
+    """(centre, refinements) of one hemisphere's rule from its lobes: the rule is centred on
+    the narrowest, and every other lobe whose centre lies farther than :data:`REACH` of its
+    own widths from each narrower lobe kept refines it (at most :data:`MAX_REFINE`)."""
+    lobes = sorted({main, *others}, key=lambda lobe: lobe[2])
+    kept = [lobes[0]]
+    for lobe in lobes[1:]:
+        if all(sphere_bins.angle(_direction(lobe)[None], _direction(k))[0] > REACH * lobe[2]
+               for k in kept):
+            kept.append(lobe)
+    return kept[0], tuple(kept[1:MAX_REFINE + 1])
+
+
+def _component_lobes(bsdf, wi: np.ndarray, cells: np.ndarray, n: int, seed: int) -> list:
+    """Per cell: (upper lobes, lower lobes) of each non-delta component sampled alone
+    (``ctx.component = k``), n samples per cell and component: a lobe that ``sample`` picks
+    with probability 10⁻⁴ is placed as well as one it picks half the time.  A plugin that
+    ignores ``ctx.component`` gives its mixture again (no harm); one whose restricted
+    ``sample`` raises gives nothing here (the ``component`` topic reports it)."""
+    delta = int(mi.BSDFFlags.Delta) | int(mi.BSDFFlags.Delta1D)
+    count = bsdf.component_count()
+    ks = [k for k in range(min(count, MAX_COMPONENTS)) if not int(bsdf.flags(k)) & delta]
+    out = [([], []) for _ in cells]
+    if count < 2 or not ks:
+        return out
+    for k in ks:
+        try:
+            s = probe.sample_random(bsdf, wi, len(wi), seed=seed + 1 + k,
+                                    ctx=probe.context(component=k))
+        except Exception:        # noqa: BLE001 -- placement only; the component topic judges it
+            continue
+        for j in range(len(cells)):
+            sl = slice(j * n, (j + 1) * n)
+            live = _live(s, sl)
+            up, down = group_lobes(s.wo[sl][live], s.pdf[sl][live],
+                                   np.zeros(int(live.sum()), dtype=np.int64))
+            out[j][0].extend(up)
+            out[j][1].extend(down)
+    return out
+
+
 def layout(bsdf, cells: np.ndarray, seed: int, whole_sphere: bool = False,
-           samples: int = LAYOUT_SAMPLES) -> list:
-    """Per (θ_i, φ_i) cell: (reflected lobe, transmitted lobe or None).
+           samples: int = LAYOUT_SAMPLES, components: bool = False, extra=None) -> list:
+    """Per (θ_i, φ_i) cell: (reflected lobe, transmitted lobe or None), or, where further
+    lobes refine the rules, (reflected, transmitted, (refine_r, refine_t)) (:func:`arrange`).
 
     The transmitted lobe is placed for a transmitting BSDF, and with ``whole_sphere`` for every
     BSDF (then the lower hemisphere of a reflection-only BSDF gets the mirror-centred fallback:
     whatever its integrand is there, it is integrated too).  ``seed``, ``samples``: of the
-    placing samples (per cell).
+    placing samples (per cell).  ``components``: also place each component's lobe from
+    samples of that component alone (:func:`_component_lobes`).  ``extra``: per cell, further
+    (upper lobes, lower lobes), e.g. :func:`group_lobes` of the caller's own samples.
     """
     out = []
     transmits = lanes.bsdf_has(bsdf, mi.BSDFFlags.Transmission) or whole_sphere
     n = samples
     wi, _ = lanes.incident(cells, n)
     s = probe.sample_random(bsdf, wi, len(wi), seed=seed)
+    more = [([], []) for _ in cells]
+    if components:
+        per = max(256, n // 4)
+        wi_c, _ = lanes.incident(cells, per)
+        more = _component_lobes(bsdf, wi_c, cells, per, seed)
     for k, (theta, phi) in enumerate(cells):
         sl = slice(k * n, (k + 1) * n)
         wo, pdf = s.wo[sl], s.pdf[sl]
-        live = np.any(s.weight[sl] != 0, axis=1) & ~lanes.delta_mask(s.sampled_type[sl])
-        live &= np.all(np.isfinite(wo), axis=1) & np.isfinite(pdf)
+        live = _live(s, sl)
         mirror = probe.direction(theta, phi + math.pi)
         up = live & (wo[:, 2] > 0)
         reflected = centre(wo[up], pdf[up], mirror)
@@ -120,16 +229,34 @@ def layout(bsdf, cells: np.ndarray, seed: int, whole_sphere: bool = False,
         if transmits:
             down = live & (wo[:, 2] < 0)
             transmitted = centre(wo[down] * np.array([1.0, 1.0, -1.0]), pdf[down], mirror)
-        out.append((reflected, transmitted))
+        upper = more[k][0] + (list(extra[k][0]) if extra is not None else [])
+        lower = more[k][1] + (list(extra[k][1]) if extra is not None else [])
+        reflected, refine_r = arrange(reflected, upper) if upper else (reflected, ())
+        refine_t = ()
+        if transmitted is not None and lower:
+            transmitted, refine_t = arrange(transmitted, lower)
+        out.append((reflected, transmitted, (refine_r, refine_t)) if refine_r or refine_t
+                   else (reflected, transmitted))
     return out
 
 
-def nodes(lobe_r: Lobe, lobe_t: Lobe | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+def parts_of(entry) -> tuple:
+    """(reflected, transmitted, refine_r, refine_t) of a :func:`layout` entry."""
+    if len(entry) == 3:
+        return entry[0], entry[1], entry[2][0], entry[2][1]
+    return entry[0], entry[1], (), ()
+
+
+def nodes(lobe_r: Lobe, lobe_t: Lobe | None, n: int, refine_r=(),
+          refine_t=()) -> tuple[np.ndarray, np.ndarray]:
     """Unit directions and weights: the upper hemisphere around ``lobe_r``, and the lower one
-    (the same rule mirrored) around ``lobe_t`` when given."""
-    wo, w = lobe_quadrature(lobe_r[0], lobe_r[2], n, azimuth=lobe_r[1], symmetric=False)
+    (the same rule mirrored) around ``lobe_t`` when given; each graded also towards its
+    ``refine_*`` lobes (``lobe_quadrature``'s ``refine``)."""
+    wo, w = lobe_quadrature(lobe_r[0], lobe_r[2], n, azimuth=lobe_r[1], symmetric=False,
+                            refine=refine_r)
     if lobe_t is not None:
-        wt, ww = lobe_quadrature(lobe_t[0], lobe_t[2], n, azimuth=lobe_t[1], symmetric=False)
+        wt, ww = lobe_quadrature(lobe_t[0], lobe_t[2], n, azimuth=lobe_t[1], symmetric=False,
+                                 refine=refine_t)
         wo, w = np.concatenate([wo, wt * np.array([1.0, 1.0, -1.0])]), np.concatenate([w, ww])
     return wo / np.linalg.norm(wo, axis=1, keepdims=True), w
 
@@ -144,10 +271,10 @@ def integrate(fn, cells: np.ndarray, lobes: list, n: int,
     """
     memo = {} if memo is None else memo
     parts = []
-    for lobe_r, lobe_t in lobes:
-        key = (lobe_r, lobe_t, n)
+    for entry in lobes:
+        key = (tuple(entry), n)
         if key not in memo:
-            memo[key] = nodes(lobe_r, lobe_t, n)
+            memo[key] = nodes(*parts_of(entry)[:2], n, *parts_of(entry)[2:])
         parts.append(memo[key])
     wis = lanes.exact(probe.direction(cells[:, 0], cells[:, 1]))
     wi = np.concatenate([np.repeat(w[None], len(p[0]), 0) for w, p in zip(wis, parts)])
@@ -175,8 +302,9 @@ def integrate_with_error(fn, cells: np.ndarray, lobes: list, n: int,
     return value, err, sum(c for _, c in q)
 
 
-def quantised(lobe_r: Lobe, lobe_t: Lobe | None) -> bool:
-    """Whether a cell's narrower lobe is below :data:`QUANTISED` (see :func:`integrate_rounded`)."""
+def quantised(lobe_r: Lobe, lobe_t: Lobe | None, *_refine) -> bool:
+    """Whether a cell's narrower lobe is below :data:`QUANTISED` (see :func:`integrate_rounded`;
+    a rule's refinements are never narrower than its centre, :func:`arrange`)."""
     return min(lobe_r[2], lobe_t[2] if lobe_t is not None else math.inf) < QUANTISED
 
 
@@ -198,8 +326,14 @@ def integrate_rounded(fn, cells: np.ndarray, lobes: list, n: int,
     q = [np.array([v for v, _ in integrate(fn, cells, lobes, n)]) if first is None else first]
     for j in range(1, COPIES):
         s = 2.0 ** (j / COPIES)
-        scaled = [((r[0], r[1], r[2] * s), None if t is None else (t[0], t[1], t[2] * s))
-                  for r, t in lobes]
+        def grow(lobe, s=s):
+            return None if lobe is None else (lobe[0], lobe[1], lobe[2] * s)
+
+        scaled = []
+        for entry in lobes:
+            r, t, rr, rt = parts_of(entry)
+            scaled.append((grow(r), grow(t), (tuple(map(grow, rr)), tuple(map(grow, rt))))
+                          if rr or rt else (grow(r), grow(t)))
         q.append(np.array([v for v, _ in integrate(fn, cells, scaled, n)]))
     q = np.array(q)
     return q.mean(axis=0), q.std(axis=0, ddof=1) / math.sqrt(COPIES)
@@ -211,7 +345,7 @@ def with_rounding(fn, cells: np.ndarray, layout: list, n: int, value: np.ndarray
     :data:`QUANTISED`; where it is narrower (``narrow``), the mean of :func:`integrate_rounded`
     and the larger of the given error and t·s/√COPIES (Student's t at the Šidák level of
     ``m_tests`` tests, COPIES − 1 degrees of freedom).  ``value``: Q(n) of ``layout``."""
-    narrow = np.array([quantised(r, t) for r, t in layout], dtype=bool)
+    narrow = np.array([quantised(*parts_of(entry)) for entry in layout], dtype=bool)
     value, err = np.array(value, dtype=np.float64), np.array(err, dtype=np.float64)
     if narrow.any():
         mean, se = integrate_rounded(fn, cells[narrow], [p for p, k in zip(layout, narrow) if k],

@@ -39,6 +39,19 @@ at all for a pdf that does not depend on ω_i's length (Lambert).  A cell whose 
 float32 spacings of ω wide (below :data:`.lobes.QUANTISED`) is the mean of
 :data:`.lobes.COPIES` rules on shifted nodes, its error also t·s/√COPIES
 (:func:`.lobes.integrate_rounded`, as in ``energy``).
+Where a BSDF has several lobes, each is placed from samples of its own (each component
+sampled alone, and the counted samples grouped by sampled_component and sampled_type) and the
+rule, centred on the narrowest, is refined towards the others (:mod:`.lobes`, issue #55): a
+lobe the mixture picks with probability 10⁻⁴ is integrated as one it picks half the time.
+Measured on tests/authors/narrow_broad_mixture.py (normalized Blinn-Phong, p = 2000, beside
+Lambert, w_s = 2.0e-4: ``specular_reflectance`` = 1e-4), at cos θ_i = 0.15, 0.05, 0.01,
+1e-4: the float64 formula integrates to 0.99999992, 0.99997369, 0.99991774, 0.99990017 (exact
+lobe by lobe, (1 − w_s) + w_s·P_s with P_s from 8.4·10⁶ float64 half-vector samples,
+σ ≤ 3e-8), the plugin's float32 pdf to the same within 6e-8 (Monte Carlo of pdf32 − pdf64
+against the float64 mixture density, σ ≤ 1e-7), 2¹⁹ samples count 1, 0.9999657, 0.9999294,
+0.9998798; the rule placed on the mixture's samples alone read (φ_i = 2.1) 0.99983, 0.99980,
+0.99980, 0.99980 with |Q16 − Q8| ≤ 3e-5 (a fail: the quadrature was wrong, not the pdf), the rule
+placed per lobe reads 0.9999999, 0.9999736, 0.9999177, 0.9999001.
 P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
 Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
 (k + z²/2)/(N + z²) over N + z² trials, so that a cell where no sample is rejected
@@ -66,10 +79,12 @@ from .topics import Row
 
 def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
     """Per cell: (counted samples k, finite samples n_f, of which drawn where the BSDF is
-    black); one cell per call (n lanes each), the sample values from the topic's own stream
-    (lanes.rng).  Non-finite samples are the finite topic's: left out of k and of n_f."""
+    black, the lobes of the counted samples grouped by sampled_component and sampled_type
+    where there are several groups (:func:`.lobes.group_lobes`; else ([], []))); one cell per
+    call (n lanes each), the sample values from the topic's own stream (lanes.rng).
+    Non-finite samples are the finite topic's: left out of k and of n_f."""
     r = lanes.rng(opts.seed, "normalization")
-    ks, totals, blacks = [], [], []
+    ks, totals, blacks, groups = [], [], [], []
     for theta, phi in cells:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
@@ -78,7 +93,11 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
         ks.append(int(k.sum()))
         totals.append(int(lanes.finite_sample(s).sum()))
         blacks.append(int((k & black).sum()))
-    return np.array(ks), np.array(totals), blacks
+        live = k & np.isfinite(s.pdf)
+        keys = (s.sampled_component[live] << 32) | s.sampled_type[live]
+        groups.append(lobes.group_lobes(s.wo[live], s.pdf[live], keys)
+                      if len(np.unique(keys)) > 1 else ([], []))
+    return np.array(ks), np.array(totals), blacks, groups
 
 
 def _conditioning(density, cells, layout, nodes, memo=None) -> np.ndarray:
@@ -109,8 +128,10 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
                     "every lobe is a delta: pdf has no density to integrate",
                     {NOT_APPLICABLE: True})]
     cells = opts.cells(opts.energy_cos)
+    n = opts.normalization_samples
+    k, n_f, blacks, groups = _counts(bsdf, cells, n, opts)
     layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
-                          whole_sphere=True)
+                          whole_sphere=True, components=True, extra=groups)
 
     def density(wi, wo):
         return probe.pdf(bsdf, wi, wo)
@@ -121,8 +142,6 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     qerr = np.maximum(qerr, _conditioning(density, cells, layout, max(1, nodes // 2), memo))
     integral, qerr, narrow = lobes.with_rounding(density, cells, layout, nodes, integral, qerr,
                                                  m_tests)
-    n = opts.normalization_samples
-    k, n_f, blacks = _counts(bsdf, cells, n, opts)
     z = stats.z_critical(stats.ALPHA, m_tests)
     n_f = np.maximum(n_f, 1)
     p_hat = k / n_f
@@ -134,8 +153,12 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     theta_deg = np.degrees(cells[:, 0])
     where = ", ".join(f"θ_i = {theta_deg[i]:.1f}° φ = {cells[i, 1]:.2f} (∫pdf {integral[i]:.5g}"
                       f" vs {p_hat[i]:.5g})" for i in np.flatnonzero(bad))
+    refined = sum(len(entry) == 3 for entry in layout)
     reason = (f"∫ pdf over the sphere by lobe-centred Gauss-Legendre ({nodes} nodes/panel, "
               f"error max |Q{nodes} − Q{nodes // 2}|, |Q{nodes} − Q{3 * nodes // 4}|"
+              + (f"; {refined} cells with several lobes, each placed from its own samples: "
+                 f"the rule centred on the narrowest, graded towards the others"
+                 if refined else "")
               + (f"; {int(narrow.sum())} cells with a lobe narrower than "
                  f"{lobes.QUANTISED:.1e} rad: mean of {lobes.COPIES} rules on shifted nodes, "
                  f"error t·s/√{lobes.COPIES} if larger" if narrow.any() else "")
