@@ -16,8 +16,9 @@ by that factor (pdf and bs.pdf scaled, weight = eval/bs.pdf, so only the normali
 it), as tests/defects/pdf_scaled_1pct.py does for a Lambert.
 
 k_d + k_s ≤ 1 (a point above is refused at load, as phonglab's phong does).  The declared
-ranges start at 1e-4, so that the sweep, --quick's ends included, reaches w_s = 2e-4
-(k_s = 1e-4, k_d = 0.5) and w_s = 1 − 2e-4 (k_d = 1e-4) beside the exponents 1e3 .. 1e4.
+ranges are [1e-4, 1], so that the sweep, --quick's ends included, reaches w_s ≈ 1e-4
+(k_s = 1e-4 beside the default k_d) and w_s ≈ 1 − 1e-4, and a --set of k_d = 1 − w_s, k_s = w_s
+(the tests' mixtures from 1e-4 to 1 − 1e-4) lies inside them; the exponents span 1e3 .. 1e4.
 """
 
 import drjit as dr
@@ -25,8 +26,8 @@ import mitsuba as mi
 
 
 class NarrowBroadMixture(mi.BSDF):
-    PARAMETER_RANGES = {"diffuse_reflectance": (1e-4, 0.5),
-                        "specular_reflectance": (1e-4, 0.5),
+    PARAMETER_RANGES = {"diffuse_reflectance": (1e-4, 1.0),
+                        "specular_reflectance": (1e-4, 1.0),
                         "exponent": (1e3, 1e4, (5e3,))}
 
     def __init__(self, props):

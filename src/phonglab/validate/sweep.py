@@ -46,6 +46,7 @@ cases do.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -186,7 +187,9 @@ def check_set(kind: Kind, target, spec, params) -> None:
         if rng is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                   for v in values):
             continue
-        bad = [v for v in values if not rng.lo <= v <= rng.hi]
+        # a value within float round-off of an end (1 − 0.9999 for 1e-4) is at that end
+        slack = 1e-9 * max([1.0] + [abs(e) for e in (rng.lo, rng.hi) if math.isfinite(e)])
+        bad = [v for v in values if not rng.lo - slack <= v <= rng.hi + slack]
         if bad:
             raise ValidateError(
                 f"{name}={bad[0]:g} is outside the range [{rng.lo:g}, {rng.hi:g}] of "
