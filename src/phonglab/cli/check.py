@@ -62,11 +62,12 @@ def run(args) -> int:
     from .. import stats
 
     # Config refuses a bad --spp: built first, before the plugins load; the outputs next.
-    if args.json:
-        check_output_file(args.json, "JSON file (--json)")
+    check_plugin_files(args.plugin)
+    if args.json is not None:
+        check_output_file(args.json, "JSON file (--json)",
+                          [(path, "plugin file (--plugin)") for path in args.plugin])
     if args.out_dir is not None:
         check_output_folder(args.out_dir, "folder of difference images (--out-dir)")
-    check_plugin_files(args.plugin)
     cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir or DEFAULT_OUT_DIR,
                         lambert=args.lambert, phong=args.phong)
     names = args.only or list(checks.CHECK_NAMES)
@@ -105,7 +106,7 @@ def run(args) -> int:
             print(f"[{r.topic}] {r.name}: {r.reason}; expected from: {r.details.get('source')}"
                   + (f"; known issue: {_issue(r)}" if r.status == "KNOWN" else ""))
     _summary(report, seconds, cfg)
-    if args.json:
+    if args.json is not None:
         print(f"JSON: {write_json(args.json, report.to_dict())}")
     return 0 if report.passed else 1
 

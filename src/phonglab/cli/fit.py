@@ -43,12 +43,11 @@ def run(args) -> int:
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
-    from ..engine.outputs import check_output_file, write_json, write_text
+    from ..engine.outputs import check_output_files, write_json, write_text
 
     check_plugin_files(args.plugin)
-    for path, what in ((args.json, "JSON file (--json)"), (args.report, "report (--report)")):
-        if path:
-            check_output_file(path, what)
+    check_output_files([(args.json, "JSON file (--json)"), (args.report, "report (--report)")],
+                       [(path, "plugin file (--plugin)") for path in args.plugin])
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
     from .. import registration, runtime
     from ..fit.optimize import fit, format_result
@@ -63,9 +62,9 @@ def run(args) -> int:
     result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
     text = format_result(result)
     # Files first: a closed stdout (`| head`) must not lose them.
-    if args.report:
+    if args.report is not None:
         write_text(args.report, text + "\n")
-    if args.json:
+    if args.json is not None:
         write_json(args.json, result.as_dict(), indent=1, end="\n")
     print(text)
     return 0

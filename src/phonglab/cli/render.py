@@ -63,16 +63,21 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from ..engine.outputs import RenderOutputs, check_output_file
     from ..engine.render import render_file
     from ..engine.scenes import scene_path
 
     if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
         check_max_seconds(args.max_seconds)
     path = scene_path(args.scene)
-    out = Path(args.output or Path("out") / (path.stem + ".exr"))
-    if out.is_dir() or out.suffix.lower() != ".exr":
+    inputs = [(path, "scene file")]
+    out = Path(Path("out") / (path.stem + ".exr") if args.output is None else args.output)
+    if args.output and (out.is_dir() or out.suffix.lower() != ".exr"):
         raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
                             f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
+    if args.output is not None:      # "" and a name ending in '/' too
+        check_output_file(args.output, "output image (-o)", inputs)
+    RenderOutputs.beside(out).check(inputs)      # every file of the set, before any work
     if args.full_pilot and (args.target_error is None or args.adaptive):
         raise PhonglabError("--full-pilot is about the planner's pilot: use it with "
                             "--target-error E (without --adaptive), or drop it")
@@ -96,10 +101,9 @@ def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan (:func:`phonglab.planner.execute.render_plan`),
     report predicted and achieved error and time."""
     from .. import planner
-    from ..engine.outputs import RenderOutputs, spp_paths
+    from ..engine.outputs import spp_paths
     from ..planner import execute
 
-    RenderOutputs.beside(out).check()       # before the pilot, not only before the render
     # the pilot's seeds follow the render's (seed + 1, ...), so that the render, which is
     # combined with the pilot's samples, never repeats them
     plan = planner.plan(path, args.target_error, variant=args.variant,

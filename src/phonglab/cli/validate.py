@@ -130,12 +130,15 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
     if args.timeout is not None and not 0 < args.timeout < float("inf"):
         raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
-    if args.report and not args.report.endswith((".html", ".htm")):
+    inputs = [(path, "plugin file (--plugin)") for path in args.plugin]
+    if args.bsdf and args.bsdf.endswith(".xml"):
+        inputs.append((args.bsdf, "XML file"))
+    outputs.check_output_files([(args.json, "JSON report (--json)"),
+                                (args.report, "HTML report (--report)")], inputs)
+    if args.report is not None and not args.report.endswith((".html", ".htm")):
         raise ValidateError(f"--report {args.report!r} must end in .html")
-    for path, what in ((args.json, "JSON report"), (args.report, "HTML report")):
-        if path:
-            outputs.check_file(Path(path), what)
-            outputs.check_folder(Path(path), what)
+    if args.all_builtins and args.json is not None:     # the finished cases, kept beside it
+        outputs.check_file(Path(args.json + ".partial.jsonl"), "log of finished cases")
     return parse_sets(args.set), topics
 
 
@@ -279,10 +282,10 @@ def run(args) -> int:
     with topic_timeout(args.timeout):
         report, label, text = validate_one(args, params)
     print(text)
-    if args.json:
+    if args.json is not None:
         from ..engine.outputs import write_json   # lazy: numpy, OpenEXR and Pillow
         write_json(args.json, report.to_dict())
-    if args.report:
+    if args.report is not None:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)
     failing, uncovered = report.failing, report.not_covered
