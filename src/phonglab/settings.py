@@ -173,15 +173,34 @@ def _at(out: dict, path: list[str]) -> dict:
     return node
 
 
+def _exit_in_traceback(text: str) -> str | None:
+    """"the plugin called sys.exit(0) (file.py:11, in __init__)" when the Python traceback
+    Mitsuba's loader quotes in ``text`` ends in a ``SystemExit`` or an intercepted
+    ``os._exit`` (:class:`phonglab.runtime.PluginExited`), else None."""
+    tail = text.rpartition("Traceback (most recent call last):")[2].strip().splitlines()
+    last = re.match(r"(SystemExit|PluginExited)(?::\s*(.*))?$", tail[-1].strip()) if tail else None
+    if not last:
+        return None
+    call = f"{'sys.exit' if last.group(1) == 'SystemExit' else 'os._exit'}({last.group(2) or ''})"
+    frames = [f for f in re.findall(r'File "([^"]+)", line (\d+), in (\S+)', "\n".join(tail))
+              if Path(f[0]).name != "runtime.py"]      # the os._exit replacement's own frame
+    where = f" ({Path(frames[-1][0]).name}:{frames[-1][1]}, in {frames[-1][2]})" if frames else ""
+    return f"the plugin called {call}{where}: a plugin must return or raise, never end the process"
+
+
 def mitsuba_reason(exc: Exception) -> str:
     """The informative part of a Mitsuba loader error, on one line (source tags and the
     "While loading dictionary node" prefix dropped, the innermost cause kept)."""
-    text = " ".join(str(exc).split())
+    raw = str(exc)
+    text = " ".join(raw.split())
     text = re.sub(r"\[[\w.]+:\d+\] ", "", text)              # [parser.cpp:444] source tags
     text = re.sub(r"^(While loading|At) dictionary node \"root\": ", "", text)
     text = text.split(": [")[-1].lstrip("[")                   # the innermost cause
     if "Traceback (most recent call last):" in text:           # a Python plugin raised:
         head, _, tail = text.partition("Traceback (most recent call last):")
+        exited = _exit_in_traceback(raw)
+        if exited:
+            return head + exited
         frames = re.findall(r"\b\w+(?:Error|Exception): .*", tail)   # keep its last line
         text = head + (frames[-1] if frames else tail.strip())
     return text.replace("] ", ": ").rstrip(".!")

@@ -17,7 +17,8 @@ from .. import __version__, checks, register
 from ..errors import PhonglabError
 from ..engine.outputs import check_output_file, check_output_folder, write_json
 from ..verdict import Report, format_number
-from .options import add_plugin, add_seed, check_plugin_files, load_plugin_files
+from .options import (add_plugin, add_seed, add_timeout, check_plugin_files, check_timeout,
+                      load_plugin_files)
 
 #: Where difference images of a failing scene check go unless --out-dir says (made only then).
 DEFAULT_OUT_DIR = "out/checks"
@@ -52,15 +53,14 @@ def add_parser(sub) -> None:
     p.add_argument("--details", action="store_true",
                    help="print what each row compares, its source and details")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_timeout(p, "check")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    # Lazy: scipy (through phonglab.stats) and tqdm would add ~0.6 s to every `phonglab` start.
-    from tqdm import tqdm
+    from ..validate.core import topic_timeout
 
-    from .. import stats
-
+    check_timeout(args.timeout)
     # Config refuses a bad --spp: built first, before the plugins load; the outputs next.
     check_plugin_files(args.plugin)
     if args.json is not None:
@@ -71,7 +71,18 @@ def run(args) -> int:
     cfg = checks.Config(spp=args.spp, seed=args.seed, out_dir=args.out_dir or DEFAULT_OUT_DIR,
                         lambert=args.lambert, phong=args.phong)
     names = args.only or list(checks.CHECK_NAMES)
-    _require_plugins(args.lambert, args.phong, plugins=args.plugin)
+    with topic_timeout(args.timeout):       # the plugin files' loading and each check
+        _require_plugins(args.lambert, args.phong, plugins=args.plugin)
+        return _run(args, cfg, names)
+
+
+def _run(args, cfg, names) -> int:
+    """The checks, the table, the summary and the JSON."""
+    # Lazy: scipy (through phonglab.stats) and tqdm would add ~0.6 s to every `phonglab` start.
+    from tqdm import tqdm
+
+    from .. import stats
+
     bar = None
     if not args.no_progress:
         bar = tqdm(total=len(names), unit="check", leave=False, file=sys.stderr)
@@ -122,6 +133,9 @@ def _summary(report: Report, seconds: float, cfg) -> None:
         which = ", ".join(f"{r.topic}/{r.name}" for r in known if _issue(r) == issue)
         print(f"  KNOWN {which}: {issue}")
     for r in report.failing:
+        if r.measured is None:          # nothing measured: the plugin raised, exited, hung
+            print(f"  fail {r.topic}/{r.name}: {r.reason}")
+            continue
         print(f"  fail {r.topic}/{r.name}: measured {format_number(r.measured, 6)}, expected "
               f"{format_number(r.expected, 6)} ± {format_number(r.tolerance, 3)} "
               f"({r.details.get('source')})"

@@ -25,7 +25,7 @@ from ..settings import parse_sets
 from ..validate import registry
 from ..validate.inputs import ValidateError, check_plugin_file, check_topics
 from ..verdict import Report
-from .options import add_seed
+from .options import add_seed, check_timeout
 
 EPILOG = """examples:
   phonglab validate diffuse
@@ -103,7 +103,8 @@ def add_parser(sub) -> None:
                         "and a rerun with the same options resumes from it")
     p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                    help="stop a topic that runs longer than this and report it as one failing "
-                        "row ('did not finish within N s'); the other topics still run. Stops "
+                        "row ('did not finish within N s'); the other topics still run; a "
+                        "--plugin file that takes longer to load is one sentence. Stops "
                         "Python code (a plugin's eval that loops forever), not a compiled "
                         "Dr.Jit kernel; per topic and parameter point, in this process "
                         "(not in --workers processes)")
@@ -128,8 +129,7 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
-    if args.timeout is not None and not 0 < args.timeout < float("inf"):
-        raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
+    check_timeout(args.timeout)
     inputs = [(path, "plugin file (--plugin)") for path in args.plugin]
     if args.bsdf and args.bsdf.endswith(".xml"):
         inputs.append((args.bsdf, "XML file"))
