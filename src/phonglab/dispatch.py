@@ -42,7 +42,7 @@ import mitsuba as mi
 from .runtime import PluginExited
 
 __all__ = ["METHODS", "Dispatched", "base_of", "bsdf", "describe", "emitter", "exit_call",
-           "integrator", "is_bad_cast", "not_implemented", "origin", "phase", "root_cause", "view"]
+           "integrator", "is_bad_cast", "raised_in", "not_implemented", "origin", "phase", "root_cause", "view"]
 
 #: The query methods each base class binds, called through the binding (Mitsuba's dispatch).
 METHODS = {
@@ -174,6 +174,21 @@ def is_bad_cast(exc: BaseException) -> bool:
     (nanobind's ``std::bad_cast``, raised after the plugin's code returned: no frame of the
     plugin's own in its traceback)."""
     return "bad_cast" in str(exc) and origin(exc) is None
+
+
+def raised_in(exc: BaseException, files) -> str | None:
+    """:func:`describe` of ``exc`` when its innermost plugin frame (Dr.Jit's wrappers
+    unwrapped) lies in one of ``files`` (a user's ``--plugin`` files), else None."""
+    where = origin(root_cause(exc))
+    if where is None:
+        return None
+    for f in files:
+        try:
+            if os.path.samefile(where[0], f):
+                return describe(exc)
+        except OSError:
+            continue
+    return None
 
 
 def exit_call(exc: BaseException) -> str | None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import traceback
 
 from .. import __version__, runtime
 from ..errors import PhonglabError, user_errors
@@ -99,8 +100,10 @@ def _main(argv: list[str] | None) -> int:
         # An OSError naming its file (a name too long, a parent that is a file, a loop of
         # symlinks, no permission) is about the path the user typed: one sentence too.
         path_error = isinstance(exc, OSError) and getattr(exc, "filename", None) is not None
-        if debug or not (isinstance(exc, user_errors()) or path_error):
+        if not (isinstance(exc, user_errors()) or path_error):
             raise
+        if debug:                        # the traceback added, the exit status kept
+            traceback.print_exc()
         print(f"phonglab: error: {exc}", file=sys.stderr)
         return 2
 

@@ -15,6 +15,7 @@ import mitsuba as mi
 
 from .. import __version__, checks, register
 from ..errors import PhonglabError
+from ..settings import mitsuba_reason
 from ..engine.outputs import check_output_file, check_output_folder, write_json
 from ..verdict import Report, format_number
 from .options import (add_plugin, add_seed, add_timeout, check_plugin_files, check_timeout,
@@ -148,12 +149,30 @@ def _issue(row) -> str:
     return row.details.get("known_issue", row.reason)
 
 
+#: What ``check`` sets on the plugins it checks: (flag, model, the spec of a name, its words).
+ROLES = (("--lambert", "Lambertian", lambda name: checks.gray(name, reflectance=0.7),
+          "reflectance (an RGB texture)"),
+         ("--phong", "modified Phong", lambda name: checks.phong_dict(name, 0.4, 0.5, 30.0),
+          "diffuse_reflectance and specular_reflectance (RGB textures) and exponent (a float)"))
+
+
 def _require_plugins(*names: str, plugins=()) -> None:
     """A clear error when a plugin named by --lambert/--phong is not registered (after the
-    ``--plugin`` files ran once)."""
+    ``--plugin`` files ran once), is not a BSDF, or does not take the parameters ``check``
+    sets on it (:data:`ROLES`): one sentence before any check runs."""
     register()
     registered = load_plugin_files(plugins)
-    for name in names:
+    for name, (flag, model, spec, sets) in zip(names, ROLES):
+        words = [word for word, n in registered if n == name]
+        builtin = mi.PluginManager.instance().plugin_type(name)
+        if words and "BSDF" not in words or builtin not in (mi.ObjectType.BSDF,
+                                                             mi.ObjectType.Unknown):
+            what = (f"{'an' if words[0][0] in 'aeiou' else 'a'} {words[0]} (registered by the "
+                    f"plugin file)" if words else
+                    f"a Mitsuba {str(builtin).split('.')[-1]} plugin")
+            raise PhonglabError(f"{flag} {name!r} is {what}, not a BSDF; {flag} names the BSDF "
+                                f"check judges as the {model} (a file that calls "
+                                f"mi.register_bsdf), or drop {flag}")
         try:
             mi.load_dict({"type": name})
         except Exception as exc:
@@ -165,3 +184,14 @@ def _require_plugins(*names: str, plugins=()) -> None:
                                        f"mi.register_bsdf({name!r}, ...)")
                                     + ", or drop the option") from None
             raise
+        try:
+            plugin = mi.load_dict(spec(name))
+        except Exception as exc:
+            raise PhonglabError(f"check sets {sets} on the BSDF it judges as the {model} "
+                                f"({flag} {name!r}), and loading {name!r} with them fails: "
+                                f"{mitsuba_reason(exc)}; give {flag} a BSDF that takes those "
+                                f"parameters, or drop {flag}") from None
+        if not isinstance(plugin, mi.BSDF):
+            raise PhonglabError(f"{flag} {name!r} is a {type(plugin).__name__}, not a BSDF; "
+                                f"{flag} names the BSDF check judges as the {model}, or drop "
+                                f"{flag}")

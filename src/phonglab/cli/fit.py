@@ -51,7 +51,7 @@ def run(args) -> int:
     check_output_files([(args.json, "JSON file (--json)"), (args.report, "report (--report)")],
                        [(path, "plugin file (--plugin)") for path in args.plugin])
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
-    from .. import registration, runtime
+    from .. import dispatch, registration, runtime
     from ..fit.optimize import fit, format_result
     from ..validate.core import TopicTimeout, topic_timeout, within_topic_limit
 
@@ -71,6 +71,14 @@ def run(args) -> int:
                                 f"{args.timeout:g} s (stopped by --timeout: does the plugin's "
                                 f"Python code loop forever?); raise --timeout or fix the "
                                 f"plugin") from None
+        except Exception as exc:
+            error = dispatch.raised_in(exc, args.plugin)
+            if error is None:
+                raise                         # not from a --plugin file: as it was
+            raise PhonglabError(f"the BSDF {args.target!r} raised {error} "
+                                f"while it was fitted, so there is no fit; fix the plugin "
+                                f"(phonglab validate {args.target} --plugin FILE.py shows "
+                                f"which methods fail)") from exc
     text = format_result(result)
     # Files first: a closed stdout (`| head`) must not lose them.
     if args.report is not None:

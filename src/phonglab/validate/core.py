@@ -8,8 +8,8 @@ table topic -> runner).  What is the same for every kind lives here:
 * :func:`load_plugins`: run the ``--plugin`` files once, recording what each registers; a file
   that registers a name Mitsuba or phonglab already has is refused (the report would be of
   the plugin that name already meant, not of the file's), and so is one that exits
-  (``sys.exit``, ``os._exit``) or runs past :func:`topic_timeout`'s limit: each is one
-  sentence, never the process's end, a hang or a report of nothing;
+  (``sys.exit``, ``os._exit``), switches the variant or runs past :func:`topic_timeout`'s
+  limit: each is one sentence, never the process's end, a hang or a report of nothing;
 * :func:`load`: the plugin from a type name, a dict for ``mi.load_dict``, an XML file or a
   loaded object (:func:`phonglab.settings.load_plugin`, or the kind's own ``load`` part);
   :func:`prepare` sets the variant and does both: everything that can be bad input, each a
@@ -139,6 +139,7 @@ def _run_plugin_file(path: Path, kind: Kind | None) -> list[tuple[str, str]]:
 
     for name, original in originals.items():
         setattr(mi, name, recording(name, original))
+    variant = mi.variant()
     try:
         with runtime.exits_intercepted(), _alarm(_TIMEOUT):
             runpy.run_path(str(path), run_name="__phonglab_plugin__")
@@ -161,6 +162,15 @@ def _run_plugin_file(path: Path, kind: Kind | None) -> list[tuple[str, str]]:
     finally:
         for name, original in originals.items():
             setattr(mi, name, original)
+        switched = mi.variant()
+        if switched != variant and variant is not None:   # back to the one phonglab set
+            registration.register(variant)
+    if switched != variant:
+        raise ValidateError(f"plugin file {str(path)!r} switched Mitsuba's variant to "
+                            f"{switched!r} (mi.set_variant) while it was loaded, so what it "
+                            f"registered is not in {variant!r}, where phonglab checks it; "
+                            f"remove the mi.set_variant call (phonglab sets the variant: "
+                            f"--variant)")
     return calls
 
 
