@@ -1,4 +1,4 @@
-"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check and fit, the
+"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check, fit and render, the
 types a Python plugin returns checked before Dr.Jit sees them; and every message about an
 author's plugin whole (#52): which parameters `check` sets on it, an emitter named as such, a
 parameter it never reads named whatever its value, its own errors in `fit` and `check`, a file
@@ -16,9 +16,11 @@ import mitsuba as mi
 import pytest
 
 from phonglab.cli import main as phonglab
+from phonglab.engine import exr
 from phonglab.settings import PluginError, load_plugin, mitsuba_reason
 
 from helpers import fails_in_one_sentence
+from test_fuzz_cli import TINY
 
 HERE = Path(__file__).parent
 AUTHORS = HERE / "authors"
@@ -256,3 +258,21 @@ def test_a_plugin_file_that_switches_the_variant_is_named_for_it(tmp_path, capsy
                           "switched Mitsuba's variant to 'scalar_rgb' (mi.set_variant)",
                           "remove the mi.set_variant call")
     assert mi.variant() != "scalar_rgb"            # phonglab's variant is back
+
+
+#: A tiny scene whose sphere is of the author's own BSDF type "mine".
+SCENE_OF_MY_OWN = TINY.replace('<bsdf type="phong"/>', '<bsdf type="mine"/>')
+
+
+def test_render_takes_the_authors_bsdf_by_plugin(tmp_path, capsys):
+    """`render` had no --plugin: a scene with the author's own BSDF could not be rendered."""
+    scene = tmp_path / "scene.xml"
+    scene.write_text(SCENE_OF_MY_OWN)
+    fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "a.exr")],
+                          "no bsdf plugin named 'mine'", "--plugin FILE.py")
+    out = tmp_path / "b.exr"
+    assert phonglab(["render", str(scene), "--plugin", str(_as(tmp_path, "mine")), "-o",
+                     str(out)]) == 0
+    capsys.readouterr()
+    image, meta = exr.read(out)
+    assert image.mean() > 0.05 and meta["spp"] == 4

@@ -320,7 +320,7 @@ FOLDER_SLOTS = {("check", "--out-dir"), ("compare-models", "-o"), ("bench", "--o
 
 def _harm_argv(command, flag, path, tiny, image, plugin) -> list[str]:
     if command == "render":
-        return ["render", str(tiny), "-o", path]
+        return ["render", str(tiny), "--plugin", str(plugin), "-o", path]
     if command == "compare":
         return ["compare", str(image), str(image), "--diff", path]
     if command == "fit":

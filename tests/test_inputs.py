@@ -256,12 +256,14 @@ VICTIM = (Path(__file__).parent / "authors" / "my_lambert.py").read_text()
      ("phonglab.fit.optimize", "fit"), "symlink"),
     (["check", "--lambert", "my_lambert", "--plugin", "{victim}", "--json", "{victim}"],
      ("phonglab.checks", "run_checks"), "same"),
+    (["render", "{scene}", "--plugin", "{victim}", "-o", "{out}.exr"],
+     ("phonglab.engine.render", "render_file"), "hardlink"),
     (["render", "{scene}", "-o", "{out}.exr"], ("phonglab.engine.render", "render_file"),
      "scene"),
     (["compare", "{victim}", "{victim}", "--diff", "{out}.png"],
      ("phonglab.engine.compare", "compare_files"), "hardlink"),
 ], ids=["validate-json", "validate-report-hardlink", "validate-json-symlink", "fit-report",
-        "fit-json-symlink", "check-json", "render-scene-hardlink",
+        "fit-json-symlink", "check-json", "render-plugin-hardlink", "render-scene-hardlink",
         "compare-diff-hardlink"])
 def test_an_output_that_is_one_of_the_inputs_is_refused(tmp_path, capsys, monkeypatch, case):
     """`validate mybp --plugin victim.py --json victim.py` overwrote the plugin's source."""

@@ -161,7 +161,9 @@ def _not_found(text: str, where: str, path: Path) -> str | None:
     hint = f" (did you mean {guess[0]!r}?)" if guess else ""
     return (f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
             f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
-            f"phonglab.register() before loading from Python.")
+            f"phonglab.register() before loading from Python, or your own, registered by "
+            f"'phonglab render --plugin FILE.py' (a file that calls "
+            f"mi.register_{kind}({plugin_type!r}, ...)).")
 
 
 def _unparsable_value(text: str, where: str, path: Path) -> str | None:
