@@ -1,14 +1,26 @@
-"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check and fit, the
-types a Python plugin returns checked before Dr.Jit sees them."""
+"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check, fit and render, the
+types a Python plugin returns checked before Dr.Jit sees them; and every message about an
+author's plugin whole (#52): which parameters `check` sets on it, an emitter named as such, a
+parameter it never reads named whatever its value, its own errors in `fit` and `check`, a file
+that switches the variant."""
 
 from __future__ import annotations
 
+import runpy
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import mitsuba as mi
 import pytest
+
+from phonglab.cli import main as phonglab
+from phonglab.engine import exr
+from phonglab.settings import PluginError, load_plugin, mitsuba_reason
+
+from helpers import fails_in_one_sentence
+from test_fuzz_cli import TINY
 
 HERE = Path(__file__).parent
 AUTHORS = HERE / "authors"
@@ -138,3 +150,129 @@ def test_phase_function_returning_the_wrong_type_names_the_method(tmp_path):
     r = cli("validate", "bad_phase_return", "--plugin", bad, "--quick", "--no-sweep")
     assert r.returncode == 2, r.stdout[-1500:] + r.stderr[-1500:]
     assert "eval_pdf() of the phase function 'bad_phase_return' returned Color3f" in r.stderr
+
+
+# --- every message whole (#52) ------------------------------------------------------------------
+
+def _as(tmp_path, name: str, source: Path = AUTHORS / "my_lambert.py") -> Path:
+    """``source`` registered as ``name``, in tmp_path."""
+    path = tmp_path / f"{name}.py"
+    path.write_text(source.read_text().replace('"my_lambert"', repr(name)))
+    return path
+
+
+MY_POINT = '''import mitsuba as mi
+
+
+class MyPoint(mi.Emitter):
+    def __init__(self, props):
+        mi.Emitter.__init__(self, props)
+        self.m_flags = mi.EmitterFlags.DeltaPosition
+
+
+mi.register_emitter("mypoint", lambda props: MyPoint(props))
+'''
+
+
+def test_check_says_which_parameters_it_sets_on_the_named_plugin(tmp_path, capsys):
+    """It said "cannot load BSDF 'mybp' (0.5, 0.5, 0.5])": a fragment of Mitsuba's list."""
+    err = fails_in_one_sentence(capsys, ["check", "--phong", "mybp", "--plugin",
+                                         str(_as(tmp_path, "mybp")), "--only", "sanity",
+                                         "--no-progress"],
+                                "check sets diffuse_reflectance and specular_reflectance",
+                                "exponent", "--phong 'mybp'",
+                                "does not read the parameters diffuse_reflectance, "
+                                "specular_reflectance, exponent")
+    assert "0.5])" not in err and "()" not in err
+
+
+def test_check_names_an_emitter_given_as_the_lambertian(tmp_path, capsys):
+    """It said "cannot load BSDF 'mypoint' (0.7, 0.7, 0.7])"."""
+    (tmp_path / "mypoint.py").write_text(MY_POINT)
+    fails_in_one_sentence(capsys, ["check", "--lambert", "mypoint", "--plugin",
+                                   str(tmp_path / "mypoint.py"), "--only", "sanity",
+                                   "--no-progress"], "'mypoint' is an emitter", "not a BSDF")
+    fails_in_one_sentence(capsys, ["check", "--lambert", "point", "--only", "sanity",
+                                   "--no-progress"], "'point' is a Mitsuba Emitter plugin")
+
+
+@pytest.mark.parametrize("value", [0.5, "x", True, 3, [1, 2, 3], {"type": "rgb", "value": 0.2},
+                                   {"type": "checkerboard"}],
+                         ids=["float", "string", "bool", "int", "vector", "rgb", "texture"])
+def test_a_parameter_the_plugin_never_reads_is_named_whatever_its_value(tmp_path, value,
+                                                                        variant_llvm_rgb):
+    """Mitsuba's list of unread properties was cut at the first '[' of a value ("1, 2, 3]")."""
+    runpy.run_path(str(_as(tmp_path, "reads_one")))
+    with pytest.raises(PluginError) as info:
+        load_plugin({"type": "reads_one", "foo": value}, kind=mi.BSDF, word="BSDF")
+    text = str(info.value)
+    assert "the plugin 'reads_one' does not read the parameter foo" in text, text
+    assert "()" not in text and "]" not in text, text
+
+
+def test_a_loader_error_without_words_is_never_empty():
+    assert mitsuba_reason(RuntimeError("")) == "RuntimeError without a message"
+    assert mitsuba_reason(RuntimeError("[parser.cpp:1] At dictionary node \"root\": [")).strip()
+
+
+RAISES = '''    def eval(self, ctx, si, wo, active=True):
+        raise RuntimeError("boom")
+'''
+
+
+def _raising(tmp_path) -> Path:
+    path = _as(tmp_path, "raise_rt")
+    text = path.read_text()
+    path.write_text(text.replace("    def eval(self, ctx, si, wo, active=True):\n", RAISES, 1))
+    return path
+
+
+def test_fit_of_a_plugin_that_raises_is_one_sentence(tmp_path, capsys):
+    """It ended in the plugin's RuntimeError traceback, exit 1."""
+    plugin = _raising(tmp_path)
+    fails_in_one_sentence(capsys, ["fit", "raise_rt", "--plugin", str(plugin), "--model",
+                                   "lambert", "--maxiter", "2"],
+                          "the BSDF 'raise_rt' raised RuntimeError: boom (raise_rt.py:", "in eval)")
+
+
+def test_the_full_check_of_a_plugin_that_raises_fails_its_rows(tmp_path, capsys):
+    """`check --lambert` of it ended in a traceback: now each check it breaks is a failing row
+    naming the plugin's error, and the others still report."""
+    plugin = _raising(tmp_path)
+    assert phonglab(["check", "--lambert", "raise_rt", "--plugin", str(plugin), "--spp", "8",
+                     "--no-progress"]) == 1
+    out, err = capsys.readouterr()
+    assert "Traceback" not in out + err
+    assert "fail energy/energy: the check ran to completion: the plugin raised RuntimeError: " \
+           "boom (raise_rt.py:" in out
+    assert "pass    snell" in out                      # a check the plugin does not enter
+
+
+def test_a_plugin_file_that_switches_the_variant_is_named_for_it(tmp_path, capsys):
+    """It was reported as "registered nothing"."""
+    path = _as(tmp_path, "switches")
+    path.write_text(path.read_text().replace("import mitsuba as mi\n",
+                                             "import mitsuba as mi\nmi.set_variant('scalar_rgb')\n",
+                                             1))
+    fails_in_one_sentence(capsys, ["validate", "switches", "--plugin", str(path), "--quick"],
+                          "switched Mitsuba's variant to 'scalar_rgb' (mi.set_variant)",
+                          "remove the mi.set_variant call")
+    assert mi.variant() != "scalar_rgb"            # phonglab's variant is back
+
+
+#: A tiny scene whose sphere is of the author's own BSDF type "mine".
+SCENE_OF_MY_OWN = TINY.replace('<bsdf type="phong"/>', '<bsdf type="mine"/>')
+
+
+def test_render_takes_the_authors_bsdf_by_plugin(tmp_path, capsys):
+    """`render` had no --plugin: a scene with the author's own BSDF could not be rendered."""
+    scene = tmp_path / "scene.xml"
+    scene.write_text(SCENE_OF_MY_OWN)
+    fails_in_one_sentence(capsys, ["render", str(scene), "-o", str(tmp_path / "a.exr")],
+                          "no bsdf plugin named 'mine'", "--plugin FILE.py")
+    out = tmp_path / "b.exr"
+    assert phonglab(["render", str(scene), "--plugin", str(_as(tmp_path, "mine")), "-o",
+                     str(out)]) == 0
+    capsys.readouterr()
+    image, meta = exr.read(out)
+    assert image.mean() > 0.05 and meta["spp"] == 4

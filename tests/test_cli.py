@@ -19,7 +19,6 @@ import pytest
 from phonglab import cli
 
 from phonglab.engine import exr
-from phonglab.errors import PhonglabError
 
 UNKNOWN_PY_PARAM = """<scene version="3.0.0">
   <bsdf type="phong" id="a"><float name="exponant" value="3"/></bsdf>
@@ -126,11 +125,15 @@ def test_bad_input_is_one_sentence_and_exit_2(tmp_path, capsys, argv, patterns, 
 
 
 @pytest.mark.parametrize("where", ["before", "after"])
-def test_debug_shows_the_traceback(tmp_path, where, variant_llvm_rgb):
+def test_debug_shows_the_traceback(tmp_path, where, variant_llvm_rgb, capsys):
+    """--debug adds the traceback and keeps the exit status (it turned exit 2 into 1, #52)."""
     bad = _files(tmp_path)["unknown_py_param"]
     argv = ["--debug", "render", str(bad)] if where == "before" else ["render", str(bad), "--debug"]
-    with pytest.raises(PhonglabError, match="has no parameter 'exponant'"):
-        cli.main(argv)
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback (most recent call last)" in err and "SceneError" in err, err
+    assert err.strip().splitlines()[-1].startswith("phonglab: error: ")
+    assert "has no parameter 'exponant'" in err.strip().splitlines()[-1]
 
 
 def test_real_subprocess(tmp_path):
@@ -146,7 +149,7 @@ def test_real_subprocess(tmp_path):
         f"(an unclosed or mismatched tag, or a stray character)."]
     p = subprocess.run([str(exe), "--debug", "render", str(bad)], capture_output=True, text=True,
                        env=env, timeout=120)
-    assert p.returncode != 0 and "Traceback (most recent call last)" in p.stderr
+    assert p.returncode == 2 and "Traceback (most recent call last)" in p.stderr
 
 
 def test_compare_end_to_end(tmp_path, capsys):
@@ -188,3 +191,26 @@ def test_subcommand_help_shows_an_example(capsys, name):
 def test_no_command_prints_help_and_exits_2(capsys):
     assert cli.main([]) == 2
     assert "usage: phonglab" in capsys.readouterr().out
+
+
+# --- messages whole (#52) ------------------------------------------------------------------------
+
+def test_plan_makes_a_reference_as_the_readme_says(tmp_path, monkeypatch, capsys):
+    """`plan gray_direct --make-reference 16` ended in ModuleNotFoundError 'phonglab.outputs'."""
+    from phonglab.engine import references
+
+    monkeypatch.setattr(references, "CACHE_DIR", tmp_path / "cache")
+    assert cli.main(["plan", "gray_direct", "--make-reference", "16", "-D", "res=8"]) == 0
+    assert "reference: 16 spp" in capsys.readouterr().out
+    assert list((tmp_path / "cache" / "references").glob("gray_direct-*.exr"))
+
+
+def test_a_given_depth_whose_bias_alone_misses_the_target_is_one_sentence(capsys, tmp_path):
+    """`render cornell_phong --target-error 0.05 --max-depth 3` ended in "math domain error"
+    (the planner took the root of E² − bias², negative, while writing its reason)."""
+    assert cli.main(["render", "cornell_phong", "--target-error", "0.05", "--max-depth", "3",
+                     "-D", "res=16", "-o", str(tmp_path / "c.exr")]) == 2
+    err = capsys.readouterr().err.split("\r")[-1].strip()
+    assert err.startswith("phonglab: error: max_depth 3 omits a relative RMS") and \
+        "more than the target error 0.05" in err and "\n" not in err, err
+    assert not (tmp_path / "c.exr").exists()

@@ -181,7 +181,7 @@ def test_cli_fit_set_grammar(tmp_path, capsys, variant_llvm_rgb):
 @pytest.mark.parametrize("argv,needle", [
     (["fit", "nosuchbsdf"], "Plugin \"nosuchbsdf\" not found"),
     (["fit", "roughconductor", "--set", "alpha"], "--set expects NAME=VALUE"),
-    (["fit", "roughconductor", "--set", "foo=1"], "unreferenced property"),
+    (["fit", "roughconductor", "--set", "foo=1"], "does not read the parameter foo"),
     (["fit", "roughconductor", "--set", "alpha=-0.5"], "outside (0, 1]"),
     (["fit", "roughconductor", "--set", "alpha=0"], "outside (0, 1]"),   # ZeroDivisionError
     (["fit", "roughconductor", "--set", "alpha=1,2"], "give one number or three"),

@@ -9,6 +9,12 @@ Properties checked on every example:
   at the output path before is byte-for-byte unchanged.
 The default suite runs a bounded, derandomized profile (reproducible in CI); the ``slow``
 test reruns the same properties with many more examples.
+
+Outputs never harm what is there (#52): every output option of every command given a FIFO, a
+socket, a character device (made in the test's own folder), a link to one, one of the command's
+own inputs (the same file, a hard link or a symbolic link to it), an empty name or a name
+ending in '/' is refused in one sentence (exit 2) and leaves what was there as it was; a link
+to a regular file is written through, the link kept.
 """
 
 from __future__ import annotations
@@ -16,6 +22,8 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +34,8 @@ from hypothesis import strategies as st
 from phonglab import cli
 
 from phonglab.engine import exr
+
+from helpers import SPECIAL_KINDS, make_special
 
 TINY = """<scene version="3.0.0">
   <default name="spp" value="4"/>
@@ -294,3 +304,104 @@ def test_name_too_long_is_one_sentence(tmp_path, tiny, variant_llvm_rgb):
     rc, err = run(["render", str(tiny), "-o", str(tmp_path / ("x" * 300 + ".exr"))])
     check_any_outcome(rc, err)
     assert rc == 2 and "File name too long" in err
+
+
+# --- outputs never harm what is there (#52) ---------------------------------------------------
+
+#: What an output path may name that must be refused, and what is written through.
+HARM_KINDS = (*SPECIAL_KINDS, "link_to_fifo", "link_to_device", "the_input", "hardlink_to_input",
+              "link_to_input", "empty", "trailing_slash", "link_to_file")
+#: Output slots (command, option, suffix) and, for "the input", what their input is.
+HARM_SLOTS = OUTPUT_SLOTS + (("compare-models", "-o", ""), ("bench", "--out", ""),
+                             ("bench", "--markdown", ".md"), ("bench", "--cache", ""))
+FOLDER_SLOTS = {("check", "--out-dir"), ("compare-models", "-o"), ("bench", "--out"),
+                ("bench", "--cache")}
+
+
+def _harm_argv(command, flag, path, tiny, image, plugin) -> list[str]:
+    if command == "render":
+        return ["render", str(tiny), "--plugin", str(plugin), "-o", path]
+    if command == "compare":
+        return ["compare", str(image), str(image), "--diff", path]
+    if command == "fit":
+        return ["fit", "diffuse", "--model", "lambert", "--maxiter", "1", "--plugin",
+                str(plugin), flag, path]
+    if command == "validate":
+        return ["validate", "diffuse", "--no-sweep", "--quick", "--only", "finite",
+                "--plugin", str(plugin), flag, path]
+    if command == "check":
+        return ["check", "--lambert", "nobody_registers_this", "--no-progress", "--plugin",
+                str(plugin), flag, path]
+    if command == "compare-models":
+        return ["compare-models", str(tiny), "-o", path]
+    return ["bench", "--quick", "--out", str(tiny.parent / "b"), "--quick-run", str(plugin),
+            flag, path]                # bench: its input is the run.json of a quick run
+
+
+def _the_input(command, tiny, image, plugin) -> Path:
+    return {"render": tiny, "compare": image, "compare-models": tiny}.get(command, plugin)
+
+
+def _harm_case(tmp_path_factory, tiny, slot, kind) -> None:
+    command, flag, suffix = slot
+    folder_slot = (command, flag) in FOLDER_SLOTS
+    if kind in ("the_input", "hardlink_to_input", "link_to_input") and folder_slot:
+        kind = "fifo"                  # a file that is an input cannot be a folder of results
+    if kind == "trailing_slash" and folder_slot:
+        kind = "empty"                 # a folder's name may end in '/'
+    if command in ("compare-models", "bench") and kind == "link_to_file":
+        kind = "link_to_fifo"          # their work is minutes long: refused kinds only
+    base = tmp_path_factory.mktemp("harm")
+    image = base / "image.exr"
+    exr.write(image, np.full((4, 4, 3), 0.5, np.float32))
+    plugin = base / "mine.py"
+    plugin.write_bytes(PLUGIN)
+    source = _the_input(command, tiny, image, plugin)
+    before = source.read_bytes()
+    path = base / f"out{suffix}"
+    kept = None                        # the file type left at path (or at the link's target)
+    if kind in SPECIAL_KINDS:
+        kept = (path, make_special(path, kind))
+    elif kind in ("link_to_fifo", "link_to_device"):
+        target = base / "special"
+        kept = (target, make_special(target, "fifo" if kind == "link_to_fifo" or
+                                     os.geteuid() != 0 else "char_device"))
+        path.symlink_to(target)
+    elif kind == "the_input":
+        path = source
+    elif kind == "hardlink_to_input":
+        os.link(source, path)
+    elif kind == "link_to_input":
+        path.symlink_to(source)
+    elif kind == "link_to_file":
+        (base / "real").write_bytes(b"old")
+        path.symlink_to(base / "real")
+    argv = _harm_argv(command, flag, {"empty": "", "trailing_slash": f"{path}/"}.get(kind,
+                                                                                   str(path)),
+                      tiny, image, plugin)
+    rc, err = run(argv)
+    assert source.read_bytes() == before, (slot, kind, "an input was overwritten")
+    if kept is not None:
+        assert stat.S_IFMT(os.lstat(kept[0]).st_mode) == kept[1], (slot, kind, err)
+    if kind.startswith("link_to"):
+        assert path.is_symlink(), (slot, kind)
+    if kind == "link_to_file":
+        check_any_outcome(rc, err)
+        assert (base / "real").is_file()
+        return
+    check_any_outcome(rc, err)
+    assert rc == 2, (slot, kind, rc, err)
+
+
+@settings(FAST, max_examples=40)
+@given(slot=st.sampled_from(HARM_SLOTS), kind=st.sampled_from(HARM_KINDS))
+def test_outputs_never_harm_what_is_there(tmp_path_factory, tiny, variant_llvm_rgb, slot, kind):
+    _harm_case(tmp_path_factory, tiny, slot, kind)
+
+
+@pytest.mark.slow
+@settings(LONG, max_examples=300)
+@given(slot=st.sampled_from(HARM_SLOTS), kind=st.sampled_from(HARM_KINDS))
+def test_outputs_never_harm_what_is_there_long(tmp_path_factory, tiny, variant_llvm_rgb, slot,
+                                               kind):
+    _harm_case(tmp_path_factory, tiny, slot, kind)

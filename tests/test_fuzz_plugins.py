@@ -8,6 +8,15 @@ scene (8 x 8, 1 spp, llvm_ad_rgb) that is finite and non-negative everywhere.
 
 The default suite runs a bounded, derandomized search (reproducible in CI); the ``slow``
 variants search a few hundred examples each.
+
+Plugin files that do not return (#52): a correct Lambertian that calls ``sys.exit(0)``,
+``sys.exit(3)`` or ``os._exit(0)``, or loops forever, at import, in its constructor, in
+``traverse`` or in any query method, given to ``validate``, ``check``, ``fit`` (each with
+``--timeout``) or :func:`phonglab.testing.assert_bsdf_valid`.  The property: when the command
+reached the plugin's act (a marker file says so) there is a verdict -- failing rows (exit 1) or
+one sentence (exit 2), an AssertionError or ValidateError from the helper -- never exit 0, a
+traceback, the end of the process or a hang (``os._exit`` raises in these tests and a
+watchdog bounds each example: :mod:`helpers`).
 """
 
 from __future__ import annotations
@@ -21,6 +30,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from phonglab.plugins._common import MaterialError
+from phonglab.testing import assert_bsdf_valid
+from phonglab.validate.inputs import ValidateError
+
+from helpers import (PLUGIN_ACTIONS, PLUGIN_PLACES, acting_plugin, assert_no_green,
+                     refuse_process_exit, run_cli, watchdog)
 from test_plugin_hardening import material_message, tiny_scene
 
 FAST = settings(max_examples=25, deadline=None, derandomize=True, database=None,
@@ -148,3 +162,64 @@ def test_fuzz_load_long(case):
 @given(case=update_cases())
 def test_fuzz_update_long(case):
     _update_case(*case)
+
+
+# --- plugin files that exit or hang, at import or in any method (#52) --------------------------
+
+#: How each entry point is asked about the plugin NAME in FILE, cheaply, with a 1 s limit.
+COMMANDS = {
+    "validate": ["validate", "{name}", "--plugin", "{file}", "--quick", "--no-sweep", "--only",
+                 "finite", "--only", "weight", "--timeout", "1"],
+    "check": ["check", "--lambert", "{name}", "--plugin", "{file}", "--only", "sanity",
+              "--spp", "8", "--no-progress", "--timeout", "1"],
+    "fit": ["fit", "{name}", "--plugin", "{file}", "--model", "lambert", "--maxiter", "2",
+            "--timeout", "1"],
+    "assert_bsdf_valid": None,
+}
+EXITS = settings(deadline=None, derandomize=True, database=None,
+                 suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                        HealthCheck.too_slow])
+
+
+def _acting_case(folder, place, action, command, n) -> None:
+    marker = folder / f"reached{n}"
+    plugin = acting_plugin(folder, place, action, name=f"act{n}_{place.strip('_')}_{action}",
+                           marker=marker)
+    if command == "assert_bsdf_valid":
+        try:
+            with watchdog(60):
+                assert_bsdf_valid(plugin.stem, plugins=[plugin], sweep=False, quick=True,
+                                  topics=["finite", "weight"], timeout=1)
+        except (AssertionError, ValidateError) as exc:
+            assert "Traceback" not in str(exc)
+            return
+        assert not marker.exists(), f"{place}/{action}: the helper passed a plugin that acted"
+        return
+    argv = [a.replace("{name}", plugin.stem).replace("{file}", str(plugin))
+            for a in COMMANDS[command]]
+    rc, out, err = run_cli(argv, seconds=90)
+    if marker.exists():
+        assert_no_green(rc, err)
+    else:           # never reached (fit never calls traverse, say): any honest outcome
+        assert rc in (0, 1, 2, 3) and "Traceback" not in err, (rc, err[-2000:])
+
+
+_counter = iter(range(10**9))
+
+
+@settings(EXITS, max_examples=10)
+@given(place=st.sampled_from(PLUGIN_PLACES), action=st.sampled_from(sorted(PLUGIN_ACTIONS)),
+       command=st.sampled_from(sorted(COMMANDS)))
+def test_fuzz_plugins_that_exit_or_hang(tmp_path_factory, monkeypatch, place, action, command):
+    refuse_process_exit(monkeypatch)
+    _acting_case(tmp_path_factory.mktemp("acts"), place, action, command, next(_counter))
+
+
+@pytest.mark.slow
+@settings(EXITS, max_examples=80)
+@given(place=st.sampled_from(PLUGIN_PLACES), action=st.sampled_from(sorted(PLUGIN_ACTIONS)),
+       command=st.sampled_from(sorted(COMMANDS)))
+def test_fuzz_plugins_that_exit_or_hang_long(tmp_path_factory, monkeypatch, place, action,
+                                             command):
+    refuse_process_exit(monkeypatch)
+    _acting_case(tmp_path_factory.mktemp("acts"), place, action, command, next(_counter))

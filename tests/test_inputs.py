@@ -1,22 +1,29 @@
 """Every input answered before the work, across the commands: folders where files are expected,
 every output path, symbolic links, time limits, and ``doctor`` telling the truth about the
-libLLVM it loaded."""
+libLLVM it loaded.  Outputs never harm what is there (#52): for every output option of every
+command, a device, FIFO or socket (or a link to one), an output that is one of the command's
+inputs, an empty name and a name ending in '/' are refused before the work, and what was there
+is left as it was."""
 
 from __future__ import annotations
 
 import importlib.util
 import json
 import os
+import stat
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from phonglab import cli, planner
 from phonglab.engine import exr
-from phonglab.errors import PlanError
+from phonglab.engine import outputs
+from phonglab.errors import PlanError, WriteError
 
+from helpers import SPECIAL_KINDS, make_special
 from helpers import fails_in_one_sentence as _fails_in_one_sentence
 
 
@@ -143,3 +150,174 @@ def test_doctor_fails_when_the_libllvm_path_is_not_a_libllvm(tmp_path, library, 
     line = next(l for l in done.stdout.splitlines() if l.startswith("libLLVM"))
     assert words in line and "using" not in line, line
     assert "variant : scalar_rgb" in done.stdout
+
+
+# --- outputs never harm what is there (#52) ---------------------------------------------------
+
+#: Every output option of every command: (name, argv with {out} for the path, suffix, "file"
+#: or "folder", the command's work (never reached when the path is refused)).
+OUTPUT_SLOTS = [
+    ("validate-json", ["validate", "diffuse", "--quick", "--no-sweep", "--json", "{out}"],
+     ".json", "file", ("phonglab.cli.validate", "validate_one")),
+    ("validate-report", ["validate", "diffuse", "--quick", "--no-sweep", "--report", "{out}"],
+     ".html", "file", ("phonglab.cli.validate", "validate_one")),
+    ("check-json", ["check", "--only", "snell", "--no-progress", "--json", "{out}"], ".json",
+     "file", ("phonglab.checks", "run_checks")),
+    ("check-out-dir", ["check", "--only", "snell", "--no-progress", "--out-dir", "{out}"], "",
+     "folder", ("phonglab.checks", "run_checks")),
+    ("fit-json", ["fit", "roughconductor", "--json", "{out}"], ".json", "file",
+     ("phonglab.fit.optimize", "fit")),
+    ("fit-report", ["fit", "roughconductor", "--report", "{out}"], ".txt", "file",
+     ("phonglab.fit.optimize", "fit")),
+    ("render-o", ["render", "gray_direct", "-o", "{out}"], ".exr", "file",
+     ("phonglab.engine.render", "render_file")),
+    ("compare-diff", ["compare", "{image}", "{image}", "--diff", "{out}"], ".png", "file",
+     ("phonglab.engine.compare", "compare_files")),
+    ("compare-models-o", ["compare-models", "gray_direct", "-o", "{out}"], "", "folder",
+     ("phonglab.engine.compare_models", "compare_models")),
+    ("bench-out", ["bench", "--quick", "--out", "{out}"], "", "folder",
+     ("phonglab.bench.run", "run_bench")),
+    ("bench-markdown", ["bench", "--quick", "--out", "{tmp}/b", "--markdown", "{out}"], ".md",
+     "file", ("phonglab.bench.run", "run_bench")),
+    ("bench-cache", ["bench", "--quick", "--out", "{tmp}/b", "--cache", "{out}"], "", "folder",
+     ("phonglab.bench.run", "run_bench")),
+]
+FILE_SLOTS = [s for s in OUTPUT_SLOTS if s[3] == "file"]
+
+
+def _slot_argv(argv, out, tmp_path) -> list[str]:
+    image = tmp_path / "image.exr"
+    if not image.exists():
+        exr.write(image, np.full((4, 4, 3), 0.5, np.float32))
+    return [a.replace("{out}", str(out)).replace("{tmp}", str(tmp_path))
+            .replace("{image}", str(image)) for a in argv]
+
+
+@pytest.mark.parametrize("kind", SPECIAL_KINDS)
+@pytest.mark.parametrize("slot", OUTPUT_SLOTS, ids=[s[0] for s in OUTPUT_SLOTS])
+def test_an_output_that_is_not_a_regular_file_is_refused_and_left_as_it_is(
+        tmp_path, capsys, monkeypatch, slot, kind):
+    """As root, `validate diffuse --json /dev/null` replaced the null device with a regular
+    file (the atomic rename goes over whatever the path is); `--json /dev/full` exited 0."""
+    _, argv, suffix, what, work = slot
+    out = tmp_path / f"x{suffix}"
+    before = make_special(out, kind)
+    _no_work(monkeypatch, *work)
+    _fails_in_one_sentence(capsys, _slot_argv(argv, out, tmp_path),
+                           "not a regular file" if what == "file" else "not a folder")
+    assert stat.S_IFMT(os.lstat(out).st_mode) == before
+
+
+@pytest.mark.parametrize("slot", FILE_SLOTS, ids=[s[0] for s in FILE_SLOTS])
+def test_a_link_to_a_device_is_refused_and_the_link_kept(tmp_path, capsys, monkeypatch, slot):
+    _, argv, suffix, _, work = slot
+    device = tmp_path / "dev"
+    before = make_special(device, "char_device" if os.geteuid() == 0 else "fifo")
+    link = tmp_path / f"link{suffix}"
+    link.symlink_to(device)
+    _no_work(monkeypatch, *work)
+    _fails_in_one_sentence(capsys, _slot_argv(argv, link, tmp_path), "a symbolic link to",
+                           "not a regular file")
+    assert link.is_symlink() and stat.S_IFMT(os.lstat(device).st_mode) == before
+
+
+@pytest.mark.parametrize("slot", OUTPUT_SLOTS, ids=[s[0] for s in OUTPUT_SLOTS])
+def test_an_empty_output_name_is_refused(tmp_path, capsys, monkeypatch, slot):
+    """`validate diffuse --json ""` validated, wrote nothing and exited 0."""
+    _, argv, _, _, work = slot
+    _no_work(monkeypatch, *work)
+    _fails_in_one_sentence(capsys, _slot_argv(argv, "", tmp_path), "is an empty name")
+
+
+@pytest.mark.parametrize("slot", FILE_SLOTS, ids=[s[0] for s in FILE_SLOTS])
+def test_an_output_file_name_ending_in_a_slash_is_refused(tmp_path, capsys, monkeypatch, slot):
+    """`validate ... --json newdir/` (a folder that does not exist) wrote a file named newdir."""
+    _, argv, suffix, _, work = slot
+    _no_work(monkeypatch, *work)
+    _fails_in_one_sentence(capsys, _slot_argv(argv, f"{tmp_path}/newdir{suffix}/", tmp_path),
+                           "ends in '/'")
+    assert not (tmp_path / f"newdir{suffix}").exists()
+
+
+VICTIM = (Path(__file__).parent / "authors" / "my_lambert.py").read_text()
+
+
+@pytest.mark.parametrize("case", [
+    # the plugin's source was overwritten with the JSON report
+    (["validate", "my_lambert", "--plugin", "{victim}", "--json", "{victim}"],
+     ("phonglab.cli.validate", "validate_one"), "same"),
+    (["validate", "my_lambert", "--plugin", "{victim}", "--report", "{out}.html"],
+     ("phonglab.cli.validate", "validate_one"), "hardlink"),
+    (["validate", "my_lambert", "--plugin", "{victim}", "--json", "{out}.json"],
+     ("phonglab.cli.validate", "validate_one"), "symlink"),
+    (["fit", "my_lambert", "--plugin", "{victim}", "--report", "{victim}"],
+     ("phonglab.fit.optimize", "fit"), "same"),
+    (["fit", "my_lambert", "--plugin", "{victim}", "--json", "{out}.json"],
+     ("phonglab.fit.optimize", "fit"), "symlink"),
+    (["check", "--lambert", "my_lambert", "--plugin", "{victim}", "--json", "{victim}"],
+     ("phonglab.checks", "run_checks"), "same"),
+    (["render", "{scene}", "--plugin", "{victim}", "-o", "{out}.exr"],
+     ("phonglab.engine.render", "render_file"), "hardlink"),
+    (["render", "{scene}", "-o", "{out}.exr"], ("phonglab.engine.render", "render_file"),
+     "scene"),
+    (["compare", "{victim}", "{victim}", "--diff", "{out}.png"],
+     ("phonglab.engine.compare", "compare_files"), "hardlink"),
+], ids=["validate-json", "validate-report-hardlink", "validate-json-symlink", "fit-report",
+        "fit-json-symlink", "check-json", "render-plugin-hardlink", "render-scene-hardlink",
+        "compare-diff-hardlink"])
+def test_an_output_that_is_one_of_the_inputs_is_refused(tmp_path, capsys, monkeypatch, case):
+    """`validate mybp --plugin victim.py --json victim.py` overwrote the plugin's source."""
+    argv, work, how = case
+    victim = tmp_path / "victim.py"
+    victim.write_text(VICTIM)
+    scene = tmp_path / "scene.xml"
+    scene.write_text(TINY_SCENE)
+    out = tmp_path / "out"
+    target = scene if how == "scene" else victim
+    for suffix in (".html", ".json", ".exr", ".png"):
+        if how in ("hardlink", "scene"):
+            os.link(target, f"{out}{suffix}")
+        elif how == "symlink":
+            Path(f"{out}{suffix}").symlink_to(target)
+    _no_work(monkeypatch, *work)
+    argv = [a.replace("{victim}", str(victim)).replace("{out}", str(out))
+            .replace("{scene}", str(scene)) for a in argv]
+    _fails_in_one_sentence(capsys, argv, "one of this command's inputs")
+    assert victim.read_text() == VICTIM and scene.read_text() == TINY_SCENE
+
+
+def test_json_and_report_of_one_run_may_not_be_the_same_file(tmp_path, capsys, monkeypatch):
+    _no_work(monkeypatch, "phonglab.fit.optimize", "fit")
+    same = str(tmp_path / "r.txt")
+    _fails_in_one_sentence(capsys, ["fit", "roughconductor", "--json", same, "--report", same],
+                           "are the same file")
+
+
+def test_the_log_beside_an_all_builtins_json_is_checked_too(tmp_path, capsys, monkeypatch):
+    make_special(tmp_path / "c.json.partial.jsonl", "fifo")
+    _no_work(monkeypatch, "phonglab.validate.batch", "run_all")
+    _fails_in_one_sentence(capsys, ["validate", "--all-builtins", "--quick", "--json",
+                                    str(tmp_path / "c.json")], "not a regular file")
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "c.json.partial.jsonl").st_mode)
+
+
+def test_a_link_to_a_regular_file_is_written_through(tmp_path, capsys):
+    """The one kind of output that is not a plain name and is what the user meant."""
+    (tmp_path / "real.json").write_text("{}")
+    (tmp_path / "link.json").symlink_to("real.json")
+    assert cli.main(["validate", "diffuse", "--quick", "--no-sweep", "--only", "finite",
+                     "--json", str(tmp_path / "link.json")]) == 0
+    capsys.readouterr()
+    assert (tmp_path / "link.json").is_symlink()
+    assert json.loads((tmp_path / "real.json").read_text())["meta"]["bsdf"] == "diffuse"
+
+
+@pytest.mark.parametrize("kind", SPECIAL_KINDS)
+def test_the_write_itself_never_renames_over_anything_but_a_regular_file(tmp_path, kind):
+    """The last line of defence, for a path that became a device after the checks ran."""
+    path = tmp_path / "x.json"
+    before = make_special(path, kind)
+    with pytest.raises(WriteError, match="not a regular file"):
+        outputs.write_json(path, {"a": 1})
+    assert stat.S_IFMT(os.lstat(path).st_mode) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["x.json"]      # no temporary left

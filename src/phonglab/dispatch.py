@@ -39,8 +39,10 @@ import traceback
 
 import mitsuba as mi
 
-__all__ = ["METHODS", "Dispatched", "base_of", "bsdf", "describe", "emitter", "integrator",
-           "is_bad_cast", "not_implemented", "origin", "phase", "root_cause", "view"]
+from .runtime import PluginExited
+
+__all__ = ["METHODS", "Dispatched", "base_of", "bsdf", "describe", "emitter", "exit_call",
+           "integrator", "is_bad_cast", "raised_in", "not_implemented", "origin", "phase", "root_cause", "view"]
 
 #: The query methods each base class binds, called through the binding (Mitsuba's dispatch).
 METHODS = {
@@ -175,6 +177,39 @@ def is_bad_cast(exc: BaseException) -> bool:
     (nanobind's ``std::bad_cast``, raised after the plugin's code returned: no frame of the
     plugin's own in its traceback)."""
     return "bad_cast" in str(exc) and origin(exc) is None
+
+
+def raised_in(exc: BaseException, files) -> str | None:
+    """:func:`describe` of ``exc`` when its innermost plugin frame (Dr.Jit's wrappers
+    unwrapped) lies in one of ``files`` (a user's ``--plugin`` files), else None."""
+    where = origin(root_cause(exc))
+    if where is None:
+        return None
+    for f in files:
+        try:
+            if os.path.samefile(where[0], f):
+                return describe(exc)
+        except OSError:
+            continue
+    return None
+
+
+def exit_call(exc: BaseException) -> str | None:
+    """``the plugin called sys.exit(0) (my_bsdf.py:12, in eval)`` when ``exc`` (or what
+    Dr.Jit wrapped) is a ``SystemExit`` or an intercepted ``os._exit``
+    (:class:`phonglab.runtime.PluginExited`); "sys.exit(0) was called" where no frame of a
+    plugin is in its traceback; None for any other exception."""
+    exc = root_cause(exc)
+    if isinstance(exc, PluginExited):
+        call = f"os._exit({exc.status!r})"
+    elif isinstance(exc, SystemExit):
+        call = f"sys.exit({exc.code!r})"
+    else:
+        return None
+    where = origin(exc)
+    if where is None:
+        return f"{call} was called"
+    return f"the plugin called {call} ({os.path.basename(where[0])}:{where[1]}, in {where[2]})"
 
 
 def describe(exc: BaseException) -> str:

@@ -15,6 +15,7 @@ nor let Dr.Jit start before :mod:`phonglab.runtime` has pinned libLLVM.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import threading
 
@@ -31,6 +32,10 @@ _lock = threading.Lock()
 _registered: set[str] = set()          # variants in which every plugin is registered
 _classes: dict[tuple[str, str], type] = {}   # (module, variant) -> plugin class
 _callback_installed = False
+#: A user's own plugin files (``phonglab render --plugin``), run once in each variant
+#: :func:`register` activates, since a Python plugin class derives from its variant's classes.
+_user_files: tuple[str, ...] = ()
+_user_variants: set[str] = set()
 
 
 def plugin_class(name: str, variant: str) -> type:
@@ -96,7 +101,36 @@ def register(variant: str | None = None) -> str:
             mi.detail.add_variant_callback(_on_variant_change)
             _callback_installed = True
         _register_active()
+    active = mi.variant()
+    if _user_files and active not in _user_variants:
+        from .validate.core import load_plugins   # lazy: the validator imports this module
+
+        _user_variants.add(active)
+        try:
+            load_plugins(_user_files)
+        except BaseException:
+            _user_variants.discard(active)
+            raise
     return mi.variant()
+
+
+@contextlib.contextmanager
+def plugin_files(paths):
+    """For the block, run the plugin files ``paths`` (each calls ``mi.register_*`` with a
+    name of its own: :func:`phonglab.validate.core.load_plugins`, which refuses a name
+    Mitsuba or phonglab has) once in every variant :func:`register` activates, the active
+    one at its next call (``phonglab render --plugin``: the scene is loaded, in whatever
+    variant the render or its plan chose, with the user's plugins registered there)."""
+    global _user_files
+    previous = _user_files, set(_user_variants)
+    _user_files = tuple(str(p) for p in paths)
+    _user_variants.clear()
+    try:
+        yield
+    finally:
+        _user_files = previous[0]
+        _user_variants.clear()
+        _user_variants.update(previous[1])
 
 
 def registered_variants() -> frozenset[str]:

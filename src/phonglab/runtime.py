@@ -30,10 +30,12 @@ from __future__ import annotations
 
 import contextlib
 import glob
+import io
 import os
 import re
 import resource
 import signal
+import sys
 import threading
 import warnings
 from dataclasses import dataclass
@@ -278,6 +280,100 @@ def interrupts_routed():
         signal.pthread_kill(listener.ident, signal.SIGINT)      # wakes sigwait, not main
         listener.join()
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+class PluginExited(BaseException):
+    """``os._exit(status)`` called while :func:`exits_intercepted` held (by a plugin file,
+    at import or in a method).  A BaseException, so a plugin's ``except Exception`` does not
+    swallow it; ``status`` is what it asked for."""
+
+    def __init__(self, status):
+        super().__init__(status)
+        self.status = status
+
+
+@contextlib.contextmanager
+def exits_intercepted():
+    """For the block, ``os._exit`` in this process raises :class:`PluginExited` instead of
+    ending it.
+
+    Why: ``os._exit(0)`` ends the process at once, with status 0, no output and no cleanup:
+    a plugin file that calls it at import (or in ``eval``) turned ``phonglab validate`` into
+    a green CI step that judged nothing.  No handler can catch it, so for the block the
+    function itself is replaced (monkeypatched in the ``os`` module, which a plugin's ``os``
+    and ``from os import _exit`` both read); the command then reports the call as the
+    plugin's, one sentence or one failing row, never exit 0.  A forked child (multiprocessing,
+    ``--workers``) inherits the replacement, so it calls the real ``os._exit`` when it is not
+    this process, which is how those children end.  A plugin that stored ``os._exit`` before
+    the block, or ends the process another way (a signal, a C ``exit``), is not caught.
+    """
+    real, pid = os._exit, os.getpid()
+
+    def intercepted(status, *args):
+        if os.getpid() != pid:
+            real(status, *args)
+        raise PluginExited(status)
+
+    os._exit = intercepted
+    try:
+        yield
+    finally:
+        os._exit = real
+
+
+@contextlib.contextmanager
+def closed_stdout_tolerated():
+    """For the block, a reader that goes away (``phonglab validate ... | head -3``) ends the
+    output quietly: the first write that meets the closed pipe points standard output at
+    ``os.devnull`` and the command goes on, so its files are still written and it exits with
+    its verdict's own status -- not 1 with a ``BrokenPipeError`` traceback (Python ignores
+    SIGPIPE, so the write fails with EPIPE instead of ending the process)."""
+    stream = sys.stdout
+    if stream is None or not hasattr(stream, "fileno"):
+        yield
+        return
+    try:
+        fd = stream.fileno()
+    except (OSError, ValueError, io.UnsupportedOperation):      # captured (pytest, StringIO)
+        yield
+        return
+    sys.stdout = tolerant = _PipeTolerant(stream, fd)
+    try:
+        yield
+    finally:
+        sys.stdout = stream
+        with contextlib.suppress(OSError, ValueError):
+            tolerant.flush()     # what is still buffered, else Python's exit meets the pipe
+
+
+class _PipeTolerant:
+    """Standard output whose writes and flushes, once its pipe is closed, go to os.devnull."""
+
+    def __init__(self, stream, fd: int):
+        self._stream, self._fd = stream, fd
+
+    def _closed(self) -> None:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, self._fd)              # the buffered rest now goes nowhere
+        os.close(devnull)
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._closed()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._closed()
+            with contextlib.suppress(BrokenPipeError, OSError):
+                self._stream.flush()
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def set_variant(variant: str | None = None) -> str:

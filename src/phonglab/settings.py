@@ -173,18 +173,65 @@ def _at(out: dict, path: list[str]) -> dict:
     return node
 
 
+_UNREFERENCED = re.compile(r'unreferenced propert(?:y|ies) in (\w+) plugin of type "([^"]+)"')
+_UNREFERENCED_NAME = re.compile(r'^\s*-\s*\w+\s+"([^"]+)"', re.MULTILINE)
+
+
+def unread_parameters(text: str) -> tuple[str, str, list[str]] | None:
+    """(kind, plugin type, parameter names) of Mitsuba's "Found N unreferenced properties in
+    <kind> plugin of type "T": - <type> "<name>": <value> ..." in ``text`` (the kind is
+    "unknown" for a Python plugin), else None."""
+    m = _UNREFERENCED.search(text)
+    if not m:
+        return None
+    return m.group(1), m.group(2), _UNREFERENCED_NAME.findall(text)
+
+
+def _exit_in_traceback(text: str) -> str | None:
+    """"the plugin called sys.exit(0) (file.py:11, in __init__)" when the Python traceback
+    Mitsuba's loader quotes in ``text`` ends in a ``SystemExit`` or an intercepted
+    ``os._exit`` (:class:`phonglab.runtime.PluginExited`), else None."""
+    tail = text.rpartition("Traceback (most recent call last):")[2].strip().splitlines()
+    last = re.match(r"(SystemExit|PluginExited)(?::\s*(.*))?$", tail[-1].strip()) if tail else None
+    if not last:
+        return None
+    call = f"{'sys.exit' if last.group(1) == 'SystemExit' else 'os._exit'}({last.group(2) or ''})"
+    frames = [f for f in re.findall(r'File "([^"]+)", line (\d+), in (\S+)', "\n".join(tail))
+              if Path(f[0]).name != "runtime.py"]      # the os._exit replacement's own frame
+    where = f" ({Path(frames[-1][0]).name}:{frames[-1][1]}, in {frames[-1][2]})" if frames else ""
+    return f"the plugin called {call}{where}: a plugin must return or raise, never end the process"
+
+
 def mitsuba_reason(exc: Exception) -> str:
     """The informative part of a Mitsuba loader error, on one line (source tags and the
-    "While loading dictionary node" prefix dropped, the innermost cause kept)."""
-    text = " ".join(str(exc).split())
+    "While loading dictionary node" prefix dropped, the innermost cause kept).
+
+    Mitsuba's "Found 2 unreferenced properties in ... plugin of type "mybp": - rgb
+    "diffuse_reflectance": [0.5, 0.5, 0.5] ..." is said as what it means, the plugin does
+    not read those parameters; a value's brackets are never taken for a cause's tag (that
+    cut the sentence to "0.5, 0.5, 0.5]")."""
+    raw = str(exc)
+    unread = unread_parameters(raw)
+    if unread:
+        _, plugin_type, names = unread
+        return (f"the plugin {plugin_type!r} does not read "
+                + (f"the parameter{'s' if len(names) > 1 else ''} {', '.join(names)}" if names
+                   else "a parameter it was given")
+                + "; Mitsuba refuses a parameter the plugin never reads")
+    text = " ".join(raw.split())
     text = re.sub(r"\[[\w.]+:\d+\] ", "", text)              # [parser.cpp:444] source tags
     text = re.sub(r"^(While loading|At) dictionary node \"root\": ", "", text)
-    text = text.split(": [")[-1].lstrip("[")                   # the innermost cause
+    text = re.split(r": \[(?=[A-Za-z_][\w.]*\] )", text)[-1]   # the innermost cause's tag
+    text = re.sub(r"^([A-Za-z_][\w.]*)\] ", r"\1: ", text)     # [PluginManager] -> its name
     if "Traceback (most recent call last):" in text:           # a Python plugin raised:
         head, _, tail = text.partition("Traceback (most recent call last):")
+        exited = _exit_in_traceback(raw)
+        if exited:
+            return head + exited
         frames = re.findall(r"\b\w+(?:Error|Exception): .*", tail)   # keep its last line
         text = head + (frames[-1] if frames else tail.strip())
-    return text.replace("] ", ": ").rstrip(".!")
+    text = text.strip().rstrip(".!")
+    return text or f"{type(exc).__name__} without a message"
 
 
 class Loaded(NamedTuple):

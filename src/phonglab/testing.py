@@ -48,17 +48,28 @@ def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None
     skipped: :func:`phonglab.validate.core.not_covered`) with their skip reasons.
     ``timeout``: seconds a topic may run before it is stopped and becomes a failing row ("did
     not finish within N s"; :func:`phonglab.validate.core.topic_timeout`: Python code only, in
-    the main thread -- a compiled Dr.Jit kernel runs to its end).  Returns the report."""
+    the main thread -- a compiled Dr.Jit kernel runs to its end); loading a plugin file or the
+    plugin that takes longer is a ValidateError.  A plugin that calls ``sys.exit`` or
+    ``os._exit`` (:func:`phonglab.runtime.exits_intercepted`) is a failing row or an
+    AssertionError naming the call, never the end of the test process.  Returns the report."""
+    from . import runtime
     from . import validate as face
+    from .dispatch import exit_call
     from .validate import registry, validate
     from .validate.core import topic_timeout
 
-    with topic_timeout(timeout):
-        if kind is None:
-            report = validate(spec, sweep=sweep, **options)
-            kind = report.meta.get("kind") or next(k.name for k in KINDS if k.name in report.meta)
-        else:
-            report = getattr(face, registry.by_name(kind).function)(spec, sweep=sweep, **options)
+    try:
+        with runtime.exits_intercepted(), topic_timeout(timeout):
+            if kind is None:
+                report = validate(spec, sweep=sweep, **options)
+                kind = report.meta.get("kind") or next(k.name for k in KINDS
+                                                       if k.name in report.meta)
+            else:
+                report = getattr(face, registry.by_name(kind).function)(spec, sweep=sweep,
+                                                                         **options)
+    except (SystemExit, runtime.PluginExited) as exc:   # never the plugin's status as pytest's
+        raise AssertionError(f"{spec}: {exit_call(exc)}, so nothing was judged; a plugin must "
+                             f"return or raise, never end the process") from exc
     if not report.passed:
         by_point = {}
         for r in report.failing:

@@ -1,7 +1,11 @@
 """Running the checks: the registry :data:`CHECKS` and :func:`run_checks`.
 
 The rows are :class:`phonglab.verdict.Row` records; ``phonglab check`` prints and writes them as
-a :class:`phonglab.verdict.Report` (:mod:`phonglab.cli.check`).
+a :class:`phonglab.verdict.Report` (:mod:`phonglab.cli.check`).  Each check runs as a validator
+topic does (:func:`phonglab.validate.core.guarded`): a plugin under test (``--lambert``,
+``--phong``) that raises, calls ``sys.exit``/``os._exit`` or runs past ``--timeout`` is one
+failing row of that check, naming the plugin's error and its file:line, and the other checks
+still report -- never a traceback, and never the plugin's exit status as the verdict.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from typing import Callable
 
 from .. import registration
 from ..errors import PhonglabError
+from ..validate.core import guarded
 from ..verdict import Row
 from . import CHECK_NAMES
 from .common import Config
@@ -47,7 +52,7 @@ def run_checks(names=None, cfg: Config | None = None,
         if on_check:
             on_check(name)
         t0 = time.perf_counter()
-        rows = CHECKS[name](cfg)
+        rows = guarded(name, lambda: CHECKS[name](cfg))
         for r in rows:
             r.details.setdefault("check_seconds", round(time.perf_counter() - t0, 2))
         results.extend(rows)

@@ -102,8 +102,9 @@ def _row(label, what, vrows: list[Row], measured, expected, tolerance, compared,
     status = ("fail" if "fail" in statuses or not vrows else
               "KNOWN" if "KNOWN" in statuses else
               "skipped" if statuses == {"skipped"} else "pass")
+    why = next((r.reason for r in vrows if r.status == "fail" and r.measured is None), None)
     return Row("sanity", f"{label}: {what}", measured, expected, 0.0, tolerance, status,
-               f"{label}: {compared}",
+               f"{label}: {compared}" + (f"; nothing measured: {why}" if why else ""),
                {"source": source, "relation": relation, **details,
                 "validate": [r.to_dict() for r in vrows]})
 

@@ -11,9 +11,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import traceback
 
 from .. import __version__, runtime
-from ..errors import user_errors
+from ..errors import PhonglabError, user_errors
 
 #: Modules ``phonglab.cli.<name>``, in the order ``--help`` lists them.
 SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor",
@@ -67,8 +68,9 @@ def interrupted(exc: BaseException) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     # Ctrl-C is taken by a thread of phonglab's own, never by the C handler Mitsuba installs
-    # during a render, which can hang the process (runtime.interrupts_routed).
-    with runtime.interrupts_routed():
+    # during a render, which can hang the process (runtime.interrupts_routed); a reader that
+    # closes the pipe (`| head`) ends the output, not the command (closed_stdout_tolerated).
+    with runtime.interrupts_routed(), runtime.closed_stdout_tolerated():
         return _main(argv)
 
 
@@ -85,8 +87,8 @@ def _main(argv: list[str] | None) -> int:
             parser.print_help()
             return 2
         debug = args.debug
-        return int(args.func(args) or 0)
-    except SystemExit:                   # argparse's --help and usage errors, sys.exit
+        return _run(args)
+    except SystemExit:                   # argparse's --help and usage errors
         raise
     except BaseException as exc:
         # A Ctrl-C first, whatever wraps it: user_errors() imports Dr.Jit, which must not
@@ -98,7 +100,25 @@ def _main(argv: list[str] | None) -> int:
         # An OSError naming its file (a name too long, a parent that is a file, a loop of
         # symlinks, no permission) is about the path the user typed: one sentence too.
         path_error = isinstance(exc, OSError) and getattr(exc, "filename", None) is not None
-        if debug or not (isinstance(exc, user_errors()) or path_error):
+        if not (isinstance(exc, user_errors()) or path_error):
             raise
+        if debug:                        # the traceback added, the exit status kept
+            traceback.print_exc()
         print(f"phonglab: error: {exc}", file=sys.stderr)
         return 2
+
+
+def _run(args) -> int:
+    """The subcommand, whose exit status is its verdict's: a ``sys.exit`` or ``os._exit`` it
+    meets (a plugin's, at import or in a method: runtime.exits_intercepted) is one sentence
+    naming the call and its file:line, exit 2 -- never the plugin's own status, which made a
+    run that judged nothing exit 0."""
+    with runtime.exits_intercepted():
+        try:
+            return int(args.func(args) or 0)
+        except (SystemExit, runtime.PluginExited) as exc:
+            from ..dispatch import exit_call    # lazy: Mitsuba
+
+            raise PhonglabError(f"{exit_call(exc)} while 'phonglab {args.command}' ran, so "
+                                f"there is no verdict; a plugin must return or raise, never "
+                                f"end the process: remove the call") from exc

@@ -43,17 +43,18 @@ def run(args) -> int:
 
     # Every path before the first sweep: the report and the rows must have somewhere to go.
     check_output_folder(args.out, "bench output folder (--out)")
-    if args.markdown:
-        check_output_file(args.markdown, "Markdown report (--markdown)")
-    if args.cache:
-        check_output_folder(args.cache, "reference cache (--cache)")
-    if args.quick_run:
+    if args.quick_run is not None:
         check_input_file(args.quick_run, "run.json of a --quick run (--quick-run)")
+    if args.markdown is not None:
+        check_output_file(args.markdown, "Markdown report (--markdown)",
+                          [(args.quick_run, "run.json of a --quick run (--quick-run)")])
+    if args.cache is not None:
+        check_output_folder(args.cache, "reference cache (--cache)")
     rec = run_bench(Path(args.out), quick=args.quick, fresh=args.fresh,
-                    markdown=Path(args.markdown) if args.markdown else None, parts=args.only,
-                    cache=Path(args.cache) if args.cache else None,
+                    markdown=Path(args.markdown) if args.markdown is not None else None, parts=args.only,
+                    cache=Path(args.cache) if args.cache is not None else None,
                     progress=not args.no_progress,
-                    quick_run=Path(args.quick_run) if args.quick_run else None,
+                    quick_run=Path(args.quick_run) if args.quick_run is not None else None,
                     runner=runner_from_args(args))
     print(f"bench ({rec['mode']}) finished in {rec['seconds']:.1f} s ({rec['execution']['where']}); "
           f"results in {args.out}/")

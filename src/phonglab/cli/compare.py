@@ -49,8 +49,11 @@ def run(args) -> int:
     if args.diff and Path(args.diff).suffix.lower() != ".png":
         raise PhonglabError(f"--diff writes a PNG image, but {args.diff} does not end in .png; "
                             f"give a path like out/a_minus_b.png")
-    if args.diff:      # the output rules of `phonglab render`: checked before any work
-        check_output_file(args.diff, "difference image")
+    if args.diff is not None:      # the output rules of every command, before any work
+        check_output_file(args.diff, "difference image (--diff)",
+                          [(args.a, "image A"), (args.b, "image B"),
+                           (args.stderr_a, "standard error of A (--stderr-a)"),
+                           (args.stderr_b, "standard error of B (--stderr-b)")])
     result, img_a, img_b, meta_a, meta_b = compare.compare_files(
         args.a, args.b, args.stderr_a, args.stderr_b, auto_stderr=not args.no_stderr_files,
         eps=args.eps if args.eps is not None else REL_EPS)
@@ -65,7 +68,7 @@ def run(args) -> int:
                     and meta_a[key] != meta_b[key]:
                 print(f"note: A and B were rendered from different {what} ({key} differs): "
                       f"their difference is not only noise")
-    if args.diff:
+    if args.diff is not None:
         compare.write_diff_png(args.diff, img_a, img_b,
                                title=f"A − B: RMSE {result.rmse:.3g}, mean {result.mean_diff:+.3g}"
                                      f" ± {result.mean_diff_stderr:.2g}")

@@ -43,8 +43,8 @@ def run(args) -> int:
 
     params = dict(args.params)
     path = scene_path(args.scene)
-    out = check_output_folder(args.output or Path("out") / f"compare_{path.stem}",
-                              "output folder (-o)")
+    out = check_output_folder(Path("out") / f"compare_{path.stem}" if args.output is None
+                              else args.output, "output folder (-o)")
     result = compare_models(path, out, spp=args.spp, path_spp=args.path_spp, seed=args.seed,
                             max_depth=args.max_depth, variant=args.variant, progress=True,
                             params=params)

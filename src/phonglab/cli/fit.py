@@ -6,7 +6,7 @@ import argparse
 
 from ..errors import PhonglabError
 from ..settings import parse_sets
-from .options import add_plugin, check_plugin_files, load_plugin_files
+from .options import add_plugin, add_timeout, check_plugin_files, check_timeout, load_plugin_files
 
 
 def add_parser(sub) -> None:
@@ -35,6 +35,7 @@ def add_parser(sub) -> None:
     p.add_argument("--variant", default=None, help="Mitsuba variant (default: llvm_ad_rgb)")
     p.add_argument("--json", default=None, metavar="PATH", help="write the result as JSON")
     p.add_argument("--report", default=None, metavar="PATH", help="write the printed report to a file")
+    add_timeout(p, "fit")
     p.set_defaults(func=run)
 
 
@@ -42,16 +43,17 @@ def run(args) -> int:
     params = parse_sets(args.settings)
     if args.maxiter < 1:
         raise PhonglabError(f"--maxiter must be at least 1, got {args.maxiter}")
+    check_timeout(args.timeout)
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
-    from ..engine.outputs import check_output_file, write_json, write_text
+    from ..engine.outputs import check_output_files, write_json, write_text
 
     check_plugin_files(args.plugin)
-    for path, what in ((args.json, "JSON file (--json)"), (args.report, "report (--report)")):
-        if path:
-            check_output_file(path, what)
+    check_output_files([(args.json, "JSON file (--json)"), (args.report, "report (--report)")],
+                       [(path, "plugin file (--plugin)") for path in args.plugin])
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
-    from .. import registration, runtime
+    from .. import dispatch, registration, runtime
     from ..fit.optimize import fit, format_result
+    from ..validate.core import TopicTimeout, topic_timeout, within_topic_limit
 
     variant = args.variant or runtime.default_variant()
     runtime.check_variant(variant)
@@ -59,13 +61,29 @@ def run(args) -> int:
         raise PhonglabError(f"fitting needs gradients and RGB or mono colour: use an *_ad_rgb or "
                             f"*_ad_mono variant such as llvm_ad_rgb, not {variant}")
     registration.register(variant)
-    load_plugin_files(args.plugin)
-    result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
+    with topic_timeout(args.timeout):
+        load_plugin_files(args.plugin)
+        try:
+            with within_topic_limit():
+                result = fit(args.target, params, model=args.model, maxiter=args.maxiter)
+        except TopicTimeout:
+            raise PhonglabError(f"the fit of {args.target!r} did not finish within "
+                                f"{args.timeout:g} s (stopped by --timeout: does the plugin's "
+                                f"Python code loop forever?); raise --timeout or fix the "
+                                f"plugin") from None
+        except Exception as exc:
+            error = dispatch.raised_in(exc, args.plugin)
+            if error is None:
+                raise                         # not from a --plugin file: as it was
+            raise PhonglabError(f"the BSDF {args.target!r} raised {error} "
+                                f"while it was fitted, so there is no fit; fix the plugin "
+                                f"(phonglab validate {args.target} --plugin FILE.py shows "
+                                f"which methods fail)") from exc
     text = format_result(result)
     # Files first: a closed stdout (`| head`) must not lose them.
-    if args.report:
+    if args.report is not None:
         write_text(args.report, text + "\n")
-    if args.json:
+    if args.json is not None:
         write_json(args.json, result.as_dict(), indent=1, end="\n")
     print(text)
     return 0

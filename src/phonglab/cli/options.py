@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import PhonglabError
 from ..settings import SEED_MAX, ParameterError, check_seed, split
 
 
@@ -68,3 +69,20 @@ def load_plugin_files(paths) -> list[tuple[str, str]]:
     from ..validate.core import load_plugins
 
     return load_plugins(paths)
+
+
+def add_timeout(p: argparse.ArgumentParser, what: str) -> None:
+    """``--timeout SECONDS``: the limit of each ``what`` (and of loading each ``--plugin``
+    file), checked by :func:`check_timeout` before any work
+    (:func:`phonglab.validate.core.topic_timeout`)."""
+    p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help=f"stop a {what} that runs longer than this (and a --plugin file that "
+                        f"takes longer to load): {what} becomes a failing row, a file one "
+                        f"sentence. Stops Python code (a plugin's eval that loops forever), not "
+                        f"a compiled Dr.Jit kernel")
+
+
+def check_timeout(seconds: float | None) -> None:
+    """``--timeout`` is a finite number of seconds > 0 (or not given), else one sentence."""
+    if seconds is not None and not 0 < seconds < float("inf"):
+        raise PhonglabError(f"--timeout must be a number of seconds > 0, got {seconds:g}")

@@ -79,7 +79,7 @@ def run(args) -> int:
     rendering = (args.make_reference is not None and
                  references.cached(path, params, min_spp=args.make_reference) is None)
     if rendering:       # where it will be cached, before the pilot
-        from ..outputs import check_output_folder
+        from ..engine.outputs import check_output_folder
         check_output_folder(references.CACHE_DIR / "references", "reference cache")
     with runner if rendering else contextlib.nullcontext():
         p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,

@@ -16,7 +16,7 @@ from pathlib import Path
 from .. import runtime
 from ..errors import PhonglabError
 from ..settings import check_max_seconds
-from .options import add_scene_params, add_seed
+from .options import add_plugin, add_scene_params, add_seed, check_plugin_files
 
 
 def add_parser(sub) -> None:
@@ -26,7 +26,8 @@ def add_parser(sub) -> None:
                     "OpenEXR file with its provenance in the header, and a PNG preview.",
         epilog="examples:\n  phonglab render cornell_phong --spp 128 -o out/cornell.exr\n"
                "  phonglab render cornell_phong --target-error 0.02   (planned: see 'phonglab plan')\n"
-               "  phonglab render gray_direct --adaptive --target-error 0.01 --max-seconds 60",
+               "  phonglab render gray_direct --adaptive --target-error 0.01 --max-seconds 60\n"
+               "  phonglab render myscene.xml --plugin mybsdf.py   (a scene with your own BSDF)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene XML file, or the name of a scene phonglab ships (e.g. cornell_phong)")
     p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
@@ -59,20 +60,50 @@ def add_parser(sub) -> None:
                    help="with --target-error: run every step of the planner's pilot even "
                         "where the render is predicted to cost less (see 'phonglab plan')")
     add_scene_params(p)
+    add_plugin(p, "mi.register_bsdf (or another mi.register_*) for the scene to use")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from ..engine.render import render_file
+    from .. import registration
+    from ..engine.outputs import RenderOutputs, check_output_file
     from ..engine.scenes import scene_path
 
     if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
         check_max_seconds(args.max_seconds)
+    check_plugin_files(args.plugin, "mi.register_bsdf (or another mi.register_*)")
     path = scene_path(args.scene)
-    out = Path(args.output or Path("out") / (path.stem + ".exr"))
-    if out.is_dir() or out.suffix.lower() != ".exr":
+    inputs = [(path, "scene file")] + [(p, "plugin file (--plugin)") for p in args.plugin]
+    out = Path(Path("out") / (path.stem + ".exr") if args.output is None else args.output)
+    if args.output and (out.is_dir() or out.suffix.lower() != ".exr"):
         raise PhonglabError(f"-o {out}: the output must be a file name ending in .exr "
                             f"(e.g. -o out/{path.stem}.exr); the PNG preview is written beside it")
+    if args.output is not None:      # "" and a name ending in '/' too
+        check_output_file(args.output, "output image (-o)", inputs)
+    RenderOutputs.beside(out).check(inputs)      # every file of the set, before any work
+    with registration.plugin_files(args.plugin):  # run in each variant the render sets
+        try:
+            return _render(args, path, out)
+        except Exception as exc:
+            from ..dispatch import raised_in   # lazy: Mitsuba
+
+            error = raised_in(exc, args.plugin)
+            if error is None:
+                raise
+            import mitsuba as mi
+
+            raise PhonglabError(f"the plugin raised {error} while {path.name} rendered in "
+                                f"{mi.variant()}; fix the plugin (phonglab validate NAME "
+                                f"--plugin FILE.py names its failing methods)"
+                                + ("; a plan renders a gray scene in a mono variant: give "
+                                   "--variant llvm_ad_rgb if the plugin is written for RGB only"
+                                   if "mono" in (mi.variant() or "") else "")) from exc
+
+
+def _render(args, path: Path, out: Path) -> int:
+    """The checked render: uniform, planned (--target-error) or adaptive."""
+    from ..engine.render import render_file
+
     if args.full_pilot and (args.target_error is None or args.adaptive):
         raise PhonglabError("--full-pilot is about the planner's pilot: use it with "
                             "--target-error E (without --adaptive), or drop it")
@@ -96,10 +127,9 @@ def run_planned(args, path: Path, out: Path) -> int:
     """Plan for --target-error, render the plan (:func:`phonglab.planner.execute.render_plan`),
     report predicted and achieved error and time."""
     from .. import planner
-    from ..engine.outputs import RenderOutputs, spp_paths
+    from ..engine.outputs import spp_paths
     from ..planner import execute
 
-    RenderOutputs.beside(out).check()       # before the pilot, not only before the render
     # the pilot's seeds follow the render's (seed + 1, ...), so that the render, which is
     # combined with the pilot's samples, never repeats them
     plan = planner.plan(path, args.target_error, variant=args.variant,

@@ -25,7 +25,7 @@ from ..settings import parse_sets
 from ..validate import registry
 from ..validate.inputs import ValidateError, check_plugin_file, check_topics
 from ..verdict import Report
-from .options import add_seed
+from .options import add_seed, check_timeout
 
 EPILOG = """examples:
   phonglab validate diffuse
@@ -116,7 +116,8 @@ def add_parser(sub) -> None:
                         "and a rerun with the same options resumes from it")
     p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                    help="stop a topic that runs longer than this and report it as one failing "
-                        "row ('did not finish within N s'); the other topics still run. Stops "
+                        "row ('did not finish within N s'); the other topics still run; a "
+                        "--plugin file that takes longer to load is one sentence. Stops "
                         "Python code (a plugin's eval that loops forever), not a compiled "
                         "Dr.Jit kernel; per topic and parameter point, in this process "
                         "(not in --workers processes)")
@@ -142,14 +143,16 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
         raise ValidateError(f"XML file {args.bsdf!r} "
                             f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
     _check_scene(args)
-    if args.timeout is not None and not 0 < args.timeout < float("inf"):
-        raise ValidateError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
-    if args.report and not args.report.endswith((".html", ".htm")):
+    check_timeout(args.timeout)
+    inputs = [(path, "plugin file (--plugin)") for path in args.plugin]
+    if args.bsdf and args.bsdf.endswith(".xml"):
+        inputs.append((args.bsdf, "XML file"))
+    outputs.check_output_files([(args.json, "JSON report (--json)"),
+                                (args.report, "HTML report (--report)")], inputs)
+    if args.report is not None and not args.report.endswith((".html", ".htm")):
         raise ValidateError(f"--report {args.report!r} must end in .html")
-    for path, what in ((args.json, "JSON report"), (args.report, "HTML report")):
-        if path:
-            outputs.check_file(Path(path), what)
-            outputs.check_folder(Path(path), what)
+    if args.all_builtins and args.json is not None:     # the finished cases, kept beside it
+        outputs.check_file(Path(args.json + ".partial.jsonl"), "log of finished cases")
     return parse_sets(args.set), topics
 
 
@@ -349,10 +352,10 @@ def run(args) -> int:
     with topic_timeout(args.timeout):
         report, label, text = validate_one(args, params)
     print(text)
-    if args.json:
+    if args.json is not None:
         from ..engine.outputs import write_json   # lazy: numpy, OpenEXR and Pillow
         write_json(args.json, report.to_dict())
-    if args.report:
+    if args.report is not None:
         Path(args.report).parent.mkdir(parents=True, exist_ok=True)
         html.write(report, args.report)
     failing, uncovered = report.failing, report.not_covered

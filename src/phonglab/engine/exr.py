@@ -28,6 +28,7 @@ import contextlib
 import errno
 import json
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any, Mapping
@@ -110,6 +111,8 @@ def atomic_paths(targets):
         yield list(temps)
         for path, tmp in zip(paths, temps):
             _settle(path, tmp)
+        for path in paths:
+            _replaceable(path)
         for path, tmp in zip(paths, temps):
             os.replace(tmp, path)
     except (OSError, WriteError) as exc:
@@ -139,6 +142,24 @@ def _settle(path: Path, tmp: str) -> None:
         raise write_error(path, exc) from None
     if empty:
         raise write_error(path, "the file came out empty: is the disk full?")
+
+
+def _replaceable(path: Path) -> None:
+    """Nothing but a regular file (or nothing) is at ``path``: a rename over a device, FIFO,
+    socket or folder would replace it (as root, ``/dev/null`` became a regular file), so that
+    is one :class:`WriteError` sentence, before any member of the set is renamed."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise write_error(path, exc) from None
+    if not stat.S_ISREG(mode):
+        err = WriteError(f"cannot write {path}: it is not a regular file (a device, FIFO, "
+                         f"socket or folder), which the write would replace; give the name of "
+                         f"a regular file")
+        err.reason, err.path = "not a regular file", Path(path)
+        raise err
 
 
 def _remove(tmp: str) -> None:

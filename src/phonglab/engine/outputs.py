@@ -12,6 +12,17 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
   folder and is refused), :func:`check_output_folder` for a folder of results.  An output
   that is a symbolic link is checked, and written, at the file it points to: the link stays
   (:func:`phonglab.engine.exr.atomic_paths` replaces the target, not the link).
+* **Never harm what is there.**  A write is a new file renamed over the target, and a rename
+  replaces *whatever* the name holds: run as root, ``--json /dev/null`` once turned the null
+  device into a regular file, and ``--json /dev/full`` "succeeded".  So an output must be, or
+  become, a regular file: a character or block device, a FIFO or a socket (or a link to one)
+  is refused before the work, as a folder is.  An output that is one of the command's own
+  inputs (the ``--plugin`` file, the scene, an image compared) is refused too: overwriting
+  an input is never what a user meant.  An empty name is refused (it names nothing, and was
+  once skipped silently with exit 0).  :func:`check_output_file` and
+  :func:`check_output_folder` are the one home of these rules; every command's every output
+  option goes through them, and :func:`phonglab.engine.exr.atomic_paths` refuses a rename
+  over anything but a regular file at the last moment too.
 * **Replaced as a set.**  Every file is written to a temporary beside its target, and the
   temporaries are renamed over the targets only once all of them are complete: written,
   fsync'ed and checked (:func:`phonglab.engine.exr.atomic_paths`).  The set is the image, its
@@ -47,9 +58,31 @@ def _through_links(path: Path) -> Path:
     return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
+def special_kind(path: str | Path) -> str | None:
+    """What ``path`` is when it exists and is neither a regular file nor a folder ("a
+    character device", "a FIFO (named pipe)", ...), links followed; None otherwise."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    for test, words in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                        (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return words
+    return None if stat.S_ISREG(mode) or stat.S_ISDIR(mode) else "not a regular file"
+
+
+def _refuse_empty(path, what: str, thing: str) -> None:
+    """An empty (or blank) name names nothing: one sentence, never a silent skip."""
+    if not str(path).strip():
+        raise PhonglabError(f"the {what} is an empty name; give the name of a {thing}, or "
+                            f"leave the option out")
+
+
 def check_file(path: Path, what: str = "output") -> None:
-    """Raise :class:`PhonglabError` when ``path`` is a folder, a read-only file, or a symbolic
-    link to a file in a folder that does not exist (a write through it fails, after the work)."""
+    """Raise :class:`PhonglabError` when ``path`` is a folder, a device, FIFO or socket (a
+    rename over it would replace it), a read-only file, or a symbolic link to a file in a
+    folder that does not exist (a write through it fails, after the work)."""
     link = Path(path)
     path = _through_links(link)
     if link.is_symlink() and not path.parent.is_dir():
@@ -57,6 +90,13 @@ def check_file(path: Path, what: str = "output") -> None:
                             f"does not exist; remove the link or choose another name")
     if path.is_dir():
         raise PhonglabError(f"the {what} {path} is a folder; give a file name instead")
+    special = special_kind(path)
+    if special is not None:
+        via = f"{link} (a symbolic link to {path})" if link != path else str(path)
+        raise PhonglabError(f"the {what} {via} is {special}, not a regular file, and phonglab "
+                            f"writes a new file and renames it into place, which would replace "
+                            f"it; give the name of a regular file (to discard the output, leave "
+                            f"the option out)")
     if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
         raise PhonglabError(f"the {what} {path} is read-only; make it writable "
                             f"(chmod u+w) or choose another output name")
@@ -85,31 +125,78 @@ def _check_creatable(folder: Path, path: Path, what: str) -> None:
                             f"writable folder for the {what}") from None
 
 
-def check_output_file(path: str | Path, what: str = "output") -> Path:
-    """One output file, checked before the work that fills it (:func:`check_file`,
-    :func:`check_folder`); a name ending in ``/`` is a folder's, refused rather than written
-    as a file named like the folder."""
+#: An input of a command, for :func:`check_not_input`: (its path, what it is).
+Input = tuple[Any, str]
+
+
+def check_not_input(path: str | Path, inputs, what: str = "output") -> None:
+    """Raise :class:`PhonglabError` when the output ``path`` is the same file as one of
+    ``inputs`` [(path, what it is)] (links and hard links followed): writing it would destroy
+    that input."""
+    if not os.path.lexists(path):
+        return
+    for source, kind in inputs:
+        if source is None or not str(source):
+            continue
+        try:
+            same = os.path.samefile(path, source)
+        except (OSError, ValueError):
+            same = False
+        if same:
+            raise PhonglabError(f"the {what} {path} is the {kind} {source}, one of this "
+                                f"command's inputs, and writing it would destroy that input; "
+                                f"choose another output name")
+
+
+def check_output_file(path: str | Path, what: str = "output", inputs=()) -> Path:
+    """One output file, checked before the work that fills it: not empty, not a name ending
+    in ``/`` (a folder's, refused rather than written as a file named like the folder), not
+    a folder, device, FIFO or socket, nor read-only (:func:`check_file`), in a folder where a
+    file can be created (:func:`check_folder`), and none of the command's ``inputs``
+    (:func:`check_not_input`)."""
+    _refuse_empty(path, what, "file")
     if str(path).endswith(("/", os.sep)):
         raise PhonglabError(f"the {what} {path} ends in '/', which names a folder; give the "
                             f"name of a file (in that folder, or elsewhere)")
     check_file(Path(path), what)
     check_folder(Path(path), what)
+    check_not_input(path, inputs, what)
     return Path(path)
+
+
+def check_output_files(outputs, inputs=()) -> None:
+    """Each given output of ``outputs`` [(path or None, what)] by :func:`check_output_file`
+    against the command's ``inputs``, and no two of them the same file (the second write
+    would replace the first)."""
+    seen: dict[str, str] = {}
+    for path, what in outputs:
+        if path is None:
+            continue
+        check_output_file(path, what, inputs)
+        key = os.path.realpath(path)
+        if key in seen:
+            raise PhonglabError(f"the {seen[key]} and the {what} are the same file {path}; "
+                                f"give each its own name")
+        seen[key] = what
 
 
 def check_output_folder(path: str | Path, what: str = "output folder") -> Path:
     """A folder of results: a folder already, or one that can be made, with files creatable
-    in it; an existing file there is refused before the work, not met by ``mkdir``."""
+    in it; an existing file (or device, FIFO, socket) there is refused before the work, not
+    met by ``mkdir``; an empty name is refused."""
+    _refuse_empty(path, what, "folder")
     real = _through_links(Path(path))
     if real.exists() and not real.is_dir():
-        raise PhonglabError(f"the {what} {path} is a file, not a folder; give a folder name, "
-                            f"or move the file away")
+        special = special_kind(real)
+        raise PhonglabError(f"the {what} {path} is {special or 'a file'}, not a folder; give "
+                            f"a folder name" + ("" if special else ", or move the file away"))
     _check_creatable(real, Path(path), what)
     return Path(path)
 
 
 def check_input_file(path: str | Path, what: str = "input file") -> Path:
     """A file to read: it exists and is not a folder (each said as such)."""
+    _refuse_empty(path, what, "file")
     path = Path(path)
     if path.is_dir():
         raise PhonglabError(f"the {what} {path} is a folder; give the path of a file")
@@ -144,15 +231,15 @@ class RenderOutputs:
         return cls(out, exr.stderr_path(out), out.with_suffix(".png") if png else None,
                    *spp_paths(out))
 
-    def check(self) -> None:
-        """Every file of the set can be written (see the module docstring)."""
-        check_file(self.image, "output image")
-        check_file(self.stderr, "standard-error image")
-        if self.png is not None:
-            check_file(self.png, "PNG preview")
-        check_file(self.spp_map, "spp map")
-        check_file(self.spp_png, "spp map preview")
-        check_folder(self.image, "output image")     # the files share one folder
+    def check(self, inputs=()) -> None:
+        """Every file of the set can be written, and none is one of the render's ``inputs``
+        [(path, what)] (see the module docstring)."""
+        check_output_file(self.image, "output image", inputs)
+        for path, what in ((self.stderr, "standard-error image"), (self.png, "PNG preview"),
+                           (self.spp_map, "spp map"), (self.spp_png, "spp map preview")):
+            if path is not None:        # the files share the image's folder
+                check_file(path, what)
+                check_not_input(path, inputs, what)
 
     def write(self, image: np.ndarray, stderr: np.ndarray | None, metadata: dict[str, Any],
               exposure: float = 0.0, extras: list[Extra] = ()) -> str:

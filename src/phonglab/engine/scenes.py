@@ -28,6 +28,7 @@ import numpy as np
 from .. import registration
 from ..errors import SceneError
 from ..runtime import quiet_mitsuba
+from ..settings import unread_parameters
 
 #: The shipped scenes.  Mitsuba opens a scene and its textures from the file system, and pip
 #: installs a wheel's package data as plain files, so the resource folder is a real folder.
@@ -78,8 +79,6 @@ def file_hash(path: Path) -> str:
 
 
 _MI_LINE = re.compile(r"\(line (\d+)")
-_UNREFERENCED = re.compile(r'unreferenced propert(?:y|ies) in (\w+) plugin of type "([^"]+)"')
-_UNREFERENCED_NAME = re.compile(r'^\s*-\s*\w+\s+"([^"]+)"', re.MULTILINE)
 _NOT_FOUND = re.compile(r'instantiate (\w+) plugin of type "([^"]+)".*Plugin "[^"]+" not found')
 _PLUGIN_EXCEPTION = re.compile(r"^\w*(?:Error|Exception): ((?:.|\n)*?)\s*$", re.MULTILINE)
 _UNPARSABLE = re.compile(r'could not parse (floating point|integer|boolean|\w+) value "([^"]*)"')
@@ -136,11 +135,11 @@ def _plugin_raised(text: str, where: str, path: Path) -> str | None:
 
 
 def _unreferenced(text: str, where: str, path: Path) -> str | None:
-    m = _UNREFERENCED.search(text)
-    if not m:
+    unread = unread_parameters(text)
+    if not unread:
         return None
-    kind, plugin_type = m.group(1), m.group(2)
-    names = _UNREFERENCED_NAME.findall(text) or ["?"]
+    kind, plugin_type, names = unread
+    names = names or ["?"]
     known = _plugin_parameters(plugin_type)
     hints = [difflib.get_close_matches(n, known, n=1) for n in names]
     guess = "".join(f" (did you mean {h[0]!r}?)" for h in hints if h) if len(names) == 1 else ""
@@ -162,7 +161,9 @@ def _not_found(text: str, where: str, path: Path) -> str | None:
     hint = f" (did you mean {guess[0]!r}?)" if guess else ""
     return (f"{where}: there is no {kind} plugin named {plugin_type!r}{hint}; use a Mitsuba "
             f"built-in or one of phonglab's ({', '.join(_OWN_PLUGINS)}), registered by "
-            f"phonglab.register() before loading from Python.")
+            f"phonglab.register() before loading from Python, or your own, registered by "
+            f"'phonglab render --plugin FILE.py' (a file that calls "
+            f"mi.register_{kind}({plugin_type!r}, ...)).")
 
 
 def _unparsable_value(text: str, where: str, path: Path) -> str | None:

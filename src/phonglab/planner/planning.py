@@ -505,6 +505,12 @@ def _choose_spp(chosen: DepthSample, target_error: float, spp: int | None, scene
         reasons.append("spp 1: the pilot shows no variance at all at this depth")
         return 1
     budget2 = target_error ** 2 - chosen.bias ** 2
+    if budget2 <= 0:        # a max_depth given whose bias alone misses E: no N reaches it
+        raise PlanError(f"max_depth {chosen.depth} omits a relative RMS {chosen.bias:.3g} of "
+                        f"the image (deeper bounces), more than the target error "
+                        f"{target_error:g} on its own, so no spp reaches the target; raise "
+                        f"--max-depth (or leave it out: the plan chooses one), raise "
+                        f"--target-error, or give --spp to render at that depth anyway")
     n = max(1, math.ceil(v1 / budget2))
     reasons.append(f"spp {n}: the pilot's per-pixel variance gives a relative noise of "
                    f"{chosen.noise_per_sample:.4g} at 1 spp, falling as 1/sqrt(spp); "

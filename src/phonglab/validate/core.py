@@ -7,7 +7,9 @@ table topic -> runner).  What is the same for every kind lives here:
 
 * :func:`load_plugins`: run the ``--plugin`` files once, recording what each registers; a file
   that registers a name Mitsuba or phonglab already has is refused (the report would be of
-  the plugin that name already meant, not of the file's);
+  the plugin that name already meant, not of the file's), and so is one that exits
+  (``sys.exit``, ``os._exit``), switches the variant or runs past :func:`topic_timeout`'s
+  limit: each is one sentence, never the process's end, a hang or a report of nothing;
 * :func:`load`: the plugin from a type name, a dict for ``mi.load_dict``, an XML file or a
   loaded object (:func:`phonglab.settings.load_plugin`, or the kind's own ``load`` part);
   :func:`prepare` sets the variant and does both: everything that can be bad input, each a
@@ -42,7 +44,7 @@ from typing import Any
 import mitsuba as mi
 import numpy as np
 
-from .. import dispatch, registration, stats
+from .. import dispatch, registration, runtime, stats
 from . import builtin
 from ..settings import Loaded, PluginError, load_plugin
 from ..verdict import NOT_APPLICABLE, Report, Row
@@ -50,8 +52,8 @@ from .inputs import ValidateError, check_plugin_file
 from . import profile as profile_
 from .kind import Kind, topic_page
 
-__all__ = ["Kind", "Known", "load", "load_plugins", "mark_known", "not_covered", "prepare", "run",
-           "topic_timeout"]
+__all__ = ["Kind", "Known", "guarded", "load", "load_plugins", "mark_known", "not_covered",
+           "prepare", "run", "topic_timeout"]
 
 
 #: Mitsuba's registration calls a plugin file may make, and the kind each registers.
@@ -139,20 +141,38 @@ def _run_plugin_file(path: Path, kind: Kind | None) -> list[tuple[str, str]]:
 
     for name, original in originals.items():
         setattr(mi, name, recording(name, original))
+    variant = mi.variant()
     try:
-        runpy.run_path(str(path), run_name="__phonglab_plugin__")
+        with runtime.exits_intercepted(), _alarm(_TIMEOUT):
+            runpy.run_path(str(path), run_name="__phonglab_plugin__")
     except Collision as exc:
         raise ValidateError(str(exc)) from None
-    except SystemExit as exc:
-        raise ValidateError(f"plugin file {str(path)!r} called sys.exit({exc.code!r}) while it "
-                            f"was loaded; a plugin file must only define its plugin and call "
+    except (SystemExit, runtime.PluginExited) as exc:
+        call = (f"os._exit({exc.status!r})" if isinstance(exc, runtime.PluginExited)
+                else f"sys.exit({exc.code!r})")
+        raise ValidateError(f"plugin file {str(path)!r} called {call} while it was loaded, so "
+                            f"nothing was judged; a plugin file must only define its plugin "
+                            f"and call {register_call}") from None
+    except TopicTimeout:
+        raise ValidateError(f"plugin file {str(path)!r} did not finish loading within "
+                            f"{_TIMEOUT:g} s (stopped by the timeout: does it loop forever at "
+                            f"import?); a plugin file must only define its plugin and call "
                             f"{register_call}") from None
     except Exception as exc:
-        raise ValidateError(f"plugin file {str(path)!r} failed: {type(exc).__name__}: "
-                            f"{str(exc).splitlines()[0] if str(exc) else ''}") from exc
+        raise ValidateError(f"plugin file {str(path)!r} failed: "
+                            f"{dispatch.describe(exc)}") from exc
     finally:
         for name, original in originals.items():
             setattr(mi, name, original)
+        switched = mi.variant()
+        if switched != variant and variant is not None:   # back to the one phonglab set
+            registration.register(variant)
+    if switched != variant:
+        raise ValidateError(f"plugin file {str(path)!r} switched Mitsuba's variant to "
+                            f"{switched!r} (mi.set_variant) while it was loaded, so what it "
+                            f"registered is not in {variant!r}, where phonglab checks it; "
+                            f"remove the mi.set_variant call (phonglab sets the variant: "
+                            f"--variant)")
     return calls
 
 
@@ -183,17 +203,27 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
             if not names else f"the plugin files registered {', '.join(map(repr, names))}")
     own = kind.part("load")
     try:
-        if own is not None:
-            loaded = own(spec, params, hint)
-        else:
-            loaded = load_plugin(spec, params, kind=getattr(mi, kind.class_name),
-                                 word=kind.word, hint=hint)
-    except PluginError as exc:
-        raise ValidateError(str(exc)) from exc
-    _check_traverse(kind, loaded)
-    returns = kind.part("returns")          # the Python methods' return types, on one lane
-    if returns is not None:
-        returns(loaded.plugin, loaded.label)
+        with _alarm(_TIMEOUT) as state:  # the constructor, traverse(), each method once
+            try:
+                if own is not None:
+                    loaded = own(spec, params, hint)
+                else:
+                    loaded = load_plugin(spec, params, kind=getattr(mi, kind.class_name),
+                                         word=kind.word, hint=hint)
+            except PluginError as exc:
+                if state["fired"]:       # Mitsuba's loader quoted the timeout as text
+                    raise TopicTimeout() from None
+                raise ValidateError(str(exc)) from exc
+            _check_traverse(kind, loaded)
+            returns = kind.part("returns")   # the Python methods' return types, on one lane
+            if returns is not None:
+                returns(loaded.plugin, loaded.label)
+    except TopicTimeout:
+        name = f" {spec!r}" if isinstance(spec, str) else ""
+        raise ValidateError(f"loading the {kind.word}{name} (its constructor, "
+                            f"traverse() and one call of each method) did not finish within "
+                            f"{_TIMEOUT:g} s (stopped by the timeout: does the plugin's Python "
+                            f"code loop forever?)") from None
     files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
     return loaded._replace(files=files) if files else loaded
 
@@ -257,10 +287,13 @@ def topic_timeout(seconds: float | None):
 def _alarm(seconds: float | None):
     """For the block, SIGALRM after ``seconds`` raises :class:`TopicTimeout`; yields a dict
     whose "fired" says whether it did (a C++ caller in between -- ``mi.render``'s custom op --
-    may re-raise it as a RuntimeError)."""
+    may re-raise it as a RuntimeError).  Inside a block whose timer is still running (loading
+    a plugin inside a ``check`` that is itself limited) the outer limit holds and no second
+    timer is set."""
     state = {"fired": False}
     if (not seconds or not hasattr(signal, "setitimer")
-            or threading.current_thread() is not threading.main_thread()):
+            or threading.current_thread() is not threading.main_thread()
+            or signal.getitimer(signal.ITIMER_REAL)[0] > 0):   # an outer limit holds already
         yield state
         return
 
@@ -283,16 +316,18 @@ def within_topic_limit():
     return _alarm(_TIMEOUT)
 
 
-def _guarded(topic: str, runner) -> list[Row]:
+def guarded(topic: str, runner) -> list[Row]:
     """The topic's rows; an exception (from the plugin or the validator) is one failing row of
     that topic with the traceback in details, so the other topics still report; so is a topic
-    that runs past :func:`topic_timeout`'s limit."""
+    that runs past :func:`topic_timeout`'s limit, and a plugin that calls ``sys.exit`` or
+    ``os._exit`` (:func:`phonglab.runtime.exits_intercepted`): its status never becomes the
+    run's."""
     limit = _TIMEOUT
     state = {"fired": False}
     try:
-        with _alarm(limit) as state:
+        with runtime.exits_intercepted(), _alarm(limit) as state:
             return runner()
-    except (TopicTimeout, Exception) as exc:
+    except (TopicTimeout, SystemExit, runtime.PluginExited, Exception) as exc:
         if not (isinstance(exc, TopicTimeout) or state["fired"]):
             return _raised(topic, exc)
         return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
@@ -310,6 +345,12 @@ def _raised(topic: str, exc: Exception) -> list[Row]:
     where = dispatch.origin(cause)
     details = {"traceback": "".join(traceback.format_exception(cause))[-3000:]}
     missing = dispatch.not_implemented(cause)
+    exited = dispatch.exit_call(cause)
+    if exited is not None:
+        details["exit"] = exited
+        return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
+                    "fail", f"{exited}: a plugin must return or raise, never end the process, "
+                    f"so nothing was judged", details)]
     if where is not None:
         details["plugin_error"] = {"file": where[0], "line": where[1], "function": where[2],
                                    "type": type(cause).__name__,
@@ -520,8 +561,8 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         opts = replace(opts, **sizes)
     if hasattr(opts, "source"):                 # topics that load the plugin again
         opts = replace(opts, source=target)
-    planned = _guarded("plan", lambda: kind.part("statistical_tests")(target.plugin, opts,
-                                                                       topics))
+    planned = guarded("plan", lambda: kind.part("statistical_tests")(target.plugin, opts,
+                                                                      topics))
     rows, seconds, profiled = [], {}, {}
     if isinstance(planned, int):
         m = planned * family
@@ -529,7 +570,7 @@ def run(kind: Kind, target: Loaded, *, topics, seed=0, quick=False, known=None, 
         with session(kind):
             for topic in topics:
                 with profile_.Topic() as timed:
-                    rows += _guarded(topic, runners[topic])
+                    rows += guarded(topic, runners[topic])
                 seconds[topic] = round(timed.record["seconds"], 3)
                 profiled[topic] = timed.record
     else:          # counting the tests ran the plugin (an integrator's depth) and it failed

@@ -23,7 +23,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .. import dispatch
+from .. import dispatch, runtime
 from .kind import ValidateError
 
 __all__ = ["check_bsdf", "check_integrator", "check_phase"]
@@ -51,13 +51,14 @@ def _refuse(word, name, method, value, expects):
 
 def _call(method, *args):
     """(True, the return) or (False, the exception) of one call; the topics report a
-    plugin's exception as its error, so it is not bad input here."""
+    plugin's exception as its error (a ``sys.exit``/``os._exit`` too, as a failing row), so it
+    is not bad input here."""
     from . import core          # the topics' time limit, if one is set (core.topic_timeout)
 
     try:
-        with core.within_topic_limit():
+        with runtime.exits_intercepted(), core.within_topic_limit():
             return True, method(*args)
-    except (Exception, core.TopicTimeout) as exc:
+    except (Exception, core.TopicTimeout, SystemExit, runtime.PluginExited) as exc:
         return False, exc
 
 
