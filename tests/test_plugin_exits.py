@@ -36,7 +36,7 @@ def no_real_exit(monkeypatch):
 
 
 
-VALIDATE = ["--quick", "--no-sweep", "--only", "finite", "--timeout", "2"]
+VALIDATE = ["--quick", "--no-sweep", "--only", "finite", "--timeout", "2", "--variant", "llvm_ad_rgb"]
 
 
 @pytest.mark.parametrize("place, action, said", [
