@@ -49,6 +49,23 @@ def scenes_dir() -> Path:
 #: lasts), each with why: every one took ≥ 3 s of a warm default-tier run on 2 cores
 #: (2026-12-04) and has a cheaper sibling left in the default tier that guards the same code.
 SLOW_TIER: dict[str, str] = {
+    "test_fuzz_plugins.py::test_fuzz_plugins_that_exit_or_hang":
+        "hypothesis over exit/hang x every method x four commands (12 s); each case stays as a "
+        "deterministic test in test_plugin_exits.py",
+    "test_plugin_exits.py::test_check_and_fit_take_a_timeout[eval-check]":
+        "check waits out its timeout on every check (8 s); fit's variant stays",
+    "test_validate_normalization_mixture.py::test_mixture_passes_and_integrates_to_the_independent_value_quick[0.5-1000.0]":
+        "a middle weight (4 s); the extreme weights 1e-4 and 1 - 1e-4 stay",
+    "test_validate_normalization_mixture.py::test_mixture_passes_and_integrates_to_the_independent_value_quick[0.5-10000.0]":
+        "a middle weight (3 s); the extreme weights stay",
+    "test_validate_normalization_mixture.py::test_mixture_passes_and_integrates_to_the_independent_value_quick[0.9999-1000.0]":
+        "p = 1e3 (4.5 s); the same weight at p = 1e4 stays",
+    "test_validate_normalization_mixture.py::test_mixture_passes_and_integrates_to_the_independent_value_quick[0.0001-1000.0]":
+        "p = 1e3 (3.3 s); the same weight at p = 1e4 stays",
+    "test_corpus.py::test_a_defect_fails_on_its_topic_with_a_measured_row[while_loop_sampler_missing]":
+        "an integrator's bias rows over several depths (7 s); the other corpus integrators stay",
+    "test_validate_chi2.py::test_roughdielectric_at_nearly_equal_iors_passes_chi2":
+        "roughdielectric's chi2 at eta near 1 at default sizes (6 s)",
     "test_validate_sweep.py::test_a_defect_at_a_parameter_edge_fails_there_and_passes_elsewhere":
         "two planted edge defects swept at default sizes (8-17 s); the sweep's points and "
         "its emitter sweep stay in the default tier",
