@@ -85,7 +85,7 @@ FINDINGS: tuple[Finding, ...] = (
             "σ_n ≥ 0: a majorant scaled by the largest projected area (sqrt of S's largest "
             "eigenvalue)", "tests/repro/heterogeneous_microflake_majorant.py",
             rows=("σ_n ≥ 0",), excerpt="m_max_density = dr::opaque<Float>(m_scale * m_sigmat->max());"),
-    Finding("heterogeneous-microflake-majorant/transmittance", "transmittance",
+    Finding("heterogeneous-microflake-majorant-transmittance", "transmittance",
             (HET_SGGX_LARGE,), "src/media/heterogeneous.cpp:163",
             "the majorant leaves out the microflake projected area (see "
             "heterogeneous-microflake-majorant): where σ_t exceeds it, σ_n < 0, the null "
@@ -103,7 +103,7 @@ FINDINGS: tuple[Finding, ...] = (
             "2.0 at x = 1)", "σ_t + σ_n = the majorant of the ray at every point",
             "tests/repro/homogeneous_microflake_majorant_at_origin.py",
             rows=("σ_t + σ_n = majorant",), excerpt="return eval_sigmat(mi, active) & active;"),
-    Finding("homogeneous-microflake-majorant-at-origin/transmittance", "transmittance",
+    Finding("homogeneous-microflake-majorant-at-origin-transmittance", "transmittance",
             (HOM_SGGX_VARYING,), "src/media/homogeneous.cpp:164",
             _ORIGIN + "; every collision is real, at the origin's rate",
             "volpath's delta and ratio tracking give exp(−σ̄(origin) t), not exp(−∫σ_t)",
@@ -112,7 +112,7 @@ FINDINGS: tuple[Finding, ...] = (
             rows=("delta tracking (volpath's free flight) = exp(−∫σ_t)",
                   "ratio tracking (volpath's shadow rays) = exp(−∫σ_t)"),
             excerpt="return eval_sigmat(mi, active) & active;"),
-    Finding("homogeneous-microflake-majorant-at-origin/flags", "flags", (HOM_SGGX_VARYING,),
+    Finding("homogeneous-microflake-majorant-at-origin-flags", "flags", (HOM_SGGX_VARYING,),
             "src/media/homogeneous.cpp:138",
             "m_is_homogeneous = true whatever the phase function, while σ_t = σ_t · "
             "projected_area(S(p)) varies with p for a spatially varying SGGX S (" + _ORIGIN
