@@ -290,6 +290,9 @@ def _read(x, n: int | None, matrices: bool) -> np.ndarray:
 #: The most memory one probe query's results may take (Dr.Jit's float32 arrays and the float64
 #: numpy copies), checked before the kernel runs (:func:`_within_budget`).
 QUERY_BUDGET = 2 * 2 ** 30
+#: Below this many bytes a query is held against :data:`QUERY_BUDGET` alone: the memory
+#: available is read (``/proc/meminfo``, ~0.1 ms) only for queries that could exhaust it.
+READ_AVAILABLE_ABOVE = 64 << 20
 
 
 def _nbytes(x) -> int:
@@ -305,7 +308,7 @@ def _within_budget(out, n: int) -> None:
     would take more than :data:`QUERY_BUDGET` (or the memory available): the float32 results
     and their float64 numpy copies (three times as much again)."""
     need = sum(_nbytes(x) for x in out) * 4
-    have = runtime.available_memory()
+    have = runtime.available_memory() if need > READ_AVAILABLE_ABOVE else None
     runtime.require_memory(need, f"one probe query of {n} lanes",
                            "query fewer lanes at once (or fix a plugin that returns more "
                            "values per lane than Mitsuba's types hold)",

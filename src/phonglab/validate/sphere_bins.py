@@ -182,10 +182,8 @@ def _panel_rule(edges: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     return ((a + b) / 2 + (b - a) / 2 * t).ravel(), ((b - a) / 2 * w).ravel()
 
 
-def peak_integral(grid: Grid, pdf_fn, b: int, x0: float, y0: float, k: int) -> float:
-    """∫pdf over bin ``b`` by a tensor Gauss-Legendre rule in (φ, −cos θ) whose panels are
-    graded toward the point (x0, y0) on each axis and cut at the bin's edges (so the bin's
-    indicator is integrated exactly): a peak far narrower than the bin is resolved."""
+def _peak_rule(grid: Grid, b: int, x0: float, y0: float, k: int) -> tuple:
+    """(directions (M, 3), weights (M,)) of :func:`peak_integrals`' rule over bin ``b``."""
     row, col = divmod(int(b), grid.cols)
     hx, hy = 2.0 * math.pi / grid.cols, 2.0 / grid.rows
     xlo, ylo = -math.pi + col * hx, -1.0 + row * hy
@@ -194,12 +192,34 @@ def peak_integral(grid: Grid, pdf_fn, b: int, x0: float, y0: float, k: int) -> f
              key=lambda v: abs(min(max(v, xlo), xlo + hx) - v))
     x, wx = _panel_rule(_graded(xlo, xlo + hx, min(max(x0, xlo), xlo + hx)), k)
     y, wy = _panel_rule(_graded(ylo, ylo + hy, min(max(y0, ylo), ylo + hy)), k)
-    xx, yy = (a.ravel() for a in np.meshgrid(x, y, indexing="ij"))
-    cos = -yy
+    cos = -y
     sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-    wo = np.stack([sin * np.cos(xx), sin * np.sin(xx), cos], axis=1)
-    p = np.asarray(pdf_fn(wo), np.float64)
-    return float((np.where(np.isfinite(p), p, 0.0) * np.outer(wx, wy).ravel()).sum())
+    wo = np.stack([np.multiply.outer(np.cos(x), sin), np.multiply.outer(np.sin(x), sin),
+                   np.broadcast_to(cos, (len(x), len(y)))], axis=-1).reshape(-1, 3)
+    return wo, np.outer(wx, wy).ravel()
+
+
+def peak_integrals(grid: Grid, pdf_fn, bins, x0: float, y0: float,
+                   orders: tuple[int, ...]) -> list[np.ndarray]:
+    """∫pdf over each bin of ``bins``, per Gauss-Legendre order k of ``orders``, by a tensor
+    rule in (φ, −cos θ) whose panels are graded toward the point (x0, y0) on each axis and cut
+    at the bin's edges (so the bin's indicator is integrated exactly): a peak far narrower
+    than the bin is resolved.  The rules go to ``pdf_fn`` together, up to :data:`CHUNK`
+    directions a query."""
+    rules = [_peak_rule(grid, b, x0, y0, k) for k in orders for b in bins]
+    sums, batch = [], []
+    for i, rule in enumerate(rules):
+        batch.append(rule)
+        if i + 1 < len(rules) and sum(len(w) for _, w in batch) + len(rules[i + 1][1]) <= CHUNK:
+            continue
+        p = np.asarray(pdf_fn(np.concatenate([wo for wo, _ in batch])), np.float64)
+        p = np.where(np.isfinite(p), p, 0.0)
+        start = 0
+        for _, w in batch:
+            sums.append(float((p[start:start + len(w)] * w).sum()))
+            start += len(w)
+        batch = []
+    return [np.array(sums[j * len(bins):(j + 1) * len(bins)]) for j in range(len(orders))]
 
 
 def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndarray,
@@ -207,7 +227,7 @@ def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndar
     """``e`` with a lobe narrower than the finest node spacing integrated: for each rechecked
     bin whose count still contradicts it (> RECHECK_Z σ: a node missed the peak, or hit it and
     weighted it by a whole node's area) and where the pdf is > 0 at one of its samples, that bin and its 8 neighbours are integrated again by
-    :func:`peak_integral`, graded toward the bin's sample of largest pdf.  The samples only
+    :func:`peak_integrals`, graded toward the bin's sample of largest pdf.  The samples only
     place the grading; the value is the pdf's alone (a finer rule of the same integral), so a
     sampler that disagrees with its pdf still fails.  A rough dielectric between nearly equal IORs has such a lobe:
     its transmission lobe's core is α·|1 − η|/η wide (2.8·10⁻⁶ rad at α = 0.01,
@@ -230,9 +250,8 @@ def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndar
         around = sorted({((row + i) % grid.rows) * grid.cols + (col + j) % grid.cols
                          for i in (-1, 0, 1) for j in (-1, 0, 1)
                          if 0 <= row + i < grid.rows} - done)
-        fine = np.array([peak_integral(grid, pdf_fn, a, x0, y0, PEAK_NODES) for a in around])
-        coarse = np.array([peak_integral(grid, pdf_fn, a, x0, y0, PEAK_NODES // 2)
-                           for a in around])
+        fine, coarse = peak_integrals(grid, pdf_fn, around, x0, y0,
+                                      (PEAK_NODES, PEAK_NODES // 2))
         e[around] = fine * n
         done.update(around)
         peaks.append({"bin": int(b), "centre": c.tolist(), "bins": around,
