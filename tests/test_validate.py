@@ -225,10 +225,18 @@ def test_bench_report_validate_section(tmp_path):
     from phonglab.bench.report import validate_section
     assert validate_section(SimpleNamespace(out=tmp_path)) == []
     (tmp_path / "validate.json").write_text(json.dumps([
-        {"bsdf": "diffuse", "repeats": 3, "exit_codes": [0],
-         "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 2.5, 11.0]}]))
+        {"plugin": "diffuse", "variant": "llvm_ad_rgb", "kind": "bsdf", "repeats": 3,
+         "exit_codes": [0], "points": 4, "targets": [20.0, 5.0],
+         "profile_default": {"chi2": 2.5, "finite": 0.1, "normalization": 3.0, "weight": 0.2},
+         "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 5.5, 11.0]},
+        {"plugin": "hg", "variant": "llvm_ad_rgb", "kind": "phase", "repeats": 3,
+         "exit_codes": [0], "points": 3, "targets": None, "profile_default": {"chi2": 1.0},
+         "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 2.5, 3.0]}]))
     text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
-    assert "| diffuse | 6.0 [5.0, 7.0] |" in text and "2.5 [2.0, 11.0]" in text
+    # the median against each target (5.5 s --quick misses 5 s), the largest topics in order
+    assert ("| diffuse | bsdf | 4 | 6.0 [5.0, 7.0] | **met** | 5.5 [2.0, 11.0] | **not met** | "
+            "normalization 3.0, chi2 2.5, weight 0.2 |") in text
+    assert "| hg | phase | 3 | 6.0 [5.0, 7.0] | — | 2.5 [2.0, 3.0] | — | chi2 1.0 |" in text
 
 
 def test_lobe_quadrature_centre_anywhere():
