@@ -1,46 +1,50 @@
-r"""The AD-against-finite-difference verdict of a sampled quantity, for any kind: Dr.Jit's
-derivative of Σ c·weight of a ``source``'s ``sample_direction`` against a central difference
-with the samples held.  The emitter kind's ``gradient`` topic
-(:mod:`phonglab.validate.emitter.gradient`) uses it on an emitter, the phase-function kind's
-(:mod:`phonglab.validate.phase.gradient`) on eval_pdf at fixed directions presented as such a
-sample.  :func:`verdict` is one parameter's row; ``setup.emitter`` is the source.
+r"""The AD-against-finite-difference verdict of one parameter, for every kind: Dr.Jit's forward-mode
+derivative of a functional S(x) = Σ_lanes S_l(x) against difference quotients of the same sum.
 
-AD side: the derivative of S(x) = Σ_lanes c_l Σ_channels weight_l, the weights of
-``sample_direction`` from the reference points (:func:`~.setup.ref_groups`) with fixed sample
-values and c_l ∈ [0.5, 1.5] fixed -- the derivative an AD integrator uses for emitter
-sampling.  FD side: the same sum with the samples held where they are at x, ds₀ (direction,
-point, pdf), and with them the sampling factor w₀/e₀ (the weight over the arriving radiance
-e₀ = eval_direction(ds₀) at x): Σ c_l w₀ eval_direction(ds₀)/e₀.  Mitsuba differentiates the
-radiance and detaches the sampling (envmap.cpp rebuilds its warp from the data in
-parameters_changed; the sampled direction and its pdf carry no derivative), so a difference
-quotient of the weights themselves would move the samples and the pdf with x and measure
-another quantity (envmap ``data``: 168 of 512 lanes jump).  For emitters whose sampling does not
-depend on x (point, spot, area, constant) the two sides are the same function.  Holding
-w₀/e₀ keeps the topic apart from ``weight``: a weight wrong by a factor (that topic's defect)
-still has the derivative of that factor times the radiance's.
+Each kind's ``gradient`` topic states its functional (a :class:`Functional`): the BSDF's
+Σ c·eval at fixed directions (:mod:`phonglab.validate.bsdf.gradient`), the emitter's sampled
+weight with its sampling held (:mod:`phonglab.validate.emitter.gradient`), the phase
+function's eval_pdf value and the medium's σ_s and σ_t at fixed points
+(:mod:`phonglab.validate.phase.gradient`, :mod:`phonglab.validate.medium.gradient`), with fixed
+weights c_l ∈ [0.5, 1.5]; :func:`verdict` judges it for one parameter x of ``mi.traverse``:
 
-As in :mod:`phonglab.validate.bsdf.gradient` (the same derivation): the direction v_i = |x_i|
-(max |x| or 0.1 where x_i = 0); AD forward mode (``dr.forward_to``); FD
-D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2).  h starts at 2⁻⁷ and is halved (at most 16
-times) until the sums Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound and at least
-half of the lanes converge (a peaked lobe's curvature: hg at g = 0.8 needs a smaller step on
-the lanes near forward scattering): a spectral
-variant's ``radiance.value`` holds the polynomial coefficients of Mitsuba's RGB-to-spectrum
-model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷ · 0.1 drives its sigmoid into
-saturation, where the quotients measure nothing (the step is chosen from the quotients alone,
-never from AD).  Lanes whose quotients do not converge (|D_l(h) − D_l(h/2)| > 1 % + 4× the
-round-off bound: a jump moving with x), or whose one-sided quotients at h/2 disagree
-(|D⁺_l − D⁻_l| > 1 % + 8× the bound: a kink within h/2 of x, e.g. a spot lane just outside
-its cutoff, lit for a larger cutoff_angle only, whose central quotient is half the one-sided
-slope at any step while AD gives the left one, 0) are left out and counted.  Tolerance on the
-kept sums: 4|D(h) − D(h/2)| + 64u(Σ|S_l|/h + Σ|∂S_l|).  Lanes along which no radiance arrives
-at x (e₀ = 0: an emitter swept to an emitted quantity of 0) while the weight's derivative is not
-0 have no sampling factor (0/0) and are left out too; where they are most lanes the row is
-skipped, saying so.  x is written as an opaque value so
-the kernels compile once, and restored after each parameter.
+* the direction v scales each element: v_i = |x_i|, or max(max_j |x_j|, 0.1) where x_i = 0,
+  so that every element moves by the same relative step (a spectral ``rgb`` texture holds
+  polynomial coefficients of very different sizes, e.g. (−7.5e-5, 0.082, −22.5));
+* AD: forward mode from x with gradient v (``dr.set_grad`` + ``dr.forward_to``), the lanes'
+  derivatives in float64;
+* FD: D(h) = (S(x + hv) − S(x − hv))/2h and D(h/2); a non-negative parameter with an element at
+  0 (a weight or reflectance at 0, where x − hv leaves its domain and plugins may switch a lobe
+  off) gets the second-order one-sided difference (−3S(x) + 4S(x + hv) − S(x + 2hv))/2h
+  instead.  h starts at 2⁻⁷ and is halved (at most :data:`MAX_HALVINGS` times) until the sums
+  Σ D(h) and Σ D(h/2) agree to 1 % + the round-off bound and at least half of the lanes
+  converge (a peaked lobe's curvature: hg at g = 0.8 needs a smaller step near forward
+  scattering; a spectral variant's ``radiance.value`` holds the coefficients of Mitsuba's
+  RGB-to-spectrum model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷·0.1 drives its
+  sigmoid into saturation).  The step is chosen from the quotients alone, never from AD;
+* lanes whose quotients do not converge (:func:`unconverged`: a jump or a kink that moves with
+  x, e.g. roughdielectric's total-internal-reflection boundary under eta, a parameter flagged
+  ``ParamFlags.Discontinuous``: there AD differentiates the continuous part only, by Mitsuba's
+  design) are left out and counted, as are lanes whose AD derivative is not finite (√ at 0 at
+  a critical angle) and lanes the functional calls undefined (an emitter's sample along which
+  no radiance arrives); when they are the majority the row is skipped, saying why;
+* Dr.Jit finding no dependence on x (``forward_to`` raises) is a skip when the differences
+  are 0 too (a delta lobe's eval is 0; a spot's texture when none is given) and a fail when
+  they are not: AD lost a dependence the function has.
+
+Tolerance on the kept lanes' sums, by analysis of float32: the FD truncation error of D(h/2) is
+about |D(h) − D(h/2)|/3 (Richardson: the error is O(h²)), taken ×12 (4 |D(h) − D(h/2)|); each
+lane carries a relative round-off ≤ 64 u (u = 2⁻²⁴), so S(x ± hv) differ from the exact values
+by ≤ 64 u Σ|S_l| and the quotient by ≤ 64 u Σ|S_l|/h; the AD sum adds ≤ 64 u Σ|∂S_l|.  A
+derivative that is wrong by a factor (×2: the planted defects) is off by |D|, far above that.
+x is written as an opaque value (a kernel input: the kernels compile once for all steps) and
+restored after each parameter; a plugin that refuses x ± hv (its own validation) makes the row
+a skip, the check's limit, not the plugin's defect.
 """
 
 from __future__ import annotations
+
+from typing import Protocol
 
 import drjit as dr
 import numpy as np
@@ -49,85 +53,37 @@ from .. import probe
 from ..verdict import Row
 from .roundoff import EPS32
 
+#: Round-off multiplier of a float32 lane (see the module docstring).
 ROUND_OFF = 64 * EPS32
 #: The first finite-difference step (relative, along v), and how often it may be halved.
 H0 = 2.0 ** -7
 MAX_HALVINGS = 16
 
 
-def _lanes(setup, it, fixed, c) -> np.ndarray:
-    """Per lane: c · Σ_channels w₀ · eval_direction(ds₀) / e₀ at the fixed samples ds₀ (the
-    weight with its sampling factor w₀/e₀ held; 0 where e₀ = 0)."""
-    ds, ratio = fixed
-    x = probe.to_numpy(setup.calls.eval_direction(it, ds), len(c)) * ratio
-    return c * np.sum(np.where(np.isfinite(x), x, 0.0), axis=1)
+class Functional(Protocol):
+    """What a kind's ``gradient`` topic differentiates (module docstring).
 
+    ``lanes()`` is S_l at the parameters as they are now, non-finite lanes as 0 (the FD side);
+    ``derivative()`` the forward-mode derivative per lane, called while x carries its
+    gradient (non-finite lanes kept: the verdict counts them); ``hold()`` fixes what the FD
+    side holds at x (an emitter's samples; may do nothing) and ``undefined()`` the lanes where
+    that held factor is undefined (None: none; ``undefined_words`` says why in a row).
+    ``ad_words`` and ``fd_words`` say what is compared, ``what`` the differentiated quantity,
+    ``owner`` the plugin's kind ("BSDF")."""
 
-def _fixed(setup, it, u, n: int):
-    """ds₀ = sample_direction at the current parameters (evaluated, no gradient) and the
-    sampling factor w₀/e₀ per channel, e₀ = eval_direction(ds₀)."""
-    ds, w = setup.calls.sample_direction(it, u)
-    ds = dr.detach(ds)
-    dr.eval(ds)
-    w0 = probe.to_numpy(w, n)
-    e0 = probe.to_numpy(setup.calls.eval_direction(it, ds), n)
-    return ds, np.where((e0 != 0) & np.isfinite(w0), w0 / np.where(e0 != 0, e0, 1.0), 0.0)
+    ad_words: str
+    fd_words: str
+    what: str
+    owner: str
+    undefined_words: str
 
+    def lanes(self) -> np.ndarray: ...
 
-def _dark(setup, it, u, n: int) -> np.ndarray:
-    """Per lane: no radiance arrives along the sample at x (e₀ = 0 in every channel), so the
-    sampling factor w₀/e₀ the FD side holds is undefined there (an emitter whose emitted
-    quantity is 0 at the point swept: its FD side is 0 whatever the derivative)."""
-    ds, _ = setup.calls.sample_direction(it, u)
-    e0 = probe.to_numpy(setup.calls.eval_direction(it, dr.detach(ds)), n)
-    return np.all(e0 == 0, axis=1)
+    def derivative(self) -> np.ndarray: ...
 
+    def hold(self) -> None: ...
 
-def _set(params, key, value):
-    value = type(value)(value)
-    dr.make_opaque(value)
-    params[key] = value
-    params.update()
-
-
-def _ad(setup, params, key, v, it, u, c) -> np.ndarray:
-    """Per lane: the forward-mode derivative of c·Σ weight along v."""
-    x = params[key]
-    dr.enable_grad(x)
-    params.update()
-    try:
-        dr.set_grad(x, v)
-        _, w = setup.calls.sample_direction(it, u)
-        dr.forward_to(w)
-        return c * np.sum(probe.to_numpy(dr.grad(w), len(c)), axis=1)
-    finally:                 # a parameter left tracked would add its derivative to the next's
-        dr.disable_grad(x)
-        params.update()
-
-
-def _quotients(setup, params, key, x0, v, h, it, fixed, c, s0):
-    """(D(h), D(h/2), D⁺(h/2), D⁻(h/2)) per lane; x is restored to x0."""
-    fd = []
-    for step in (h, h / 2):
-        s = []
-        for k in (1.0, -1.0):
-            _set(params, key, x0 + (k * step) * v)
-            s.append(_lanes(setup, it, fixed, c))
-        fd.append((s[0] - s[1]) / (2.0 * step))
-    _set(params, key, x0)
-    return fd[0], fd[1], (s[0] - s0) / (h / 2), (s0 - s[1]) / (h / 2)
-
-
-def _refused(key, h, exc) -> Row:
-    if "does not depend on the input" in str(exc):
-        return Row("gradient", key, None, None, None, None, "skipped",
-                   "sample_direction's weight does not depend on this parameter (Dr.Jit: the "
-                   "output does not depend on it; e.g. a spot's texture when none is given)", {})
-    return Row("gradient", key, None, None, None, None, "skipped",
-               f"the validator's own finite-difference step x ± {h:g}·v left the values the "
-               f"emitter accepts (it raised: "
-               f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}): a limit of the "
-               f"check's step, not a defect of the emitter", {})
+    def undefined(self, g: np.ndarray) -> np.ndarray | None: ...
 
 
 def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
@@ -141,8 +97,8 @@ def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
     η = 0.99972, lanes just above the critical cosine 0.0235 whose AD derivative is 138
     against quotients 0.31 and 0.78 -- the step crosses the total-reflection edge, where
     ∂/∂η of the Fresnel term grows as 1/√(cos² θ − cos² θ_c) -- and the sums read 408
-    against 3.4: ValidatorIssue ``gradient-convergence-judged-by-ad``.)  Lanes with a
-    non-finite quotient or AD derivative are the caller's to count."""
+    against 3.4.)  Lanes with a non-finite quotient or AD derivative are the caller's to
+    count."""
     scale = 0.01 * np.abs(d2)
     with np.errstate(invalid="ignore"):
         out = np.abs(d1 - d2) > scale + 4.0 * noise
@@ -151,64 +107,194 @@ def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
     return out
 
 
-def verdict(setup, params, key, it, u, c) -> Row:
-    """One parameter's gradient row: forward-mode AD of Σ c·weight along v against the
-    central differences with the samples held (module docstring)."""
-    x0 = params[key]
+def _set(params, key, value) -> None:
+    """Write ``value`` as an opaque value (a kernel input) and let the plugin re-derive."""
+    value = type(value)(value)
+    dr.make_opaque(value)
+    params[key] = value
+    params.update()
+
+
+def _ad(fn: Functional, params, key, v) -> np.ndarray:
+    """Per lane: the forward-mode derivative along v.  Leaves ``key`` detached but not yet
+    re-propagated: the verdict's next :func:`_set` updates (an update costs ~50 ms for a
+    plugin that tabulates in ``parameters_changed``, roughplastic's alpha and eta)."""
+    x = params[key]
+    dr.enable_grad(x)
+    params.update()
+    try:
+        dr.set_grad(x, v)
+        return fn.derivative()
+    finally:                 # a parameter left tracked would add its derivative to the next's
+        dr.disable_grad(x)
+
+
+def _quotients(fn: Functional, params, key, x0, v, h, one_sided: bool):
+    """(D(h), D(h/2), S(x)) per lane, and (D⁺(h/2), D⁻(h/2)) for a central difference (None
+    for a one-sided one); x is restored to x0."""
+    s0, fd, sides = None, [], None
+    for step in (h, h / 2):
+        ks = (0.0, 1.0, 2.0) if one_sided else (1.0, -1.0)
+        s = {}
+        for k in ks:
+            if k == 0.0 and s0 is not None:
+                s[k] = s0
+                continue
+            _set(params, key, x0 + (k * step) * v)
+            s[k] = fn.lanes()
+        if one_sided:
+            s0 = s[0.0]
+            fd.append((-3.0 * s[0.0] + 4.0 * s[1.0] - s[2.0]) / (2.0 * step))
+        else:
+            fd.append((s[1.0] - s[-1.0]) / (2.0 * step))
+    _set(params, key, x0)
+    if not one_sided:
+        s0 = fn.lanes()
+        sides = ((s[1.0] - s0) / (h / 2), (s0 - s[-1.0]) / (h / 2))
+    return fd[0], fd[1], s0, sides
+
+
+def _first(exc) -> str:
+    return (str(exc).splitlines() or [type(exc).__name__])[0][:160]
+
+
+def _skip(key, reason, details=None, row=Row) -> Row:
+    return row("gradient", key, None, None, None, None, "skipped", reason, details or {})
+
+
+def _refused(fn: Functional, key, h, exc, row=Row) -> Row:
+    return _skip(key, f"the validator's own finite-difference step x ± {h:g}·v left the values "
+                      f"the {fn.owner} accepts (it raised: {_first(exc)}): a limit of the "
+                      f"check's step, not a defect of the {fn.owner}", row=row)
+
+
+def _independent(fn: Functional, params, key, x0, v, one_sided: bool, row=Row) -> Row:
+    """Dr.Jit found no dependence of the functional on ``key``: a skip when the differences
+    are 0 too (nothing to compare), a fail when they are not (AD lost a dependence)."""
+    h = H0 / 2
+    try:
+        _, d2, s0, _ = _quotients(fn, params, key, x0, v, H0, one_sided)
+    except Exception as exc:
+        _set(params, key, x0)
+        return _refused(fn, key, H0, exc, row)
+    noise = float((ROUND_OFF * np.abs(s0) / h).sum())
+    fd = float(np.nansum(d2))
+    details = {"fd_h2": fd, "h": h, "one_sided": one_sided, "lanes": int(len(d2))}
+    if abs(fd) <= noise:
+        return _skip(key, f"{fn.what} does not depend on this parameter (Dr.Jit finds no "
+                          f"dependence and the finite differences are 0 too): nothing to "
+                          f"compare, a limit of the check, not a defect of the {fn.owner}",
+                     details, row)
+    return row("gradient", key, 0.0, fd, None, noise, "fail",
+               f"forward-mode AD finds no dependence of {fn.what} on this parameter "
+               f"(drjit.forward_to raised) while its finite difference with step {h:g}·v is "
+               f"{fd:.6g}: AD lost a dependence {fn.what} has", details)
+
+
+def verdict(fn: Functional, params, key: str, discontinuous: bool = False,
+            row=Row) -> Row:
+    """One parameter's gradient row (module docstring); ``discontinuous``: the parameter is
+    flagged ``ParamFlags.Discontinuous`` (said in a skip); ``row``: the kind's row type."""
+    try:
+        x0 = params[key]
+    except TypeError as exc:   # e.g. hair's sigma_a is traversed as None when unused
+        return _skip(key, f"mi.traverse exposes a value that cannot be read ({_first(exc)})",
+                     row=row)
     if not dr.is_diff_v(x0) or dr.type_v(x0) not in (dr.VarType.Float32, dr.VarType.Float64):
-        return Row("gradient", key, None, None, None, None, "skipped",
-                   f"{type(x0).__name__} is not a differentiable floating-point value", {})
-    x0 = type(x0)(x0)
+        return _skip(key, f"{type(x0).__name__} is not a differentiable floating-point value",
+                     row=row)
+    x0 = type(x0)(x0)                                # a detached copy to restore
     values = np.array(x0).ravel() if dr.width(x0) else np.zeros(1)
     fill = max(float(np.max(np.abs(values))), 0.1)
     v = dr.detach(dr.select(x0 != 0, dr.abs(x0), fill))
+    one_sided = bool(values.min() >= 0.0 and (values == 0.0).any())
     h = H0
     try:
-        g = _ad(setup, params, key, v, it, u, c)
-        fixed = _fixed(setup, it, u, len(c))
-        dark = _dark(setup, it, u, len(c))
-        s0 = _lanes(setup, it, fixed, c)
-        s_abs = np.abs(s0)
+        g = _ad(fn, params, key, v)
+    except Exception as exc:
+        if "does not depend on the input" not in str(exc):
+            _set(params, key, x0)
+            return _refused(fn, key, h, exc, row)
+        return _independent(fn, params, key, x0, v, one_sided, row)
+    try:
+        fn.hold()
         for halvings in range(MAX_HALVINGS + 1):
             h = H0 * 2.0 ** -halvings
-            d1, d2, forward, backward = _quotients(setup, params, key, x0, v, h, it, fixed, c,
-                                                   s0)
-            noise = ROUND_OFF * (s_abs / (h / 2) + np.abs(g))
-            jumps = unconverged(d1, d2, noise, forward, backward) & np.isfinite(g)
+            d1, d2, s0, sides = _quotients(fn, params, key, x0, v, h, one_sided)
+            noise = ROUND_OFF * (np.abs(s0) / (h / 2) + np.abs(g))   # per-lane round-off
+            jumps = unconverged(d1, d2, noise, *(sides or ())) & np.isfinite(g)
             if (abs(np.nansum(d1) - np.nansum(d2)) <= 0.01 * abs(np.nansum(d2)) + noise.sum()
                     and jumps.sum() <= len(g) // 2):
                 break
-    except Exception as exc:
+    except Exception as exc:   # a plugin refusing x ± hv (its validation) is a skip
         _set(params, key, x0)
-        return _refused(key, h, exc)
+        return _refused(fn, key, h, exc, row)
     nonfinite = ~np.isfinite(g)
-    # no radiance arrives, yet the weight moves with x: the FD side's factor w₀/e₀ is 0/0
-    undefined = dark & (g != 0) & ~nonfinite
+    undefined = fn.undefined(g)
+    undefined = np.zeros(len(g), bool) if undefined is None else undefined & ~nonfinite
     keep = ~jumps & ~nonfinite & ~undefined & np.isfinite(d1) & np.isfinite(d2)
     ad, f1, f2 = float(g[keep].sum()), float(d1[keep].sum()), float(d2[keep].sum())
-    details = {"fd_h": f1, "fd_h2": f2, "h": h / 2, "halvings": halvings, "lanes": len(g),
-               "jump_lanes": int(jumps.sum()), "nonfinite_ad_lanes": int(nonfinite.sum())}
+    details = {"fd_h": f1, "fd_h2": f2, "h": h / 2, "halvings": halvings,
+               "one_sided": one_sided, "value_range": [float(values.min()), float(values.max())],
+               "lanes": int(len(g)), "jump_lanes": int(jumps.sum()),
+               "nonfinite_ad_lanes": int(nonfinite.sum()),
+               "discontinuous_flag": discontinuous,
+               "all_lanes": {"ad": float(np.nansum(g)), "fd_h2": float(np.nansum(d2))}}
     left_out = ""
     if undefined.any():
-        details["undefined_factor_lanes"] = int(undefined.sum())
-        left_out = f", {int(undefined.sum())} with no arriving radiance"
+        details["undefined_lanes"] = int(undefined.sum())
+        left_out = f", {int(undefined.sum())} where {fn.undefined_words}"
     if keep.sum() < len(g) // 2 and undefined.sum() > jumps.sum():
-        return Row("gradient", key, ad, f2, None, None, "skipped",
-                   f"no radiance arrives along {int(undefined.sum())} of {len(g)} samples at "
-                   f"this point (the emitted quantity is 0) while the weight's derivative is "
-                   f"not 0: the difference side's sampling factor w₀/e₀ is 0/0 there, nothing "
+        return row("gradient", key, ad, f2, None, None, "skipped",
+                   f"{fn.undefined_words} on {int(undefined.sum())} of {len(g)} lanes while "
+                   f"AD's derivative is not 0 there: the difference side is undefined, nothing "
                    f"to compare", details)
     if keep.sum() < len(g) // 2:
-        return Row("gradient", key, ad, f2, None, None, "skipped",
-                   f"the difference quotients do not converge on {int(jumps.sum())} of {len(g)} "
-                   f"lanes: nothing to compare", details)
+        return row("gradient", key, ad, f2, None, None, "skipped",
+                   f"the difference quotients do not converge on {int(jumps.sum())} of "
+                   f"{len(g)} lanes (a discontinuity moving with the parameter"
+                   f"{', flagged Discontinuous' if discontinuous else ''}): nothing to compare",
+                   details)
     tol = 4.0 * abs(f1 - f2) + float(noise[keep].sum())
     ok = np.isfinite(ad) and abs(ad - f2) <= tol
-    return Row("gradient", key, ad, f2, abs(f1 - f2) / 3.0, tol, "pass" if ok else "fail",
-               f"forward-mode AD of Σ c·(sample_direction weight) along v (v_i = |x_i|) vs the "
-               f"central difference of Σ c·w₀·eval_direction(ds₀)/e₀ (samples held), step "
-               f"{h / 2:.3g}·v ({halvings} halvings of 2^-7) over "
-               f"{int(keep.sum())} lanes ({int(jumps.sum())} with a jump or kink, "
+    how = "one-sided (x ≥ 0 with an element at 0)" if one_sided else "central"
+    return row("gradient", key, ad, f2, abs(f1 - f2) / 3.0, tol, "pass" if ok else "fail",
+               f"forward-mode AD of {fn.ad_words} along v (v_i = |x_i|) vs the {how} "
+               f"difference of {fn.fd_words}, step {h / 2:.3g}·v ({halvings} halvings of "
+               f"2^-7) over {int(keep.sum())} lanes ({int(jumps.sum())} with a jump or kink, "
                f"{int(nonfinite.sum())} with a non-finite AD derivative{left_out} left out); "
-               f"tolerance "
-               f"4|D(h)−D(h/2)| + 64u(Σ|S|/h + Σ|∂S|)", details)
+               f"tolerance 4|D(h)−D(h/2)| + 64u(Σ|S|/h + Σ|∂S|)", details)
+
+
+class AtFixedInputs:
+    """A :class:`Functional` of a value at fixed inputs: S_l = c_l Σ_channels value_l, where
+    ``value()`` returns the Dr.Jit value (the phase function's eval_pdf value, a medium's
+    coefficient, a BSDF's eval) and ``n`` its lanes; nothing is held."""
+
+    fd_words = "the same sum"
+    undefined_words = ""
+
+    def __init__(self, value, c: np.ndarray, ad_words: str, what: str, owner: str):
+        self.value, self.c = value, c
+        self.ad_words, self.what, self.owner = ad_words, what, owner
+
+    def _per_lane(self, x, finite_only: bool) -> np.ndarray:
+        """c_l Σ_channels x_l (non-finite channels as 0 with ``finite_only``)."""
+        a = probe.to_numpy(x, len(self.c))
+        if finite_only:
+            a = np.where(np.isfinite(a), a, 0.0)
+        return self.c * (a if a.ndim == 1 else np.sum(a, axis=1))
+
+    def lanes(self) -> np.ndarray:
+        return self._per_lane(self.value(), True)
+
+    def derivative(self) -> np.ndarray:
+        out = self.value()
+        dr.forward_to(out)
+        return self._per_lane(dr.grad(out), False)
+
+    def hold(self) -> None:
+        return None
+
+    def undefined(self, g) -> None:
+        return None
