@@ -38,6 +38,7 @@ PLANTED = {
     "spectral_flag_unset": {"flags", "transmittance"},
     "homogeneous_flag_set": {"flags", "transmittance"},
     "ignored_override": {"overrides"},
+    "wrong_gradient": {"gradient"},
 }
 #: the row each defect's own topic fails by
 OWN_ROW = {
@@ -46,6 +47,7 @@ OWN_ROW = {
     "spectral_flag_unset": "has_spectral_extinction where σ_t's channels differ",
     "homogeneous_flag_set": "is_homogeneous only where σ_n = 0 and σ_t = majorant",
     "ignored_override": "sample_interaction() overridden",
+    "wrong_gradient": "albedo: σ_s",
 }
 
 
@@ -210,3 +212,23 @@ def test_catalogue_covers_3_9_1_and_its_findings_are_pinned(variant_llvm_rgb):
         for label in f.labels:
             assert f.key in {k.key for k in known[label][f.topic]}
     assert cat.markdown == "docs/conformance-media.md" and (HERE.parent / cat.markdown).is_file()
+
+
+def test_a_sweep_varies_the_documented_parameters_and_judges_the_phase_once(variant_llvm_rgb):
+    """homogeneous is swept over albedo, sigma_t and scale (Mitsuba's documented domains,
+    medium.ranges.BUILTIN); the phase function comes from the properties, which no swept
+    parameter changes, so its topic runs at the given point only; the gradient topic runs at
+    every point."""
+    from phonglab.validate import validate_medium
+
+    report = validate_medium("homogeneous", quick=True, topics=["phase", "gradient", "albedo"],
+                             sweep=True)
+    swept = report.meta["sweep"]["parameters"]
+    assert {p["name"] for p in swept} == {"albedo", "sigma_t", "scale"}, swept
+    assert {p["source"] for p in swept} == {"mitsuba"}
+    points = {tuple(sorted(r.point.items())) for r in report.rows}
+    assert len(points) > 3
+    assert {tuple(sorted(r.point.items())) for r in report.rows if r.topic == "phase"} == {()}
+    assert {tuple(sorted(r.point.items())) for r in report.rows if r.topic == "gradient"} \
+        == points
+    assert report.passed, report.table(report.failing)

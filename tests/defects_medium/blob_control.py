@@ -3,7 +3,8 @@
 σ_t(p) = 4 (1 − |p − c|²/R²)² (0.5, 0.35, 0.2)/0.5 inside the ball of radius R = 0.45 about
 c = (0.5, 0.5, 0.5), 0 outside; its bounds the unit cube [0, 1]³ (mi.BoundingBox3f); the
 majorant its peak in every channel, and σ_n = majorant − σ_t (Mitsuba's null-collision
-coefficient, src/media/heterogeneous.cpp:194); albedo 0.8; spectral extinction flagged.
+coefficient, src/media/heterogeneous.cpp:194); albedo 0.8, traversed as a differentiable
+``albedo`` (an opaque mi.Float); spectral extinction flagged.
 """
 import drjit as dr
 import mitsuba as mi
@@ -23,6 +24,13 @@ class BlobControl(mi.Medium):
         self.m_is_homogeneous = False
         self.m_has_spectral_extinction = True
         self.bbox = mi.BoundingBox3f(mi.Point3f(0.0, 0.0, 0.0), mi.Point3f(1.0, 1.0, 1.0))
+        self.albedo = dr.opaque(mi.Float, 0.8)
+
+    def traverse(self, callback):
+        callback.put("albedo", self.albedo, mi.ParamFlags.Differentiable)
+
+    def parameters_changed(self, keys=[]):
+        pass
 
     def intersect_aabb(self, ray):
         return self.bbox.ray_intersect(ray)
@@ -32,7 +40,7 @@ class BlobControl(mi.Medium):
 
     def get_scattering_coefficients(self, mei, active=True):
         sigma_t = density(mei.p) * mi.UnpolarizedSpectrum(*TINT)
-        return 0.8 * sigma_t, mi.UnpolarizedSpectrum(PEAK) - sigma_t, sigma_t
+        return self.albedo * sigma_t, mi.UnpolarizedSpectrum(PEAK) - sigma_t, sigma_t
 
     def to_string(self):
         return "BlobControl[]"

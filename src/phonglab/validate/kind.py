@@ -104,6 +104,9 @@ class Kind:
     topics: tuple[str, ...]    #: every topic, in table order
     #: topics that measure and never fail (``cost``): a sweep runs them at the given point only
     informational: tuple[str, ...] = ()
+    #: topics whose result no swept parameter changes (a medium's nested phase function, which
+    #: comes from its properties): a sweep judges them at the given point only
+    given_point_only: tuple[str, ...] = ()
     #: topics that hold a physical bound (a BSDF's albedo ≤ 1, an emitter's power) rather than
     #: an identity: a sweep judges them only inside the declared or documented domain, and an
     #: excess at a probed point outside it is advice (:func:`phonglab.validate.sweep.advise`)

@@ -33,7 +33,8 @@ becomes an ``advice`` row (not a fail) saying which value is accepted and what i
 ("accepts kd = 10000, where directional albedo is 9499"), and the meta's ``sweep.advice``
 lists, per parameter, where the excess starts (:func:`advise`).
 
-Informational topics (``cost``: a timing that never fails) run at the given point only.
+Informational topics (``cost``: a timing that never fails) run at the given point only, and so
+do the topics no swept parameter changes (``Kind.given_point_only``: a medium's phase function).
 
 Rows.  Every row carries its point (``Row.point``: the parameters that differ from the given
 point, ``{}`` there); the report's meta records the parameters swept, their ranges and where
@@ -132,7 +133,8 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                "sizes": sizes, "kind": kind.name}
     with core.session(kind):             # one for every point run here
         reports = _run_points(spec, params or {}, runnable, loaded, options, runner, progress,
-                              [t for t in topics if t not in kind.informational])
+                              [t for t in topics if t not in kind.informational
+                               and t not in kind.given_point_only])
     rows: list[Row] = []
     records = []
     summed: dict = {}                   # topic -> its profile summed over the points

@@ -2,7 +2,8 @@
 
 ``finite``, ``majorant``, ``albedo``, ``bounds``, ``flags`` (:mod:`.coefficients`),
 ``transmittance`` (:mod:`.tracking`), ``overrides`` (:mod:`.overrides`), ``phase``
-(:mod:`.scattering`, through the phase kind), ``cost`` (:mod:`.cost`); the probe rays and the
+(:mod:`.scattering`, through the phase kind), ``gradient`` (:mod:`.gradient`), ``cost``
+(:mod:`.cost`); the swept parameters and their ranges (:mod:`.ranges`); the probe rays and the
 calls into Mitsuba (:mod:`.lanes`), sizes and seeds (:mod:`.config`), the topic list and the
 row (:mod:`.topics`), Mitsuba's built-in media and their findings (:mod:`.builtins`), and the
 table that ties them to the kind-independent runner (:mod:`.kind`; the validator is
@@ -58,5 +59,6 @@ from .topics import TOPICS
 
 #: The participating-medium kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
 KIND = Kind(name="medium", word="medium", class_name="Medium", register="mi.register_medium",
-            topics=TOPICS, informational=("cost",), bounds=("albedo",), object_type="Medium",
+            topics=TOPICS, informational=("cost",), bounds=("albedo",),
+            given_point_only=("phase",), object_type="Medium",
             tag="medium", impl=__name__ + ".kind", conformance="docs/conformance-media.md")

@@ -13,7 +13,8 @@ import numpy as np
 
 #: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
 SEED_OFFSETS = {"probe": 51, "finite": 52, "majorant": 53, "albedo": 54, "transmittance": 55,
-                "bounds": 56, "flags": 57, "overrides": 58, "phase": 59, "cost": 60}
+                "bounds": 56, "flags": 57, "overrides": 58, "phase": 59, "cost": 60,
+                "gradient": 61}
 
 
 def rng(seed: int, topic: str) -> np.random.Generator:
@@ -36,6 +37,7 @@ class Options:
     quad_panels: int = 64             #: Gauss-Legendre panels along a ray (optical depth)
     quad_nodes: int = 4               #: nodes per panel (and twice as many for the error)
     override_lanes: int = 4096        #: lanes an override is compared with the base class on
+    gradient_lanes: int = 4096        #: in-bounds interactions the gradient topic sums over
     cost_lanes: int = 1 << 16
     cost_repeats: int = 5
     topics: tuple = field(default_factory=tuple)
@@ -47,4 +49,4 @@ def options(quick: bool = False, seed: int = 0, topics=()) -> Options:
         return Options(seed=seed, topics=tuple(topics))
     return Options(quick=True, seed=seed, topics=tuple(topics), n_rays=1 << 13,
                    tracking_rays=12, tracking_lanes=4096, quad_panels=48,
-                   override_lanes=1024, cost_lanes=1 << 14, cost_repeats=3)
+                   override_lanes=1024, gradient_lanes=1024, cost_lanes=1 << 14, cost_repeats=3)

@@ -20,7 +20,9 @@ from . import KIND, lanes
 from .coefficients import albedo, bounds, finite, flags, majorant
 from .config import options  # noqa: F401 (the kind's part "options")
 from .cost import cost
+from .gradient import gradient
 from .overrides import overrides
+from .ranges import domain, parameters  # noqa: F401 (the kind's parts "domain", "parameters")
 from .scattering import phase, statistical_tests as phase_tests
 from .tracking import statistical_tests as tracking_tests, transmittance
 
@@ -42,6 +44,7 @@ def runners(medium, opts, topics, m: int) -> dict:
         "flags": lambda: flags(medium, opts),
         "overrides": lambda: overrides(medium, opts),
         "phase": lambda: phase(medium, opts, m),
+        "gradient": lambda: gradient(medium, opts),
         "cost": lambda: cost(medium, opts),
     }
 

@@ -10,7 +10,7 @@ from ..kind import topic_row
 
 #: The validator's medium topics, in the order the table lists them.
 TOPICS = ("finite", "majorant", "albedo", "transmittance", "bounds", "flags", "overrides",
-          "phase", "cost")
+          "phase", "gradient", "cost")
 
 
 #: A row of one of :data:`TOPICS` (:func:`phonglab.validate.kind.topic_row`).
