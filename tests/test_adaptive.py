@@ -192,7 +192,7 @@ def test_scalar_variant_refused():
 
 def test_cli_writes_image_stderr_and_spp_map(tmp_path, capsys):
     out = tmp_path / "gd.exr"
-    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.1",
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "0.1",
                      "--max-spp", "64", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "adaptively" in text and "spp map" in text
@@ -205,19 +205,40 @@ def test_cli_writes_image_stderr_and_spp_map(tmp_path, capsys):
     assert (tmp_path / "gd.png").is_file() and (tmp_path / "gd.spp.png").is_file()
 
 
+def test_cli_stop_after_ends_the_passes(tmp_path, capsys):
+    """--stop-after S is adaptive sampling's time limit: with a target the pilot cannot meet
+    and a limit the pilot alone overruns, the render stops after the pilot and says why."""
+    out = tmp_path / "gd.exr"
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "1e-4",
+                     "--stop-after", "1e-9", "-D", "res=16", "-o", str(out)]) == 0
+    assert "stopped: --stop-after ran out" in capsys.readouterr().out
+    _, meta = exr.read(out)
+    assert meta["stopped"] == "max_seconds" and meta["passes"] == 1
+
+
 @pytest.mark.parametrize("args,message", [
-    (["--adaptive", "--target-error", "0"], "target error"),
-    (["--adaptive", "--target-error", "-0.1"], "target error"),
-    (["--adaptive", "--target-error", "nan"], "target error"),
-    (["--adaptive", "--target-error", "inf"], "target error"),
-    (["--adaptive"], "needs --target-error"),
-    (["--adaptive", "--target-error", "0.1", "--max-spp", "0"], "--max-spp"),
-    (["--adaptive", "--target-error", "0.1", "--max-seconds", "-1"], "--max-seconds"),
-    (["--adaptive", "--target-error", "0.1", "--max-seconds", "nan"], "--max-seconds"),
-    (["--adaptive", "--target-error", "0.1", "--spp", "8"], "drop --spp"),
-    (["--max-spp", "8"], "add --adaptive"),
+    (["--adaptive", "--target-noise", "0"], "target noise must be a relative RMSE"),
+    (["--adaptive", "--target-noise", "-0.1"], "target noise must be a relative RMSE"),
+    (["--adaptive", "--target-noise", "nan"], "target noise must be a relative RMSE"),
+    (["--adaptive", "--target-noise", "inf"], "target noise must be a relative RMSE"),
+    (["--adaptive"], "needs --target-noise"),
+    (["--adaptive", "--by-time"], "needs --target-noise"),
+    # --target-error is the planner's total error: not adaptive sampling's noise target
+    (["--adaptive", "--target-error", "0.1"], "give --adaptive --target-noise N"),
+    (["--adaptive", "--target-noise", "0.1", "--max-spp", "0"], "--max-spp"),
+    (["--adaptive", "--target-noise", "0.1", "--stop-after", "-1"],
+     "--stop-after must be a positive number of seconds"),
+    (["--adaptive", "--target-noise", "0.1", "--stop-after", "nan"],
+     "--stop-after must be a positive number of seconds"),
+    # --max-seconds refuses plans: adaptive sampling's time limit is --stop-after
+    (["--adaptive", "--target-noise", "0.1", "--max-seconds", "60"], "with --stop-after S"),
+    (["--adaptive", "--target-noise", "0.1", "--spp", "8"], "drop --spp"),
+    (["--max-spp", "8"], "add --adaptive --target-noise N"),
+    (["--stop-after", "60"], "--stop-after applies to adaptive sampling"),
+    (["--target-noise", "0.1"], "--target-noise applies to adaptive sampling; add --adaptive"),
+    (["--target-error", "0.1", "--stop-after", "60"], "--stop-after applies to adaptive"),
+    (["--max-seconds", "60"], "--max-seconds is about a plan's predicted time"),
     (["--by-time"], "--by-time is about adaptive sampling"),
-    (["--adaptive", "--by-time"], "--by-time is about adaptive sampling"),
 ])
 def test_cli_bad_input_exits_2_before_work(tmp_path, capsys, args, message):
     out = tmp_path / "x.exr"
@@ -229,7 +250,7 @@ def test_cli_bad_input_exits_2_before_work(tmp_path, capsys, args, message):
 
 def test_cli_unwritable_spp_map_refused_before_render(tmp_path, capsys):
     (tmp_path / "x.spp.exr").mkdir()
-    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.1",
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "0.1",
                      "-o", str(tmp_path / "x.exr")]) == 2
     assert "spp map" in capsys.readouterr().err
     assert not (tmp_path / "x.exr").exists()

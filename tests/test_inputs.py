@@ -129,7 +129,7 @@ def test_a_time_limit_that_is_not_positive_is_refused_before_any_work(command, b
 
 def test_the_planner_refuses_a_time_limit_that_is_not_positive():
     with pytest.raises(PlanError, match="positive number of seconds"):
-        planner.plan("gray_direct", 0.1, max_seconds=-1)
+        planner.PlanOptions(0.1, max_seconds=-1)
 
 
 @pytest.mark.parametrize("library, words", [

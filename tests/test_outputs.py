@@ -151,7 +151,7 @@ def test_a_uniform_render_removes_the_spp_map_of_an_earlier_adaptive_one(tmp_pat
     """The spp map was written after the set and never removed: a later uniform render left
     an old x.spp.exr / x.spp.png beside its new image."""
     out = tmp_path / "x.exr"
-    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.2",
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "0.2",
                      "-D", "res=16", "-o", str(out)]) == 0
     spp_map, spp_png = tmp_path / "x.spp.exr", tmp_path / "x.spp.png"
     assert exr.read(spp_map)[1]["render_id"] == exr.read(out)[1]["render_id"]
@@ -168,7 +168,7 @@ def test_a_failing_member_leaves_the_whole_previous_set(tmp_path, capsys, monkey
     from phonglab.engine import adaptive
 
     out = tmp_path / "x.exr"
-    assert cli.main(["render", "gray_direct", "--adaptive", "--target-error", "0.2",
+    assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "0.2",
                      "-D", "res=16", "-o", str(out)]) == 0
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
 
@@ -177,7 +177,7 @@ def test_a_failing_member_leaves_the_whole_previous_set(tmp_path, capsys, monkey
 
     monkeypatch.setattr(adaptive, "spp_map_image", broken)
     capsys.readouterr()
-    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--adaptive", "--target-error",
+    _fails_in_one_sentence(capsys, ["render", "gray_direct", "--adaptive", "--target-noise",
                                     "0.2", "-D", "res=16", "--seed", "4", "-o", str(out)],
                            "No space left on device")
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -25,7 +25,7 @@ from phonglab import planner, runtime, stats
 from phonglab.engine import exr, metrics, references, render, scenes
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
-from phonglab.planner import benchmark
+from phonglab.planner import PlanOptions, benchmark, choice
 
 RES = {"res": 32}
 
@@ -122,18 +122,18 @@ def test_backend_is_the_best_that_works_here():
 @pytest.mark.parametrize("target", [0, -0.01, float("nan"), 10])
 def test_bad_target_is_a_user_error(target):
     with pytest.raises(PhonglabError, match="target error must be a relative RMSE"):
-        planner.plan("gray_direct", target, params=RES)
+        PlanOptions(target)
 
 
 def test_non_path_integrator_is_refused(tmp_path):
     path = _write(tmp_path, '<integrator type="direct"/><shape type="sphere"/>')
     with pytest.raises(PhonglabError, match="plans path-traced scenes"):
-        planner.plan(path, 0.05)
+        planner.plan(path, PlanOptions(0.05))
 
 
 def test_polarized_only_when_asked_and_then_it_plans():
     """phonglab's plugins are ideal depolarizers (like diffuse), so a polarized plan works."""
-    plan = planner.plan("gray_direct", TARGET, polarized=True, params=RES)
+    plan = planner.plan("gray_direct", PlanOptions(TARGET, polarized=True, params=RES))
     assert plan.variant.endswith("_polarized")
 
 
@@ -148,7 +148,7 @@ def test_spectral_data_is_planned_spectral(tmp_path):
             <spectrum name="reflectance" value="400:0.2, 550:0.5, 700:0.8"/>
         </bsdf></shape>
         <emitter type="constant"><spectrum name="radiance" value="1"/></emitter>""")
-    p = planner.plan(path, 0.1)
+    p = planner.plan(path, PlanOptions(0.1))
     assert p.color == "spectral" and p.variant.endswith("_spectral")
     # Constant environment + convex sphere: everything arrives within 2 segments.
     assert p.max_depth == 2
@@ -158,12 +158,12 @@ def test_spectral_data_is_planned_spectral(tmp_path):
 
 @pytest.fixture(scope="module")
 def plans():
-    return {name: planner.plan(name, TARGET, params=RES)
+    return {name: planner.plan(name, PlanOptions(TARGET, params=RES))
             for name in ("gray_direct", "cornell_phong", "glass_slab")}
 
 
 def _bias(plan, depth):
-    return next(s.bias for s in plan.depths if s.depth == depth)
+    return next(s.bias for s in plan.pilot.depths if s.depth == depth)
 
 
 def test_gray_direct_is_planned_mono_with_depth_2(plans):
@@ -194,7 +194,7 @@ def test_glass_keeps_the_depth_of_its_delta_chain(plans):
 def test_plan_is_the_smallest_depth_and_spp_meeting_the_target(plans, name):
     p = plans[name]
     assert _bias(p, p.max_depth) <= ALLOWED
-    shallower = [s for s in p.depths if 1 <= s.depth < p.max_depth]
+    shallower = [s for s in p.pilot.depths if 1 <= s.depth < p.max_depth]
     failing = max(s.depth for s in shallower)
     assert _bias(p, failing) > ALLOWED
     if any("were not searched" in r for r in p.reasons):
@@ -204,14 +204,15 @@ def test_plan_is_the_smallest_depth_and_spp_meeting_the_target(plans, name):
                                                        if r.startswith("max_depth"))
     else:
         assert failing == p.max_depth - 1
-    noise1 = next(s.noise_per_sample for s in p.depths if s.depth == p.max_depth)
-    assert math.isclose(p.predicted_noise, noise1 / math.sqrt(p.spp), rel_tol=1e-9)
-    assert math.isclose(p.predicted_error, math.hypot(p.predicted_bias, p.predicted_noise),
+    noise1 = next(s.noise_per_sample for s in p.pilot.depths if s.depth == p.max_depth)
+    u = p.uniform
+    assert math.isclose(u.predicted_noise, noise1 / math.sqrt(u.spp), rel_tol=1e-9)
+    assert math.isclose(u.predicted_error, math.hypot(u.predicted_bias, u.predicted_noise),
                         rel_tol=1e-9)
-    assert p.predicted_error <= TARGET
-    if p.spp > 1:  # one sample fewer would miss the target
-        assert math.hypot(p.predicted_bias, noise1 / math.sqrt(p.spp - 1)) > TARGET
-    assert p.predicted_seconds > 0 and p.seconds_per_sample > 0
+    assert u.predicted_error <= TARGET
+    if u.spp > 1:  # one sample fewer would miss the target
+        assert math.hypot(u.predicted_bias, noise1 / math.sqrt(u.spp - 1)) > TARGET
+    assert u.predicted_seconds > 0 and u.seconds_per_sample > 0
 
 
 def test_plan_json_has_the_documented_fields(plans):
@@ -234,15 +235,11 @@ def test_noise_target_is_what_the_total_error_leaves_to_noise():
     assert metrics.noise_target(0.05, 0.03) == pytest.approx(0.04)
     assert metrics.noise_target(0.05) == 0.05
     assert metrics.noise_target(0.05, 0.06) == pytest.approx(0.0005)
-    p = planner.Plan(**{**_PLAN_FIELDS, "target_error": 0.05, "predicted_bias": 0.03})
+    uniform = planner.planning.Uniform(16, 8, 0.05, 0.03, 0.04, 1.0, 1e-9, 1e-3)
+    p = planner.Plan("s.xml", PlanOptions(0.05), "llvm_ad_rgb", "llvm", "rgb", 8, (8, 8),
+                     uniform, choice.Option("path", "adaptive", 12.0, 0.8, 0.16),
+                     planner.planning.PilotRecord(64, 1.0, 1))
     assert p.noise_target == pytest.approx(0.04)
-
-
-_PLAN_FIELDS = dict(scene="s.xml", target_error=0.05, variant="llvm_ad_rgb", backend="llvm",
-                    color="rgb", max_depth=8, spp=16, passes=8, predicted_error=0.05,
-                    predicted_bias=0.0, predicted_noise=0.05, predicted_seconds=1.0,
-                    seconds_per_sample=1e-9, seconds_per_pass=1e-3, resolution=(8, 8),
-                    params={}, pilot_spp=64, pilot_seconds=1.0)
 
 
 def test_render_plan_reuses_the_pilot_scene_and_reports_its_error(plans, tmp_path, monkeypatch):
@@ -261,23 +258,26 @@ def test_render_plan_reuses_the_pilot_scene_and_reports_its_error(plans, tmp_pat
     assert done.image.shape[:2] == (h, w)
     err = done.error
     assert err.achieved == metrics.relative_rmse(done.image, ref.image, ref_stderr=ref.stderr)
-    assert err.reference_spp == ref.spp and err.target == TARGET and err.bias == p.predicted_bias
-    assert err.estimated == pytest.approx(math.hypot(err.noise, p.predicted_bias))
+    assert err.reference_spp == ref.spp and err.target == TARGET
+    assert err.bias == p.uniform.predicted_bias
+    assert err.estimated == pytest.approx(math.hypot(err.noise, p.uniform.predicted_bias))
+    said = done.describe()   # what `render --target-error` prints of it
+    assert f"achieved {err.achieved:.4g}" in said and f"target {TARGET:g}" in said
     out = tmp_path / "gd.exr"
     filed = planner.render_plan(p, seed=4, out=out, reference=ref)
     image, meta = exr.read(out)
-    assert meta["target_error"] == TARGET and meta["planned"]["model"] == p.model
+    assert meta["target_error"] == TARGET and meta["planned"]["model"] == p.render.model
     np.testing.assert_allclose(image.reshape(done.image.shape), done.image, rtol=1e-5,
                                atol=1e-6)
     assert filed.error.achieved == pytest.approx(err.achieved, rel=1e-4)
 
 
 def test_explicit_settings_override_the_plan():
-    p = planner.plan("gray_direct", TARGET, variant="llvm_ad_rgb", max_depth=1, spp=4,
-                     params=RES)
-    assert (p.variant, p.max_depth, p.spp) == ("llvm_ad_rgb", 1, 4)
+    p = planner.plan("gray_direct", PlanOptions(TARGET, variant="llvm_ad_rgb", max_depth=1,
+                                                spp=4, params=RES))
+    assert (p.variant, p.max_depth, p.uniform.spp) == ("llvm_ad_rgb", 1, 4)
     # Depth 1 sees no emitter: the whole image is bias, far above the target, and it says so.
-    assert p.predicted_error > TARGET and any("misses the target" in r for r in p.reasons)
+    assert p.uniform.predicted_error > TARGET and any("misses the target" in r for r in p.reasons)
 
 
 # --- achieved error ---------------------------------------------------------------------------------
@@ -291,10 +291,10 @@ def test_achieved_error_is_near_the_target(plans, name):
     percent, so the window tests the planner's prediction, not the luck of one seed.
     """
     p = plans[name]
-    ref = references.reference(name, max(1024, 16 * p.spp), params=RES)
+    ref = references.reference(name, max(1024, 16 * p.uniform.spp), params=RES)
     scene = scenes.load_scene(name, p.variant, **RES)
     info = scenes.inspect_scene(name, **RES)
-    result = render.render_scene(scene, p.spp, seed=0, passes=p.passes,
+    result = render.render_scene(scene, p.uniform.spp, seed=0, passes=p.uniform.passes,
                                  integrator=scenes.path_integrator(p.max_depth, info))
     achieved = metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr)
     assert 0.5 * TARGET <= achieved <= 1.5 * TARGET, (name, achieved, p.summary())
@@ -339,12 +339,16 @@ def test_cli_bad_target_exits_2(capsys):
 
 
 def test_cli_render_with_target_error(tmp_path, capsys):
+    """The plan is made for the render's --seed (its pilot takes the seeds after it), and
+    the render runs with that seed."""
     out = tmp_path / "gd.exr"
-    assert main(["render", "gray_direct", "--target-error", "0.1", "-o", str(out)]) == 0
+    assert main(["render", "gray_direct", "--target-error", "0.1", "--seed", "3",
+                 "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "predicted" in text and "error:" in text and "max_depth 2" in text
     image, meta = exr.read(out)
     assert meta["target_error"] == 0.1 and meta["max_depth"] == 2
+    assert meta["seed"] == 3 and meta["planned"]["pilot_seed"] == 3 + planner.PILOT_SEED
     assert image.ndim == 2                  # mono: one channel
 
 
@@ -385,19 +389,20 @@ def test_plan_prices_models_and_sampling(plans):
     """Every plan states its render (model, sampling) and the priced options behind it; at
     depth > 2 no cheaper exact model exists and it says so."""
     for name, p in plans.items():
-        assert p.model in ("path", "direct", "whitted") and p.sampling in ("uniform", "adaptive")
-        assert p.chosen_seconds > 0 and p.chosen_spp >= 1
+        assert p.render.model in ("path", "direct", "whitted")
+        assert p.render.sampling in ("uniform", "adaptive")
+        assert p.render.seconds > 0 and p.render.spp >= 1
         assert any(r.startswith("priced") for r in p.reasons)
         assert any(r.startswith("chosen:") for r in p.reasons)
-        assert p.uses_wavefront == (p.model != "path" or p.sampling == "adaptive")
-    assert plans["cornell_phong"].model == "path"
+        assert p.uses_wavefront == (p.render.model != "path" or p.render.sampling == "adaptive")
+    assert plans["cornell_phong"].render.model == "path"
     assert any("no cheaper exact model" in r for r in plans["cornell_phong"].reasons)
     assert any("whitted (radiance units) not considered" in r
                for r in plans["gray_direct"].reasons)
 
 
 def test_whitted_is_priced_when_every_light_is_a_point_light(tmp_path):
-    p = planner.plan(_write(tmp_path, POINT_LIT), TARGET)
+    p = planner.plan(_write(tmp_path, POINT_LIT), PlanOptions(TARGET))
     assert p.max_depth == 2
     priced = next(r for r in p.reasons if r.startswith("priced"))
     assert "whitted, uniform" in priced and "whitted, adaptive" in priced
@@ -552,8 +557,8 @@ def test_pooled_pilot_sees_the_rare_bounces_of_the_sphere_row():
     3e-6 to 0.003 over ten seeds, six of them under the budget, and the plan chose depth 4 and
     missed E by 6 %; pooled with the second pilot (16 spp) the plan must find depth 4 short."""
     params = {"width": 512, "height": 128}
-    p = planner.plan("nb_sphere_row", 0.005, params=params)
-    b4 = next(d for d in p.depths if d.depth == 4)
+    p = planner.plan("nb_sphere_row", PlanOptions(0.005, params=params))
+    b4 = next(d for d in p.pilot.depths if d.depth == 4)
     assert b4.bias > planner.BIAS_FRACTION * 0.005
     assert p.max_depth > 4
 
@@ -740,17 +745,17 @@ def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plan
     for name, p in plans.items():
         assert any(r.startswith("sampler: multijitter") for r in p.reasons), name
     target = 0.002   # (at 0.003 the pilot's own samples nearly suffice: 2 spp more)
-    p = planner.plan("gray_direct", target, params=RES)
-    assert p.sampler == "multijitter" and p.reused, p.summary()
-    assert p.chosen_spp / p.chosen_passes >= planner.pilot.STRATIFIED_PASS_SPP
-    ref = references.reference("gray_direct", max(1024, 16 * p.spp), params=RES)
+    p = planner.plan("gray_direct", PlanOptions(target, params=RES))
+    assert p.render.sampler == "multijitter" and p.reused, p.summary()
+    assert p.render.spp / p.render.passes >= planner.pilot.STRATIFIED_PASS_SPP
+    ref = references.reference("gray_direct", max(1024, 16 * p.uniform.spp), params=RES)
     errs = [execute.render_plan(p, seed=100 + seed, reference=ref).error.achieved
             for seed in range(3)]
     # the gain is measured on 8-spp passes and these hold more: the error errs low
     assert max(errs) <= 1.15 * target, (errs, p.summary())
     kw = p.render_kwargs()   # alone: the uniform spp of independent samples
-    assert kw == {"spp": p.spp, "variant": p.variant, "max_depth": p.max_depth,
-                  "passes": p.passes}
+    assert kw == {"spp": p.uniform.spp, "variant": p.variant, "max_depth": p.max_depth,
+                  "passes": p.uniform.passes}
     info = scenes.inspect_scene("gray_direct", **RES)
     scene = scenes.load_scene("gray_direct", p.variant, **RES)
     result = render.render_scene(scene, kw["spp"], seed=200, passes=kw["passes"],
@@ -828,9 +833,9 @@ def test_a_planned_render_reuses_the_pilot_and_reaches_the_target():
     from phonglab.planner import execute
 
     target = 0.006
-    p = planner.plan("gray_room", target, params=RES)
+    p = planner.plan("gray_room", PlanOptions(target, params=RES))
     assert p.reused is not None and p.reused_spp > 0, p.summary()
-    assert math.ceil(p.chosen_spp) < p.spp
+    assert math.ceil(p.render.spp) < p.uniform.spp
     assert any(r.startswith("reuse:") for r in p.reasons)
     ref = references.reference("gray_room", 4096, params=RES)
     for seed in range(3):
@@ -844,18 +849,20 @@ def test_a_render_seed_among_the_pilots_renders_alone():
     renders the plan's uniform spp alone (standalone plan), and says so."""
     from phonglab.planner import execute
 
-    p = planner.plan("gray_room", 0.03, params=RES, seed=5)
+    p = planner.plan("gray_room", PlanOptions(0.03, params=RES, seed=4))
+    assert p.pilot.seed == 4 + planner.PILOT_SEED == 5   # the plan's render seed is 4
     assert p.reused is not None and p.repeats_pilot(5) and not p.repeats_pilot(4)
     done = execute.render_plan(p, seed=6)
     assert "combined" not in done.result.metadata
-    assert sum(done.result.pass_spp) == p.spp
+    assert sum(done.result.pass_spp) == p.uniform.spp
     assert "the render's seed is one of the pilot's" in done.plan.reasons[-1]
 
 
 def test_the_pilots_renders_never_share_seeds(monkeypatch):
     """Every pilot render that the planned render may be combined with has a seed of its own
     (a later ladder stage too), all within pilot_seed .. pilot_seed + PILOT_SEEDS, so the
-    CLI's render seed (pilot seed − 1) repeats none of them."""
+    render seed the plan is made for (PlanOptions.seed, pilot seed − 1) repeats none of
+    them."""
     seeds = []
     real = render.render_scene
 
@@ -864,7 +871,7 @@ def test_the_pilots_renders_never_share_seeds(monkeypatch):
         return real(scene, spp, seed=seed, **kw)
 
     monkeypatch.setattr(render, "render_scene", spy)
-    p = planner.plan("cornell_phong", 0.05, params=RES, seed=40)
+    p = planner.plan("cornell_phong", PlanOptions(0.05, params=RES, seed=39))
     assert len(seeds) == len(set(seeds)), seeds
     assert all(40 <= s <= 40 + planner.pilot.PILOT_SEEDS for s in seeds)
     assert not p.repeats_pilot(39)
@@ -883,12 +890,12 @@ def test_a_render_cheaper_than_the_pilot_is_planned_straight_away(monkeypatch):
     monkeypatch.setattr(render, "render_scene",
                         lambda *a, **kw: calls.append(kw.get("integrator")) or real(*a, **kw))
     target = 0.05
-    p = planner.plan("gray_room", target, params=RES, straight=True)
+    p = planner.plan("gray_room", PlanOptions(target, params=RES, straight=True))
     assert any(r.startswith("straight:") for r in p.reasons), p.summary()
-    assert p.max_depth == -1 and p.predicted_bias == 0.0 and p.reused is not None
+    assert p.max_depth == -1 and p.uniform.predicted_bias == 0.0 and p.reused is not None
     assert len(calls) == 2   # the two pilot renders, nothing else
     monkeypatch.setattr(render, "render_scene", real)
-    full = planner.plan("gray_room", target, params=RES, straight=False)
+    full = planner.plan("gray_room", PlanOptions(target, params=RES, straight=False))
     assert not any(r.startswith("straight:") for r in full.reasons) and full.max_depth > 0
     ref = references.reference("gray_room", 4096, params=RES)
     for seed in range(3):
@@ -903,20 +910,22 @@ def test_a_rest_of_a_few_first_renders_goes_straight(monkeypatch):
     with the threshold at one first render the depth search runs."""
     import re
 
-    p = planner.plan("gray_room", 0.008, params=RES, straight=True)
+    p = planner.plan("gray_room", PlanOptions(0.008, params=RES, straight=True))
     reason = next((r for r in p.reasons if r.startswith("straight:")), None)
     assert reason is not None and p.max_depth == -1, p.summary()
     rest = int(re.search(r"needs (\d+) more spp", reason).group(1))
-    assert p.pilot_spp < rest <= planner.planning.STRAIGHT_RENDERS * p.pilot_spp
+    assert p.pilot.spp < rest <= planner.planning.STRAIGHT_RENDERS * p.pilot.spp
     assert f"{planner.planning.STRAIGHT_RENDERS} first renders or less" in reason
     monkeypatch.setattr(planner.planning, "STRAIGHT_RENDERS", 1)
-    full = planner.plan("gray_room", 0.008, params=RES, straight=True)
+    full = planner.plan("gray_room", PlanOptions(0.008, params=RES, straight=True))
     assert not any(r.startswith("straight:") for r in full.reasons) and full.max_depth > 0
 
 
-def test_full_pilot_without_a_target_error_is_one_sentence(capsys):
+@pytest.mark.parametrize("extra", [[], ["--adaptive", "--target-noise", "0.1"]],
+                         ids=["alone", "adaptive"])
+def test_full_pilot_without_a_target_error_is_one_sentence(capsys, extra):
     """--full-pilot belongs to the planner: alone (or with --adaptive) it is refused, exit 2."""
-    assert main(["render", "gray_direct", "--full-pilot"]) == 2
+    assert main(["render", "gray_direct", "--full-pilot", *extra]) == 2
     assert "--full-pilot is about the planner's pilot" in capsys.readouterr().err
 
 

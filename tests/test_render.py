@@ -32,7 +32,7 @@ def test_render_cli_sets_scene_parameters(tmp_path, capsys, variant_llvm_rgb):
     """-D NAME=VALUE reaches the scene (film size) in every render mode, and is recorded;
     a malformed one or a name the scene does not use exits 2 with one sentence."""
     for mode in (["--spp", "4"], ["--target-error", "0.05"],
-                 ["--adaptive", "--target-error", "0.2"]):
+                 ["--adaptive", "--target-noise", "0.2"]):
         out = tmp_path / f"{mode[0].strip('-')}.exr"
         assert cli.main(["render", "gray_direct", "-D", "res=24", *mode, "-o", str(out)]) == 0
         image, meta = exr.read(out)

@@ -177,7 +177,7 @@ def test_the_usual_films_are_written_as_before(variant_llvm_rgb, tmp_path, fmt):
                                                       "luminance": (10, 12)}[fmt]
 
 
-ADAPTIVE = ["--adaptive", "--target-error", "0.1"]
+ADAPTIVE = ["--adaptive", "--target-noise", "0.1"]
 
 
 @pytest.mark.parametrize("integrator, route, needle", [

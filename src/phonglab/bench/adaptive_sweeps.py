@@ -99,17 +99,18 @@ def _planned(name: str, params: dict, target: float, ref, seed: int) -> dict:
     """plan() then the render it chose (:func:`phonglab.planner.execute.prepare`, the scene the
     pilot loaded): error and the time a user waits (pilot included)."""
     with quiet_mitsuba():
-        plan = planner.plan(name, target, params=params)
+        plan = planner.plan(name, planner.PlanOptions(target, params=params))
     job = execute.prepare(plan)
     job.render(seed)                                        # compile
     result, seconds = _timed(lambda: job.render(seed))
     set_variant(VARIANT)                  # the plan may have switched to another variant
     return {"method": "planned", "target": target, "seed": seed, "render_seconds": seconds,
-            "pilot_seconds": plan.pilot_seconds, "seconds": seconds + plan.pilot_seconds,
-            "render": f"{plan.model} {plan.sampling}" + (f" {plan.sampler}" if plan.sampler
-                                                          != "independent" else ""),
+            "pilot_seconds": plan.pilot.seconds, "seconds": seconds + plan.pilot.seconds,
+            "render": f"{plan.render.model} {plan.render.sampling}"
+                      + (f" {plan.render.sampler}" if plan.render.sampler != "independent"
+                         else ""),
             "variant": plan.variant,
-            "uniform_spp": plan.spp,
+            "uniform_spp": plan.uniform.spp,
             "max_depth": plan.max_depth,
             "error": execute.error_report(plan, result, ref).achieved}
 

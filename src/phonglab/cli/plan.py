@@ -13,7 +13,6 @@ import contextlib
 
 from ..errors import PhonglabError
 from ..parallel import add_arguments, runner_from_args
-from ..settings import check_max_seconds
 from .options import add_scene_params
 
 
@@ -48,8 +47,8 @@ def add_parser(sub) -> None:
                         "plan is then path at full depth at once, and says so)")
     add_scene_params(p)
     p.add_argument("--max-seconds", type=float, default=None, metavar="S",
-                   help="refuse a plan predicted to take longer (default: planner.MAX_SECONDS, "
-                        "one hour; 'inf' allows any)")
+                   help="refuse a plan predicted to take longer than S seconds (default: "
+                        "planner.MAX_SECONDS, one hour; 'inf' allows any)")
     p.add_argument("--make-reference", type=int, default=None, metavar="SPP",
                    help="also render a converged reference (max_depth -1, SPP samples) into "
                         "the reference cache (.bench_cache/ in a checkout), which 'phonglab render --target-error' compares with")
@@ -62,18 +61,19 @@ def run(args) -> int:
     from ..engine import metrics, references
     from ..engine.scenes import scene_path
 
-    if args.max_seconds is not None:     # before the pilot, whose plans it would all refuse
-        check_max_seconds(args.max_seconds)
-    path = scene_path(args.scene)
-    params = dict(args.params)
-    kwargs = {}
     if args.make_reference is not None and args.make_reference < 16:
         raise PhonglabError(f"--make-reference needs at least 16 spp (16 passes), got "
                             f"{args.make_reference}.")
-    if args.pilot_spp is not None:
-        if args.pilot_spp < 8:
-            raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
-        kwargs["pilot_spp"] = args.pilot_spp
+    if args.pilot_spp is not None and args.pilot_spp < 8:
+        raise PhonglabError(f"--pilot-spp must be at least 8 (8 passes), got {args.pilot_spp}.")
+    # every value checked here, before the pilot (whose plans a bad limit would all refuse)
+    options = planner.PlanOptions(args.target_error, polarized=args.polarized,
+                                  variant=args.variant, max_depth=args.max_depth, spp=args.spp,
+                                  params=dict(args.params), max_seconds=args.max_seconds,
+                                  straight=False if args.full_pilot else None,
+                                  pilot_spp=args.pilot_spp)
+    path = scene_path(args.scene)
+    params = options.params
     # A missing reference's passes run on --workers/--scheduler: reached before the pilot.
     runner = runner_from_args(args)
     rendering = (args.make_reference is not None and
@@ -82,10 +82,7 @@ def run(args) -> int:
         from ..engine.outputs import check_output_folder
         check_output_folder(references.CACHE_DIR / "references", "reference cache")
     with runner if rendering else contextlib.nullcontext():
-        p = planner.plan(path, args.target_error, polarized=args.polarized, variant=args.variant,
-                         max_depth=args.max_depth, spp=args.spp, params=params,
-                         straight=False if args.full_pilot else None,
-                         max_seconds=args.max_seconds, **kwargs)
+        p = planner.plan(path, options)
         print(p.to_json() if args.json else p.summary())
         if args.make_reference is not None:
             ref = references.reference(path, args.make_reference, params=params, progress=True,

@@ -52,7 +52,7 @@ import numpy as np
 
 from . import exr
 from ..errors import PhonglabError
-from .metrics import REL_EPS
+from .metrics import REL_EPS, check_target
 from .outputs import spp_paths
 from .render import MAX_SPP, pass_seed, render_scene_file
 from .wavefront import Wavefront, relative_error_map, window_mean
@@ -98,6 +98,17 @@ class AdaptiveResult:
         """Mean samples per pixel."""
         return float(self.spp.mean())
 
+    def describe(self, scene: str | Path) -> str:
+        """What the render of ``scene`` did, as ``phonglab render --adaptive`` prints it: its
+        passes, samples and time, the estimated error against the target, why it stopped."""
+        meta = self.metadata
+        why = {"target": "the estimated error meets the target",
+               "max_spp": "pixels reached --max-spp", "max_seconds": "--stop-after ran out"}
+        return (f"rendered {scene} adaptively in {meta['variant']}: {len(self.passes)} passes, "
+                f"{self.total_spp:.1f} spp on average ({meta['spp_min']} to {meta['spp_max']}), "
+                f"{self.seconds:.3g} s; estimated relative RMSE {self.estimated_error:.4g} "
+                f"(target {self.target_error:g}); stopped: {why[self.stopped]}")
+
 
 def neyman_gain(u: np.ndarray, cost: np.ndarray | None = None) -> float:
     """The most a per-pixel allocation can gain over uniform sampling on the relative MSE
@@ -131,13 +142,11 @@ def oracle_speedup(variance: np.ndarray, reference: np.ndarray, eps: float = REL
 
 
 def _check(target_error, max_seconds, max_spp, min_spp) -> None:
-    """Refuse a target or cap no render can use (one sentence each)."""
-    if not (isinstance(target_error, (int, float)) and math.isfinite(target_error)
-            and 0 < target_error < 10):
-        raise PhonglabError(f"the target error must be a relative RMSE in (0, 10), e.g. 0.02 "
-                            f"for 2 %, got {target_error!r}")
+    """Refuse a target or cap no render can use (one sentence each, naming the flag of
+    ``phonglab render --adaptive``)."""
+    check_target(target_error, "the target noise")
     if max_seconds is not None:
-        check_max_seconds(max_seconds)
+        check_max_seconds(max_seconds, "--stop-after")
     if not (isinstance(min_spp, int) and 2 <= min_spp <= MAX_SPP):
         raise PhonglabError(f"the pilot needs 2 to {MAX_SPP} samples per pixel (it estimates a "
                             f"variance), got {min_spp!r}")
@@ -168,7 +177,7 @@ def allocation(u: np.ndarray, target_error: float, neighbourhood: bool = True,
 
 def fit_time(counts: np.ndarray, seconds_left: float, seconds_per_sample: float) -> np.ndarray:
     """``counts`` scaled down so that the pass fits ``seconds_left`` at the last pass's
-    measured cost per sample (all zero when no time is left): ``--max-seconds`` is honoured
+    measured cost per sample (all zero when no time is left): ``--stop-after`` is honoured
     within one pass, which a pass of GROWTH times the samples would overrun."""
     if seconds_left <= 0:
         return np.zeros_like(counts)

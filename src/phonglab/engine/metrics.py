@@ -18,9 +18,9 @@ A reference rendered by Monte Carlo carries its own noise, standard error s_r pe
 E[d²] = MSE_true + s_r², so passing ``ref_stderr`` subtracts mean(s_r² / (r² + ε)) (and
 mean(s_r²) from the MSE), clamped at 0 (:func:`errors`).
 
-**The error target E** (``--target-error E`` on every route of ``phonglab render`` and
-``phonglab plan``, :func:`phonglab.planner.plan`, :func:`phonglab.engine.adaptive.render_adaptive`;
-the one definition, which the others refer to) is the *total* relative RMSE of the image
+**The error target E** (``--target-error E`` of ``phonglab plan`` and ``phonglab render``,
+:class:`phonglab.planner.PlanOptions`; the one definition, which the others refer to) is the
+*total* relative RMSE of the image
 against a converged reference r: the image at unbounded depth (``max_depth = -1``, paths ended
 by Russian roulette, no depth bias; :func:`phonglab.engine.references.reference`), its own noise
 subtracted as above.  Its square splits into bias and noise, E² = b² + n² (MSE = bias² +
@@ -32,12 +32,14 @@ noise at :func:`noise_target` (E, b) = √(E² − b²):
 
 * ``render --target-error E`` (planned) has b from the pilot: a uniform render takes the spp
   with b² + n² <= E², a wavefront one (another model, adaptive sampling) aims at √(E² − b²);
-* ``render --adaptive --target-error E`` has no bias estimate and takes b = 0: its noise target
-  is E itself.  E is then its total error only when the render is unbiased against the
-  reference (the scene's integrator at ``max_depth = -1``, or at a depth past which the scene
-  carries no energy); at a finite depth that omits energy the total error is about √(E² + b²),
-  b the depth bias of that max_depth (``phonglab plan SCENE --max-depth D`` gives b(D) in
-  its reasons).
+* ``render --adaptive --target-noise N`` (:func:`phonglab.engine.adaptive.render_adaptive`) has
+  no bias estimate: N is a noise target, the relative noise the render may leave.  N is its
+  total error only when the render is unbiased against the reference (the scene's integrator
+  at ``max_depth = -1``, or at a depth past which the scene carries no energy); at a finite
+  depth that omits energy the total error is about √(N² + b²), b the depth bias of that
+  max_depth (``phonglab plan SCENE --max-depth D`` gives b(D) in its reasons).
+
+Both targets are checked by :func:`check_target`.
 
 **Luminance** is Rec. 709 / sRGB, with the coefficients Mitsuba's ``mi.luminance`` and its
 mono variants use: Y = 0.212671 R + 0.715160 G + 0.072169 B.
@@ -50,6 +52,7 @@ import math
 import numpy as np
 
 from ..errors import CompareError
+from ..settings import ParameterError
 
 #: ε of the relative MSE: d² / (r² + REL_EPS).
 REL_EPS = 1e-2
@@ -115,6 +118,15 @@ def noise_target(total_error: float, bias: float = 0.0) -> float:
     with a relative bias b (module docstring), at least E/100 (where b alone reaches E the
     render cannot meet E, and a smaller noise target would only cost samples)."""
     return math.sqrt(max(total_error ** 2 - bias ** 2, (0.01 * total_error) ** 2))
+
+
+def check_target(value, what: str = "the target error") -> float:
+    """A relative RMSE to reach (E, or a noise target) as a float in (0, 10), else
+    :class:`phonglab.settings.ParameterError` in one sentence: the one check of both targets."""
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 10):
+        raise ParameterError(f"{what} must be a relative RMSE in (0, 10), e.g. 0.01 for 1 %, "
+                             f"got {value!r}")
+    return float(value)
 
 
 def errors(image, reference, ref_stderr=None, eps: float = REL_EPS) -> dict[str, float]:

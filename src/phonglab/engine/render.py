@@ -255,6 +255,11 @@ class Prior:
     precisions: tuple[float, ...]
     weight: np.ndarray
 
+    @property
+    def spp(self) -> int:
+        """Samples per pixel the renders hold."""
+        return int(sum(sum(r.pass_spp) for r in self.renders))
+
 
 def combine_renders(parts: list[RenderResult], precisions: list[float]) -> RenderResult:
     """Independent unbiased renders of one image, combined with inverse-variance weights
@@ -424,7 +429,7 @@ class UniformPasses:
         if self.prior is not None:
             result = combine_renders([*self.prior.renders, result],
                                      [*self.prior.precisions, precision(result, self.prior.weight)])
-            reused = {"reused_spp": int(sum(sum(p.pass_spp) for p in self.prior.renders)),
+            reused = {"reused_spp": self.prior.spp,
                       "combined": result.metadata["combined"],
                       "combined_noise": result.metadata["combined_noise"]}
         integrator = sf.integrator or sf.scene.integrator()

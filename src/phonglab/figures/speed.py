@@ -100,7 +100,7 @@ def efficiency_table(curves: ConvergenceCurves) -> list[tuple[str, float, float]
 def fig_plan_depths(plan):
     """The planner's depth evidence: relative RMS of the omitted deeper bounces b(d) for each
     pilot depth, the budget 0.25·E it must stay under, and the chosen depth."""
-    depths = [d for d in plan.depths if d.depth != -1]
+    depths = [d for d in plan.pilot.depths if d.depth != -1]
     fig = figure(5.5, 3.2)
     ax = fig.subplots()
     x = [d.depth for d in depths]
@@ -112,6 +112,6 @@ def fig_plan_depths(plan):
         ax.axvline(plan.max_depth, color="C2", ls=":", label=f"chosen max_depth {plan.max_depth}")
     ax.set_xlabel("max_depth")
     ax.set_ylabel("relative RMS (floored at 1e-6)")
-    ax.set_title(f"{Path(plan.scene).name}: pilot at {plan.pilot_spp} spp", fontsize=9)
+    ax.set_title(f"{Path(plan.scene).name}: pilot at {plan.pilot.spp} spp", fontsize=9)
     ax.legend(fontsize=7)
     return fig

@@ -1,6 +1,6 @@
 r"""The planner: the leanest variant, path depth and sample count that meet an error target.
 
-``plan(scene, target_error=E)`` answers "how should this scene be rendered to reach a relative
+``plan(scene, PlanOptions(target_error=E))`` answers "how should this scene be rendered to reach a relative
 RMSE of E, and at what cost?" in four steps, each with a reason the user can read
 (:attr:`Plan.reasons`):
 
@@ -57,8 +57,9 @@ measured with the same definition (:func:`phonglab.planner.execute.error_report`
 Carlo noise falls as ``1/√N`` (M. Pharr, W. Jakob, G. Humphreys, *Physically Based
 Rendering*, 4th ed., §2.1.4, and §2.2.4 on Russian roulette).
 
-Modules: :mod:`.planning` (:class:`Plan`, :func:`plan` and its steps), :mod:`.execute`
-(:func:`render_plan`: the plan's render and its error report, for the CLI and the bench),
+Modules: :mod:`.planning` (:class:`PlanOptions`, :class:`Plan` and its records, :func:`plan`
+and its steps), :mod:`.execute` (:func:`render_plan`: the plan's render, its error report and
+what it did, for the CLI and the bench),
 :mod:`.pilot` (the pilot renders, depth search, weights, noise and time model), :mod:`.ladder`
 (one render that gives the image at several depths), :mod:`.benchmark` (the table of
 ``scripts/planner_bench.py``).
@@ -68,8 +69,8 @@ from .benchmark import benchmark_table
 from .execute import render_plan
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SPP,
                     DepthSample, Pilot)
-from .planning import MAX_SECONDS, Plan, plan, render_passes
+from .planning import MAX_SECONDS, Plan, PlanOptions, plan, render_passes
 
 __all__ = ["BIAS_FRACTION", "DEPTH_LADDER", "EPS", "MAX_SECONDS", "PILOT_PASSES", "PILOT_SEED",
-           "PILOT_SPP", "DepthSample", "Pilot", "Plan", "benchmark_table", "plan", "render_passes",
-           "render_plan"]
+           "PILOT_SPP", "DepthSample", "Pilot", "Plan", "PlanOptions", "benchmark_table", "plan",
+           "render_passes", "render_plan"]

@@ -1,6 +1,7 @@
 r"""Executing a plan: :func:`render_plan` renders what :func:`.planning.plan` chose and reports
-its error; the CLI (``phonglab render --target-error E``) and the bench
-(:mod:`phonglab.bench.adaptive_sweeps`) both run plans through it.
+its error (:meth:`PlannedRender.describe` says what it did); the CLI (``phonglab render
+--target-error E``) and the bench (:mod:`phonglab.bench.adaptive_sweeps`) both run plans
+through it.
 
 **The render** (:func:`sampling`, :func:`integrator`):
 
@@ -11,7 +12,7 @@ its error; the CLI (``phonglab render --target-error E``) and the bench
   with the model's integrator (:func:`.choice.model_dict`; the scene's own at
   ``plan.max_depth`` for ``path``) and the noise target √(E² − b²)
   (:attr:`.Plan.noise_target`, :func:`phonglab.engine.metrics.noise_target`); a uniform one traces
-  ⌈chosen_spp⌉ samples (at least 2: the error estimate needs a variance) in every pixel.
+  ⌈``plan.render.spp``⌉ samples (at least 2: the error estimate needs a variance) in every pixel.
 
 The scene is the one the pilot loaded and inspected (:attr:`.Plan.loaded`, :attr:`.Plan.info`;
 :func:`phonglab.engine.render.open_scene_file`): Mitsuba loads it once per ``render``, not twice, and
@@ -32,6 +33,7 @@ pilot's; from its samples, wavefront) and b the pilot's depth bias.
 from __future__ import annotations
 
 import math
+import statistics
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,7 +45,7 @@ from ..engine.adaptive import MIN_SPP, AdaptiveResult, AdaptiveSampling
 from ..registration import register
 from ..engine.references import Reference
 from ..engine.render import (RenderResult, SceneFile, UniformPasses, open_scene_file,
-                      render_scene_file)
+                             render_scene_file)
 from ..runtime import quiet_mitsuba
 from . import choice
 from .planning import Plan
@@ -78,39 +80,83 @@ class PlannedRender:
     def image(self):
         return self.result.image
 
+    def describe(self) -> str:
+        """What the render did, as ``phonglab render --target-error`` prints it: its
+        configuration, time against the prediction, and error (achieved against the cached
+        reference, else estimated) against the target."""
+        plan, result, error = self.plan, self.result, self.error
+        target = f"target {plan.target_error:g}"
+        if plan.uses_wavefront:
+            lines = [f"rendered {plan.scene} with {plan.render.model}, {plan.render.sampling} "
+                     f"sampling, max_depth {plan.max_depth} in {plan.variant}: "
+                     f"{result.total_spp:.1f} spp on average, {result.seconds:.3g} s "
+                     f"(predicted {plan.render.seconds:.3g} s steady state)"]
+            if error.achieved is not None:
+                lines.append(f"  error: achieved {error.achieved:.4g} against the cached "
+                             f"reference ({error.reference_spp} spp); estimated "
+                             f"{error.estimated:.4g}, {target}")
+            else:
+                lines.append(f"  error: estimated {error.estimated:.4g} (noise {error.noise:.4g} "
+                             f"from the samples, depth bias {error.bias:.3g} from the pilot); "
+                             f"{target}")
+            return "\n".join(lines)
+        times = result.pass_seconds
+        # Steady state: the first pass may include JIT compilation; count it as a median pass.
+        steady = statistics.median(times[1:]) * len(times) if len(times) > 1 else result.seconds
+        rendered = sum(result.pass_spp) - plan.reused_spp   # its own, not the pilot's
+        lines = [f"rendered {plan.scene} with {rendered} spp ({plan.render.sampler} "
+                 f"sampler), max_depth {plan.max_depth} in {plan.variant}: "
+                 f"{result.seconds:.3g} s ({steady:.3g} s steady state; predicted "
+                 f"{plan.render.seconds:.3g} s)"]
+        predicted = f"predicted {error.predicted:.4g}, {target}"
+        if error.achieved is not None:
+            lines.append(f"  error: achieved {error.achieved:.4g} against the cached reference "
+                         f"({error.reference_spp} spp, max_depth -1); {predicted}")
+        elif error.noise is not None:
+            lines.append(f"  error: about {error.estimated:.4g} (noise {error.noise:.4g} "
+                         f"estimated from {len(times)} passes, depth bias {error.bias:.3g} from "
+                         f"the pilot; no cached reference: make one with 'phonglab plan "
+                         f"{plan.scene} --make-reference 4096'); {predicted}")
+        else:
+            lines.append(f"  error: not measurable from one pass; {predicted}")
+        return "\n".join(lines)
+
 
 def sampling(plan: Plan, progress: bool = False,
              by_time: bool = False) -> UniformPasses | AdaptiveSampling:
     """How the plan's render samples (module docstring); ``by_time``: an adaptive render
     allocates by time (:func:`phonglab.engine.adaptive.render_adaptive`)."""
+    chosen = plan.render
     if plan.reused is not None:   # combined with the pilot's renders: the spp chosen for that
-        sampler = plan.sampler if plan.sampler != "independent" else None
-        return UniformPasses(math.ceil(plan.chosen_spp), plan.chosen_passes, sampler, progress,
+        sampler = chosen.sampler if chosen.sampler != "independent" else None
+        return UniformPasses(math.ceil(chosen.spp), chosen.passes, sampler, progress,
                              prior=plan.reused)
     if not plan.uses_wavefront:
         kw = plan.render_kwargs()
         return UniformPasses(kw["spp"], kw["passes"], kw.get("sampler"), progress)
-    if plan.sampling == "uniform":
-        spp = max(2, math.ceil(plan.chosen_spp))
+    if chosen.sampling == "uniform":
+        spp = max(2, math.ceil(chosen.spp))
         return AdaptiveSampling(plan.noise_target, min_spp=spp, max_spp=spp)
     return AdaptiveSampling(plan.noise_target, min_spp=MIN_SPP, by_time=by_time)
 
 
 def integrator(plan: Plan) -> dict | None:
     """The ``mi.load_dict`` dictionary of the plan's model (None: the scene's own ``path``)."""
-    if plan.model == "path":
+    if plan.render.model == "path":
         return None
-    return choice.model_dict(plan.model, plan.max_depth,
-                             plan.info if plan.info is not None else plan.scene, plan.params)
+    return choice.model_dict(plan.render.model, plan.max_depth,
+                             plan.info if plan.info is not None else plan.scene,
+                             plan.options.params)
 
 
 def header(plan: Plan) -> dict[str, Any]:
     """What a planned render adds to its EXR header: target, predictions and the plan (and,
     for a wavefront render, max_depth, model and sampling)."""
-    meta = {"target_error": plan.target_error, "predicted_error": plan.predicted_error,
-            "predicted_seconds": plan.predicted_seconds, "planned": plan.to_dict()}
+    meta = {"target_error": plan.target_error, "predicted_error": plan.uniform.predicted_error,
+            "predicted_seconds": plan.uniform.predicted_seconds, "planned": plan.to_dict()}
     if plan.uses_wavefront:
-        meta.update(max_depth=plan.max_depth, model=plan.model, sampling=plan.sampling)
+        meta.update(max_depth=plan.max_depth, model=plan.render.model,
+                    sampling=plan.render.sampling)
     return meta
 
 
@@ -142,7 +188,7 @@ def prepare(plan: Plan) -> PreparedPlan:
     _activate(plan)
     with quiet_mitsuba():
         sf = open_scene_file(plan.scene, variant=how.variant(plan.variant),
-                             max_depth=plan.max_depth, params=plan.params,
+                             max_depth=plan.max_depth, params=plan.options.params,
                              settings=how.settings(), integrator=integrator(plan),
                              loaded=plan.loaded, info=plan.info, quiet=how.quiet_load)
     return PreparedPlan(plan, how, sf)
@@ -158,13 +204,15 @@ def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
         noise = float(result.metadata["combined_noise"])
     elif result.stderr is None:
         noise = None
-    elif plan.weight is not None:   # weighed by the pilot's image, not the render's own
-        noise = math.sqrt(float(np.mean(result.stderr.astype(np.float64) ** 2 * plan.weight)))
+    elif plan.pilot.weight is not None:   # weighed by the pilot's image, not the render's own
+        noise = math.sqrt(float(np.mean(result.stderr.astype(np.float64) ** 2
+                                        * plan.pilot.weight)))
     else:
         noise = metrics.relative_noise(result.image, result.stderr)
-    report = ErrorReport(plan.target_error, plan.predicted_error, plan.predicted_bias, noise)
+    report = ErrorReport(plan.target_error, plan.uniform.predicted_error,
+                         plan.uniform.predicted_bias, noise)
     if reference is None:
-        reference = references.cached(plan.scene, params=plan.params,
+        reference = references.cached(plan.scene, params=plan.options.params,
                                       variant=references.variant_for_color(plan.color))
     if reference is not None:
         report.achieved = metrics.relative_rmse(result.image, reference.image,
@@ -173,10 +221,11 @@ def error_report(plan: Plan, result: RenderResult | AdaptiveResult,
     return report
 
 
-def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
+def render_plan(plan: Plan, *, seed: int | None = None, out: str | Path | None = None,
                 reference: Reference | None = None, progress: bool = False,
                 by_time: bool = False) -> PlannedRender:
-    """Render ``plan`` (module docstring) and report its error.
+    """Render ``plan`` (module docstring) with ``seed`` (default: the one it was planned for,
+    :attr:`.PlanOptions.seed`) and report its error.
 
     With ``out`` the render writes its files as ``phonglab render`` does
     (:func:`phonglab.engine.render.render_scene_file`: image, standard error, preview, and the spp
@@ -185,6 +234,7 @@ def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
     (default: the cached one, when there is one).  ``progress`` shows a uniform render's
     passes.
     """
+    seed = plan.options.seed if seed is None else seed
     if plan.repeats_pilot(seed):   # combining would count the same samples twice
         plan = plan.standalone()
     if out is None:
@@ -194,6 +244,6 @@ def render_plan(plan: Plan, *, seed: int = 0, out: str | Path | None = None,
         with quiet_mitsuba():
             result = render_scene_file(
                 plan.scene, out, sampling(plan, progress, by_time), variant=plan.variant, seed=seed,
-                max_depth=plan.max_depth, params=plan.params, integrator=integrator(plan),
+                max_depth=plan.max_depth, params=plan.options.params, integrator=integrator(plan),
                 extra_metadata=header(plan), loaded=plan.loaded, info=plan.info)
     return PlannedRender(plan, result, error_report(plan, result, reference))

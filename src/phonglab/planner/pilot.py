@@ -93,9 +93,10 @@ STRATIFIED_COST = 1.15
 #: 4 spp cost deep rgb scenes ~0.2 s of the pilot).
 TIME_SPP = 1
 TIME_SAMPLES = 4 * 128 * 128
-#: Seed of the pilot (pass k uses render.pass_seed(seed, k)); renders use seed 0.  The pilot
-#: renders with seeds seed, seed + 1 (second pilot), seed + 2, ... (later ladder stages, at
-#: most 3) and seed + TIME_SEED, ... (time model).
+#: Seed of the pilot relative to the render's (pass k uses render.pass_seed(seed, k)): a plan
+#: for a render of seed S pilots with S + PILOT_SEED (:attr:`.planning.PlanOptions.pilot_seed`).
+#: The pilot renders with seeds seed, seed + 1 (second pilot), seed + 2, ... (later ladder
+#: stages, at most 3) and seed + TIME_SEED, ... (time model).
 PILOT_SEED = 1
 TIME_SEED = 7
 #: The pilot's renders use seeds PILOT_SEED to PILOT_SEED + PILOT_SEEDS (relative to its own).

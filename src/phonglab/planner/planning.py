@@ -1,5 +1,9 @@
 """The plan: :func:`plan` chooses the variant, runs the pilot, and picks depth, spp and time.
 
+:func:`plan` takes what it is asked (:class:`PlanOptions`, checked on construction) and gives
+a :class:`Plan` made of the choices of its steps: the variant (step 1) and depth (step 2),
+the uniform ``path`` render that reaches E on its own (:class:`Uniform`, steps 3-4), the render
+that runs (:class:`.choice.Option`, step 5) and what it keeps of its pilot (:class:`PilotRecord`).
 Each step is a function of its own and appends its reason to :attr:`Plan.reasons`; the math
 is in the package docstring (:mod:`phonglab.planner`), the pilot in :mod:`.pilot`.
 """
@@ -15,14 +19,14 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import PlanError, SceneError
-from ..engine.metrics import noise_target
+from ..engine.metrics import check_target, noise_target
 from ..engine.render import MAX_SPP, Prior, check_spp, precision
 from ..runtime import available_backend, check_variant, quiet_mitsuba, variant_for
 from ..engine.scenes import SceneInfo, inspect_scene, load_scene, sensor_with_sampler
 from ..settings import ParameterError, check_max_seconds
 from . import choice, ladder
 from .pilot import (BIAS_FRACTION, DEPTH_LADDER, EPS, PILOT_PASSES, PILOT_SEED, PILOT_SEEDS,
-                    PILOT_SPP, DepthSample, Pilot, pilot_size)
+                    DepthSample, Pilot, pilot_size)
 
 #: :func:`plan` renders straight away (:func:`_straight`) when it pays, unless told not to.
 STRAIGHT = True
@@ -44,15 +48,70 @@ MAX_SECONDS = 3600.0
 
 
 @dataclass
-class Plan:
-    """A rendering configuration for a target error, with its predictions and reasons."""
+class PlanOptions:
+    """What :func:`plan` is asked for, checked on construction (PlanError, one sentence each;
+    a bad spp is render.check_spp's sentence, the one a render gives): the command line builds
+    it from its flags before any work."""
 
-    scene: str
-    target_error: float
-    variant: str
-    backend: str
-    color: str
-    max_depth: int
+    target_error: float = 0.01  #: E, the total relative RMSE, bias included (engine.metrics)
+    variant: str | None = None  #: fix the variant (the predictions follow it)
+    max_depth: int | None = None  #: fix max_depth (-1: unbounded)
+    spp: int | None = None      #: fix the uniform spp (the error is then predicted)
+    polarized: bool = False     #: plan a polarized variant (never chosen otherwise)
+    #: values for the scene's ``<default>`` entries (``{"res": 64}``; None values are dropped)
+    params: dict[str, Any] = field(default_factory=dict)
+    #: refuse a plan predicted to take longer (seconds; None: :data:`MAX_SECONDS`; ``math.inf``
+    #: allows any)
+    max_seconds: float | None = None
+    #: when the rest of the render is predicted cheaper than the pilot's later steps, plan path
+    #: at full depth at once (:func:`_straight`); None: :data:`STRAIGHT`; False: every step
+    straight: bool | None = None
+    #: pilot samples per pixel (None: :func:`.pilot.pilot_size` of the film), in at most
+    #: PILOT_PASSES passes
+    pilot_spp: int | None = None
+    #: the seed of the render the plan is for (:func:`.execute.render_plan`'s default): the
+    #: pilot renders with :attr:`pilot_seed` and the seeds after it, so that the render, which
+    #: is combined with the pilot's samples, never repeats them
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        self.params = {k: v for k, v in (self.params or {}).items() if v is not None}
+        try:
+            check_target(self.target_error)
+            if self.max_seconds is not None:
+                check_max_seconds(self.max_seconds)
+        except ParameterError as exc:
+            raise PlanError(str(exc)) from None
+        if self.pilot_spp is not None and self.pilot_spp < PILOT_PASSES:
+            raise PlanError(f"the pilot needs at least {PILOT_PASSES} spp ({PILOT_PASSES} "
+                            f"passes of at least 1), got pilot_spp={self.pilot_spp}.")
+        if self.spp is not None:
+            check_spp(self.spp)
+        if self.max_depth is not None and (self.max_depth == 0 or self.max_depth < -1):
+            raise PlanError(f"max_depth must be -1 (unbounded) or >= 1, got {self.max_depth}.")
+
+    @property
+    def overrides(self) -> dict[str, Any]:
+        """The parts of the plan the caller fixed (variant, max_depth, spp)."""
+        return {k: v for k, v in (("variant", self.variant), ("max_depth", self.max_depth),
+                                  ("spp", self.spp)) if v is not None}
+
+    @property
+    def pilot_seed(self) -> int:
+        """The pilot's seed: the render's + :data:`.pilot.PILOT_SEED`."""
+        return self.seed + PILOT_SEED
+
+    @property
+    def time_limit(self) -> float:
+        """Seconds beyond which a plan is refused."""
+        return MAX_SECONDS if self.max_seconds is None else float(self.max_seconds)
+
+
+@dataclass
+class Uniform:
+    """Steps 2-4: uniform ``path`` at :attr:`Plan.max_depth`, the render that reaches E on its
+    own, and what the pilot predicts for it."""
+
     spp: int
     passes: int                #: passes the render uses (for the standard error)
     predicted_error: float     #: √(bias² + noise²)
@@ -61,55 +120,83 @@ class Plan:
     predicted_seconds: float   #: steady-state render time (JIT compile excluded)
     seconds_per_sample: float  #: b of T = a + b·spp, per pixel sample
     seconds_per_pass: float    #: a of T = a + b·spp
-    resolution: tuple[int, int]
-    params: dict[str, Any]     #: scene parameters the plan was made with (res=..., ...)
-    pilot_spp: int
-    pilot_seconds: float       #: wall time of the whole pilot (inspection, renders, timing)
+
+
+@dataclass
+class PilotRecord:
+    """What a plan keeps of its pilot (:class:`.pilot.Pilot`)."""
+
+    spp: int
+    seconds: float             #: wall time of the whole plan (inspection, renders, timing)
+    seed: int                  #: its seed (its renders use it and the next PILOT_SEEDS ones)
     depths: list[DepthSample] = field(default_factory=list)
+    #: its weights ≈ 1/(r² + ε) (from its second render): the render's noise is measured with
+    #: them (:func:`.execute.error_report`), not with its own image's
+    weight: Any = field(default=None, repr=False, compare=False)
+
+
+@dataclass
+class Plan:
+    """A rendering configuration for a target error: the choices of :func:`plan`'s steps, with
+    their predictions and reasons."""
+
+    scene: str
+    options: PlanOptions       #: what the plan was asked for (target, params, fixed parts, seed)
+    variant: str
+    backend: str
+    color: str
+    max_depth: int
+    resolution: tuple[int, int]
+    #: steps 3-4: uniform ``path`` at :attr:`max_depth`, whatever renders
+    uniform: Uniform
+    #: step 5 (:mod:`.choice`): the render that runs, its transport model, sampling, sampler,
+    #: samples per pixel (mean when adaptive), passes and predicted steady-state time
+    render: choice.Option
+    pilot: PilotRecord
     reasons: list[str] = field(default_factory=list)
-    overrides: dict[str, Any] = field(default_factory=dict)
-    #: step 5 (:mod:`.choice`): the render's transport model and sampling; ``spp`` and
-    #: ``predicted_seconds`` above stay those of uniform ``path`` at ``max_depth``
-    model: str = "path"
-    sampling: str = "uniform"
-    chosen_spp: float = 0.0          #: samples per pixel of the choice (mean when adaptive)
-    chosen_seconds: float = 0.0      #: its predicted steady-state time
-    sampler: str = "independent"     #: Mitsuba sampler of the render (uniform path)
-    chosen_passes: int = 0           #: passes of the chosen uniform render
-    #: the scene file as :func:`plan` inspected it (with :attr:`params`), and the scene the
-    #: pilot loaded (:attr:`variant`, :attr:`params`): the render reuses them
-    #: (:mod:`.execute`); neither is part of :meth:`to_dict`
+    #: the scene file as :func:`plan` inspected it (with the options' params), and the scene
+    #: the pilot loaded (:attr:`variant`): the render reuses them (:mod:`.execute`)
     info: SceneInfo | None = field(default=None, repr=False, compare=False)
     loaded: Any = field(default=None, repr=False, compare=False)
     #: the pilot's renders the chosen uniform render is combined with (:meth:`.pilot.Pilot.
     #: reusable`, :func:`phonglab.engine.render.combine_renders`); None when it renders alone
     reused: Prior | None = field(default=None, repr=False, compare=False)
-    #: the pilot's weights ≈ 1/(r² + ε) (from its second render): the render's noise is
-    #: measured with them (:func:`.execute.error_report`), not with its own image's
-    weight: Any = field(default=None, repr=False, compare=False)
-    reused_spp: int = 0              #: samples per pixel of :attr:`reused`
-    pilot_seed: int = PILOT_SEED     #: the pilot's seed (its renders use it and the next ones)
+
+    @property
+    def target_error(self) -> float:
+        """E, the plan's total relative error target (:attr:`PlanOptions.target_error`)."""
+        return float(self.options.target_error)
 
     @property
     def noise_target(self) -> float:
         """The noise the render may leave, √(E² − bias²) (:func:`phonglab.engine.metrics.noise_target`:
         what a wavefront render aims at)."""
-        return noise_target(self.target_error, self.predicted_bias)
+        return noise_target(self.target_error, self.uniform.predicted_bias)
 
     @property
     def uses_wavefront(self) -> bool:
         """True when the render goes through :mod:`phonglab.engine.adaptive` (adaptive sampling, or
         a model other than the scene's path integrator)."""
-        return self.sampling == "adaptive" or self.model != "path"
+        return self.render.sampling == "adaptive" or self.render.model != "path"
+
+    @property
+    def reused_spp(self) -> int:
+        """Samples per pixel of :attr:`reused` (0: the render renders alone)."""
+        return self.reused.spp if self.reused is not None else 0
 
     def to_dict(self) -> dict[str, Any]:
-        """The plan as plain values (JSON, the EXR header), without :attr:`info` and
-        :attr:`loaded`."""
-        d = dataclasses.asdict(dataclasses.replace(self, info=None, loaded=None, reused=None,
-                                                   weight=None))
-        del d["info"], d["loaded"], d["reused"], d["weight"]
-        d["resolution"] = list(self.resolution)
-        return d
+        """The plan as plain values (JSON, the EXR header), one level deep as the keys of
+        docs/planner.md, without the scene and pilot images it holds."""
+        r, p = self.render, self.pilot
+        return {"scene": self.scene, "target_error": self.target_error, "variant": self.variant,
+                "backend": self.backend, "color": self.color, "max_depth": self.max_depth,
+                **dataclasses.asdict(self.uniform), "resolution": list(self.resolution),
+                "params": dict(self.options.params), "pilot_spp": p.spp,
+                "pilot_seconds": p.seconds, "depths": [dataclasses.asdict(d) for d in p.depths],
+                "reasons": list(self.reasons), "overrides": self.options.overrides,
+                "model": r.model, "sampling": r.sampling, "chosen_spp": float(r.spp),
+                "chosen_seconds": r.seconds, "sampler": r.sampler, "chosen_passes": r.passes,
+                "reused_spp": self.reused_spp, "pilot_seed": p.seed}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent)
@@ -118,27 +205,29 @@ class Plan:
         """Keyword arguments of :func:`phonglab.engine.render.render_file` that apply the plan (a
         uniform ``path`` render that reaches E on its own: the chosen sampler, spp and passes;
         when the plan combines its render with the pilot's, the uniform spp of
-        :attr:`spp`)."""
-        if (self.sampler != "independent" and self.sampling == "uniform"
-                and self.model == "path" and self.reused is None):
-            return {"spp": int(math.ceil(self.chosen_spp)), "variant": self.variant,
-                    "max_depth": self.max_depth, "passes": self.chosen_passes,
-                    "sampler": self.sampler}
-        return {"spp": self.spp, "variant": self.variant, "max_depth": self.max_depth,
-                "passes": self.passes}
+        :attr:`uniform`)."""
+        r = self.render
+        if (r.sampler != "independent" and r.sampling == "uniform"
+                and r.model == "path" and self.reused is None):
+            return {"spp": int(math.ceil(r.spp)), "variant": self.variant,
+                    "max_depth": self.max_depth, "passes": r.passes, "sampler": r.sampler}
+        return {"spp": self.uniform.spp, "variant": self.variant, "max_depth": self.max_depth,
+                "passes": self.uniform.passes}
 
     def repeats_pilot(self, seed: int) -> bool:
         """True when a render with ``seed`` would repeat the samples of the pilot's renders
-        this plan combines its render with (seeds pilot_seed to pilot_seed + PILOT_SEEDS)."""
-        return self.reused is not None and self.pilot_seed <= seed <= self.pilot_seed + PILOT_SEEDS
+        this plan combines its render with (seeds pilot seed to pilot seed + PILOT_SEEDS)."""
+        return (self.reused is not None
+                and self.pilot.seed <= seed <= self.pilot.seed + PILOT_SEEDS)
 
     def standalone(self) -> Plan:
-        """The plan without the pilot's samples: its uniform ``path`` render of :attr:`spp`
-        (:meth:`render_kwargs`), which reaches E on its own."""
+        """The plan without the pilot's samples: its uniform ``path`` render of
+        :attr:`uniform` (:meth:`render_kwargs`), which reaches E on its own."""
+        u = self.uniform
         return dataclasses.replace(
-            self, reused=None, reused_spp=0, sampling="uniform", model="path",
-            sampler="independent", chosen_spp=float(self.spp), chosen_passes=self.passes,
-            chosen_seconds=self.predicted_seconds,
+            self, reused=None,
+            render=choice.Option("path", "uniform", float(u.spp), u.predicted_seconds,
+                                 u.predicted_noise * math.sqrt(u.spp), passes=u.passes),
             reasons=self.reasons + ["the render's seed is one of the pilot's: it renders the "
                                     "uniform spp alone, without the pilot's samples"])
 
@@ -151,24 +240,25 @@ class Plan:
     def summary(self) -> str:
         """The plan and its reasons, as the CLI prints them."""
         w, h = self.resolution
+        u, r = self.uniform, self.render
         lines = [
             f"plan for {self.scene} ({w}x{h}), target relative RMSE {self.target_error:g} "
             f"(eps {EPS:g}):",
             f"  variant   {self.variant}",
             f"  max_depth {self.max_depth}",
-            f"  spp       {self.spp}  ({self.passes} passes)",
-            f"  render    {self.model}, {self.sampling} sampling ({self.sampler} sampler), "
-            f"{self.chosen_spp:.1f} spp"
-            f"{' on average' if self.sampling == 'adaptive' else ''}, about "
-            f"{self.chosen_seconds:.3g} s",
-            f"  predicted error {self.predicted_error:.4g} (depth bias {self.predicted_bias:.3g}, "
-            f"noise {self.predicted_noise:.4g}); time {self.predicted_seconds:.3g} s "
-            f"steady state ({self.seconds_per_sample * 1e9:.3g} ns per sample + "
-            f"{self.seconds_per_pass * 1e3:.3g} ms per pass); pilot took "
-            f"{self.pilot_seconds:.2f} s",
+            f"  spp       {u.spp}  ({u.passes} passes)",
+            f"  render    {r.model}, {r.sampling} sampling ({r.sampler} sampler), "
+            f"{r.spp:.1f} spp"
+            f"{' on average' if r.sampling == 'adaptive' else ''}, about "
+            f"{r.seconds:.3g} s",
+            f"  predicted error {u.predicted_error:.4g} (depth bias {u.predicted_bias:.3g}, "
+            f"noise {u.predicted_noise:.4g}); time {u.predicted_seconds:.3g} s "
+            f"steady state ({u.seconds_per_sample * 1e9:.3g} ns per sample + "
+            f"{u.seconds_per_pass * 1e3:.3g} ms per pass); pilot took "
+            f"{self.pilot.seconds:.2f} s",
             "because:",
         ]
-        lines += [f"  - {r}" for r in self.reasons]
+        lines += [f"  - {reason}" for reason in self.reasons]
         return "\n".join(lines)
 
     def __str__(self) -> str:
@@ -180,130 +270,61 @@ def render_passes(spp: int) -> int:
     return max(1, min(int(spp), 8)) if spp >= 2 else 1
 
 
-def plan(scene_path: str | Path, target_error: float = 0.01, *, pilot_spp: int | None = None,
-         pilot_passes: int = PILOT_PASSES, seed: int = PILOT_SEED,
-         bias_fraction: float = BIAS_FRACTION, polarized: bool = False,
-         variant: str | None = None, max_depth: int | None = None, spp: int | None = None,
-         max_depth_cap: int = DEPTH_LADDER[-1], params: dict[str, Any] | None = None,
-         max_seconds: float | None = None, straight: bool | None = None) -> Plan:
-    """Plan the cheapest render of ``scene_path`` predicted to reach ``target_error``.
+def plan(scene_path: str | Path, options: PlanOptions | None = None) -> Plan:
+    """Plan the cheapest render of ``scene_path`` predicted to reach ``options.target_error``.
 
     Args:
         scene_path: scene file, or the name of a shipped scene (``cornell_phong``).
-        target_error: E, the total relative RMSE, bias included (:mod:`phonglab.engine.metrics`;
-            ``0.01`` = 1 %).
-        pilot_spp, pilot_passes: pilot samples per pixel (default :func:`.pilot.pilot_size`
-            of the film: 64, fewer beyond 64² pixels, at least 4) and the passes they are split
-            into (at most ``pilot_passes``).
-        seed: pilot seed (the render that follows should use another; the CLI uses 0).
-        bias_fraction: the depth bias may use this fraction of E.
-        polarized: plan a polarized variant (never chosen otherwise).
-        variant, max_depth, spp: fix that part of the plan (the predictions follow it).
-        max_depth_cap: deepest finite depth tried; beyond it the plan uses -1 (unbounded).
-        params: values for the scene's ``<default>`` entries (``{"res": 64}``).
-        straight: when the rest of the render is predicted cheaper than the pilot's first
-            render, plan path at full depth at once (:func:`_straight`); default
-            :data:`STRAIGHT`, False to run every step of the pilot whatever it costs.
-        max_seconds: a plan predicted to take longer is refused (default :data:`MAX_SECONDS`;
-            ``math.inf`` allows any).
+        options: what is asked (:class:`PlanOptions`; default: E = 0.01, nothing fixed).
 
     Returns:
         a :class:`Plan`.
 
     Raises:
-        PlanError: bad target or pilot size, unknown variant, a scene whose integrator is not
-            ``path``, a plan beyond ``max_seconds`` or beyond the spp a render takes; SceneError: a scene that cannot be found, parsed or loaded.
+        PlanError: unknown variant, a scene whose integrator is not ``path``, a plan beyond
+            the options' time limit or beyond the spp a render takes; SceneError: a scene
+            that cannot be found, parsed or loaded.
     """
     t_start = time.perf_counter()
-    _check_arguments(target_error, PILOT_SPP if pilot_spp is None else pilot_spp, pilot_passes,
-                     spp, max_depth)
-    if max_seconds is not None:
-        try:
-            check_max_seconds(max_seconds)
-        except ParameterError as exc:
-            raise PlanError(str(exc)) from None
-    params = {k: v for k, v in (params or {}).items() if v is not None}
-    info = inspect_scene(scene_path, **params)
+    options = PlanOptions() if options is None else options
+    info = inspect_scene(scene_path, **options.params)
     if info.integrator != "path":
         raise PlanError(f"{info.path}: the planner plans path-traced scenes, but this one "
                         f"uses the '{info.integrator}' integrator; use <integrator "
                         f"type=\"path\"> or render it with 'phonglab render' directly.")
     reasons: list[str] = []
-    overrides = {k: v for k, v in (("variant", variant), ("max_depth", max_depth), ("spp", spp))
-                 if v is not None}
-    variant, backend, color = _choose_variant(info, variant, polarized, reasons)
+    variant, backend, color = _choose_variant(info, options.variant, options.polarized, reasons)
     with quiet_mitsuba():
-        scene = load_scene(info.path, variant, **params)
+        scene = load_scene(info.path, variant, **options.params)
     sensor = scene.sensors()[0]
     resolution = (int(sensor.film().size()[0]), int(sensor.film().size()[1]))
     scene_spp = int(sensor.sampler().sample_count())  # before the pilot: mi.render changes it
-    if pilot_spp is None:
-        pilot_spp, pilot_passes = pilot_size(resolution[0] * resolution[1], pilot_passes)
-    stratified = _stratified_sensor(info, overrides, reasons)
-    pilot = Pilot(scene, info, pilot_spp, pilot_passes, seed, stratified=stratified)
-    if not overrides and (STRAIGHT if straight is None else straight):
-        straight = _straight(pilot, target_error, resolution, reasons)
-        if straight is not None:
-            n, final, b, prior = straight
-            pixels = resolution[0] * resolution[1]
-            noise = pilot.measure(-1).noise_per_sample / math.sqrt(n)
-            _refuse_absurd(info.path, target_error, n, b * n,
-                           MAX_SECONDS if max_seconds is None else max_seconds)
-            passes = max(2, min(8, final // choice.MIN_PASS_SPP))
-            return Plan(scene=str(info.path), target_error=float(target_error),
-                        variant=variant, backend=backend, color=color, max_depth=-1,
-                        spp=int(n), passes=render_passes(n), predicted_error=noise,
-                        predicted_bias=0.0, predicted_noise=noise, predicted_seconds=b * n,
-                        seconds_per_sample=b / pixels, seconds_per_pass=0.0,
-                        resolution=resolution, params=dict(params), pilot_spp=pilot.spp,
-                        pilot_seconds=time.perf_counter() - t_start, depths=pilot.depths(),
-                        reasons=reasons, overrides=overrides, chosen_spp=float(final),
-                        chosen_seconds=b * final, chosen_passes=passes, info=info,
-                        loaded=scene, reused=prior, weight=pilot.weight,
-                        reused_spp=int(sum(sum(r.pass_spp) for r in prior.renders)),
-                        pilot_seed=int(seed))
-    depth = _choose_depth(pilot, target_error, bias_fraction, max_depth, max_depth_cap, reasons)
-    chosen = pilot.measure(depth)
-    n = _choose_spp(chosen, target_error, spp, scene_spp, reasons)
-    noise = math.sqrt(chosen.noise_per_sample ** 2 / n)
-    predicted = math.sqrt(chosen.bias ** 2 + noise ** 2)
-    if predicted > target_error * (1 + 1e-9):
-        reasons.append(f"warning: the predicted error {predicted:.4g} misses the target "
-                       f"{target_error:g} with the configuration given")
-    a, b, passes, seconds = _predict_time(pilot, depth, n, resolution, reasons)
-    _refuse_absurd(info.path, target_error, n, seconds,
-                   MAX_SECONDS if max_seconds is None else max_seconds)
-    pixels = resolution[0] * resolution[1]
-    prior, credit = _reusable(pilot, depth, overrides)
-    option = _choose_render(pilot, depth, chosen, n, seconds, overrides, target_error,
-                            pixels, passes, reasons, credit)
-    reused = prior if option.reuses else None
-    if reused:
-        reasons.append(f"reuse: the pilot's {len(reused.renders)} renders at this depth (or "
-                       f"full depth) hold {sum(sum(r.pass_spp) for r in reused.renders)} "
-                       f"samples per pixel, "
-                       f"worth {credit * chosen.noise_per_sample ** 2:.1f} of its independent "
-                       f"ones; the render is combined with them (inverse-variance weights), "
-                       f"so it takes {option.spp:g} spp")
-    return Plan(scene=str(info.path), target_error=float(target_error), variant=variant,
-                backend=backend, color=color, max_depth=int(depth), spp=int(n), passes=passes,
-                predicted_error=predicted, predicted_bias=chosen.bias, predicted_noise=noise,
-                predicted_seconds=seconds, seconds_per_sample=b / pixels,
-                seconds_per_pass=a, resolution=resolution, params=dict(params),
-                pilot_spp=pilot.spp, pilot_seconds=time.perf_counter() - t_start,
-                depths=pilot.depths(), reasons=reasons, overrides=overrides,
-                model=option.model, sampling=option.sampling, chosen_spp=float(option.spp),
-                chosen_seconds=option.seconds, sampler=option.sampler,
-                chosen_passes=option.passes or passes, info=info, loaded=scene,
-                reused=reused, weight=pilot.weight,
-                reused_spp=int(sum(sum(r.pass_spp) for r in reused.renders)) if reused else 0,
-                pilot_seed=int(seed))
+    pilot_spp, pilot_passes = (pilot_size(resolution[0] * resolution[1])
+                               if options.pilot_spp is None else (options.pilot_spp, PILOT_PASSES))
+    stratified = _stratified_sensor(info, options.overrides, reasons)
+    pilot = Pilot(scene, info, pilot_spp, pilot_passes, options.pilot_seed, stratified=stratified)
+    straight = None
+    if not options.overrides and (STRAIGHT if options.straight is None else options.straight):
+        straight = _straight(pilot, options.target_error, resolution, reasons)
+    if straight is not None:
+        depth, (uniform, render, reused) = -1, straight
+        _refuse_absurd(info.path, options, uniform)
+    else:
+        depth = _choose_depth(pilot, options.target_error, BIAS_FRACTION, options.max_depth,
+                              DEPTH_LADDER[-1], reasons)
+        uniform = _choose_uniform(pilot, depth, options, resolution, scene_spp, reasons)
+        _refuse_absurd(info.path, options, uniform)
+        render, reused = _choose_render(pilot, depth, uniform, options, resolution, reasons)
+    record = PilotRecord(pilot.spp, time.perf_counter() - t_start, options.pilot_seed,
+                         pilot.depths(), pilot.weight)
+    return Plan(str(info.path), options, variant, backend, color, int(depth), resolution,
+                uniform, render, record, reasons, info=info, loaded=scene, reused=reused)
 
 
 def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
-              reasons: list[str]):
-    """(N, spp to render, seconds per pixel sample x pixels, the pilot's renders) of a
-    straight render, or None: when the rest of the render is predicted to take at most
+              reasons: list[str]) -> tuple[Uniform, choice.Option, Prior] | None:
+    """(uniform path, the render, the pilot's renders it is combined with) of a straight
+    render, or None: when the rest of the render is predicted to take at most
     :data:`STRAIGHT_RENDERS` times what the pilot's first render did, the rest of the pilot
     (the depth search, the time model) cannot save more than it costs, and the plan is the
     default configuration at once:
@@ -341,7 +362,12 @@ def _straight(pilot: Pilot, target_error: float, resolution: tuple[int, int],
                    f"timing: path at full depth (max_depth -1, unbiased), {rest} spp, combined "
                    f"with the pilot's renders")
     prior = Prior(tuple(part for part, _ in parts), precisions, pilot.weight)
-    return n_total, rest, per_spp, prior
+    noise = full.noise_per_sample / math.sqrt(n_total)
+    uniform = Uniform(int(n_total), render_passes(n_total), noise, 0.0, noise,
+                      per_spp * n_total, per_spp / (resolution[0] * resolution[1]), 0.0)
+    render = choice.Option("path", "uniform", float(rest), per_spp * rest, full.noise_per_sample,
+                           passes=max(2, min(8, rest // choice.MIN_PASS_SPP)), reuses=True)
+    return uniform, render, prior
 
 
 def _reusable(pilot: Pilot, depth: int, overrides: dict[str, Any]) -> tuple[Prior | None, float]:
@@ -373,29 +399,60 @@ def _stratified_sensor(info: SceneInfo, overrides: dict[str, Any], reasons: list
         return None
 
 
-def _choose_render(pilot: Pilot, depth: int, sample: DepthSample, n: int, seconds: float,
-                   overrides: dict[str, Any], target_error: float, pixels: int, passes: int,
-                   reasons: list[str], credit: float = 0.0) -> choice.Option:
-    """Step 5 (:mod:`.choice`): model and sampling; uniform path when spp or depth are given."""
-    uniform = choice.Option("path", "uniform", n, seconds, sample.noise_per_sample)
-    if "spp" in overrides or "max_depth" in overrides:
+def _choose_uniform(pilot: Pilot, depth: int, options: PlanOptions, resolution: tuple[int, int],
+                    scene_spp: int, reasons: list[str]) -> Uniform:
+    """Steps 3-4: uniform ``path`` at ``depth``, its spp, predicted error and time."""
+    chosen = pilot.measure(depth)
+    target_error = options.target_error
+    n = _choose_spp(chosen, target_error, options.spp, scene_spp, reasons)
+    noise = math.sqrt(chosen.noise_per_sample ** 2 / n)
+    predicted = math.sqrt(chosen.bias ** 2 + noise ** 2)
+    if predicted > target_error * (1 + 1e-9):
+        reasons.append(f"warning: the predicted error {predicted:.4g} misses the target "
+                       f"{target_error:g} with the configuration given")
+    a, b, passes, seconds = _predict_time(pilot, depth, n, resolution, reasons)
+    return Uniform(int(n), passes, predicted, chosen.bias, noise, seconds,
+                   b / (resolution[0] * resolution[1]), a)
+
+
+def _choose_render(pilot: Pilot, depth: int, uniform: Uniform, options: PlanOptions,
+                   resolution: tuple[int, int],
+                   reasons: list[str]) -> tuple[choice.Option, Prior | None]:
+    """Step 5 (:mod:`.choice`): model and sampling, and the pilot's renders the render is
+    combined with (None: it renders alone); uniform path when spp or depth are given."""
+    sample = pilot.measure(depth)
+    passes = uniform.passes
+    option = choice.Option("path", "uniform", uniform.spp, uniform.predicted_seconds,
+                           sample.noise_per_sample)
+    prior, credit = _reusable(pilot, depth, options.overrides)
+    if "spp" in options.overrides or "max_depth" in options.overrides:
         reasons.append("render: uniform path, as the spp/max_depth given by the caller imply")
-        return uniform
-    if sample.noise_per_sample == 0.0:
-        return uniform
-    return choice.choose(pilot, depth, sample.bias, target_error, uniform, pixels, passes,
-                         reasons, credit)
+    elif sample.noise_per_sample != 0.0:
+        option = choice.choose(pilot, depth, sample.bias, options.target_error, option,
+                               resolution[0] * resolution[1], passes, reasons, credit)
+    reused = prior if option.reuses else None
+    if reused:
+        reasons.append(f"reuse: the pilot's {len(reused.renders)} renders at this depth (or "
+                       f"full depth) hold {reused.spp} samples per pixel, "
+                       f"worth {credit * sample.noise_per_sample ** 2:.1f} of its independent "
+                       f"ones; the render is combined with them (inverse-variance weights), "
+                       f"so it takes {option.spp:g} spp")
+    return dataclasses.replace(option, spp=float(option.spp),
+                               passes=option.passes or passes), reused
 
 
-def _refuse_absurd(path, target_error: float, n: int, seconds: float, max_seconds: float) -> None:
-    """A plan no one should start by accident: more spp than a render takes, or over the time limit."""
+def _refuse_absurd(path, options: PlanOptions, uniform: Uniform) -> None:
+    """A plan no one should start by accident: more spp than a render takes, or over the
+    options' time limit."""
+    target_error, n, seconds = options.target_error, uniform.spp, uniform.predicted_seconds
     if n > MAX_SPP:
         raise PlanError(f"{path}: reaching E = {target_error:g} needs about {n:.3g} spp, more than "
                         f"a render takes ({MAX_SPP}); ask for a larger --target-error.")
-    if seconds > max_seconds:
+    if seconds > options.time_limit:
         raise PlanError(f"{path}: reaching E = {target_error:g} needs {n} spp and about "
-                        f"{_duration(seconds)}, over the limit of {_duration(max_seconds)}; ask "
-                        f"for a larger --target-error, or allow it with --max-seconds.")
+                        f"{_duration(seconds)}, over the limit of "
+                        f"{_duration(options.time_limit)}; ask for a larger --target-error, or "
+                        f"allow it with --max-seconds.")
 
 
 def _duration(seconds: float) -> str:
@@ -403,23 +460,6 @@ def _duration(seconds: float) -> str:
         if seconds >= size:
             return f"{seconds / size:.3g} {unit}"
     return f"{seconds:.3g} s"
-
-
-def _check_arguments(target_error, pilot_spp: int, pilot_passes: int, spp: int | None,
-                     max_depth: int | None) -> None:
-    """Refuse a target, pilot size, spp or max_depth the plan cannot use (PlanError; a bad
-    spp is render.check_spp's PhonglabError, the same sentence a render gives)."""
-    if not (isinstance(target_error, (int, float)) and math.isfinite(target_error)
-            and 0 < target_error < 10):
-        raise PlanError(f"target error must be a relative RMSE in (0, 10), e.g. 0.01 for "
-                        f"1 %, got {target_error!r}.")
-    if pilot_passes < 2 or pilot_spp < pilot_passes:
-        raise PlanError(f"the pilot needs at least 2 passes of at least 1 spp, got "
-                        f"pilot_spp={pilot_spp}, pilot_passes={pilot_passes}.")
-    if spp is not None:
-        check_spp(spp)
-    if max_depth is not None and (max_depth == 0 or max_depth < -1):
-        raise PlanError(f"max_depth must be -1 (unbounded) or >= 1, got {max_depth}.")
 
 
 def _choose_variant(info: SceneInfo, variant: str | None, polarized: bool,
