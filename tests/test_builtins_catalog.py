@@ -102,7 +102,7 @@ def test_markdown_renders_a_given_json():
 
 def test_markdown_lists_a_finding_only_under_the_rows_it_explains():
     # roughdielectric/polarized (eta 1.5): its normalization row is Beckmann's, never the
-    # index-matched finding's (eta in [0.999, 1.001]), though both name the case (#52)
+    # index-matched finding's (eta in [0.999, 1.001]), though both name the case
     label = "roughdielectric/polarized"
     case = next(c for c in CASES if c.label == label)
     rows = [Row("normalization", "∫ pdf dω_o = P(sample counted)", 0.998, 1.0, 1e-5, 1e-4,

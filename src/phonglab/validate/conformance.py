@@ -34,7 +34,7 @@ from .core import Known
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"
 #: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
-#: ``a8c3ffd763c8…``, quoted here before, is the tag object itself).
+#: not ``a8c3ffd763c8…``, the tag object itself).
 MITSUBA_COMMIT = "478e193a183c21723f4a8251afc3ad29a8da4c5e"
 SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
 
