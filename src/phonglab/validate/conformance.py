@@ -3,7 +3,7 @@ r"""The records of the conformance tables, one per plugin kind: what ``make conf
 are rendered from (:mod:`phonglab.validate.markdown`).
 
 A :class:`Catalogue` names a kind's cases, the validator function that checks one case, its
-topics, its documented Mitsuba findings (:class:`~.findings.Finding`, matched by signature),
+topics, its documented Mitsuba findings (:class:`Finding`, matched by signature),
 its open and fixed validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
 is :mod:`phonglab.validate.bsdf.builtins`; the emitter and integrator ones are
 :mod:`phonglab.validate.emitter.builtins` and :mod:`phonglab.validate.integrator.builtins`,

@@ -228,7 +228,7 @@ def _validator_section(data: dict, cat: Catalogue) -> list[str]:
 def render_markdown(data: dict, cat: Catalogue | None = None) -> str:
     """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
     (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``);
-    ``cat``: the kind's :class:`~.kinds.Catalogue` (default: the JSON's ``options["kind"]``,
+    ``cat``: the kind's :class:`~.conformance.Catalogue` (default: the JSON's ``options["kind"]``,
     else the BSDFs')."""
     meta = data.get("meta", {})
     options = meta.get("options") or {}

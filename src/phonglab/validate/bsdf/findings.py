@@ -7,7 +7,7 @@ measures, what a correct plugin gives and a reproducer in ``tests/repro/`` that 
 the behaviour is present (the polarized topics' findings are :mod:`.polarized_findings`);
 :func:`phonglab.validate.conformance.known_causes` turns
 :data:`FINDINGS` into the ``known`` entries of the catalogue's cases (their rows are reported as
-KNOWN).  The rows traced to the validator itself are :mod:`.validator_issues`.
+KNOWN).  The rows traced to the validator itself are :data:`.builtins.VALIDATOR_ISSUES`.
 """
 
 from __future__ import annotations
