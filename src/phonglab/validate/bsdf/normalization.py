@@ -130,7 +130,7 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     cells = opts.cells(opts.energy_cos)
     n = opts.normalization_samples
     k, n_f, blacks, groups = _counts(bsdf, cells, n, opts)
-    layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
+    layout = lobes.layout(bsdf, cells, lanes.STREAMS.int_seed(opts.seed, "normalization"),
                           whole_sphere=True, components=True, extra=groups)
 
     def density(wi, wo):

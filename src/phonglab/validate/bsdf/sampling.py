@@ -258,7 +258,7 @@ def delta_directions(bsdf, opts) -> Row:
     """Delta-only BSDF: every sampled wo obeys reflection or Snell's law with bs.eta."""
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
     wi = wi[wi[:, 2] > 0]
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["chi2"])
+    s = probe.sample_random(bsdf, wi, len(wi), seed=lanes.STREAMS.int_seed(opts.seed, "chi2"))
     live = lanes.some(s.weight != 0) & lanes.every(np.isfinite(s.wo))
     wi, wo, eta = wi[live], s.wo[live], s.eta[live]
     reflect = wo[:, 2] * wi[:, 2] > 0
