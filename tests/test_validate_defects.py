@@ -55,7 +55,8 @@ def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
 
 
 def test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes(variant_llvm_rgb):
-    """A pdf 1 % too large fails at default sizes: ∫pdf = 1.01 against P = 1 (no rejection), a band of z²/(√2 N) + the quadrature's error, ~3e-5."""
+    """A pdf 1 % too large fails at default sizes: ∫pdf = 1.01 against P = 1 (no rejection),
+    a band of z²/(√2 N) + the quadrature's error, ~3e-5."""
     report = validate_bsdf("defect_pdf_scaled_1pct", plugins=[DEFECTS / "pdf_scaled_1pct.py"],
                            seed=0)
     assert {r.topic for r in report.failing} == {"normalization"}, report.table(report.failing)

@@ -4,7 +4,7 @@ are rendered from (:mod:`phonglab.validate.markdown`).
 
 A :class:`Catalogue` names a kind's cases, the validator function that checks one case, its
 topics, its documented Mitsuba findings (:class:`Finding`, matched by signature),
-its open and fixed validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
+its open validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
 is :mod:`phonglab.validate.bsdf.builtins`; the emitter and integrator ones are
 :mod:`phonglab.validate.emitter.builtins` and :mod:`phonglab.validate.integrator.builtins`,
 whose cases are :class:`KindCase` (a BSDF :class:`~phonglab.validate.bsdf.builtins.Case` has a

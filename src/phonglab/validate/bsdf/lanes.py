@@ -15,8 +15,6 @@ from ... import probe
 from ..directions import ONE_MINUS, sphere  # noqa: F401  (the lanes every topic draws)
 from ..seeds import Streams
 
-#: 1 − ε for a float32 sample value: the largest float32 below 1.
-
 #: The BSDF topics' random streams (``weight`` and ``pdf`` check the same samples, drawn from
 #: ``weight``'s).
 STREAMS = Streams("bsdf", {
