@@ -1,4 +1,4 @@
-"""Where the time of an adaptive render goes, against ``mi.render`` at the same samples (issue 39).
+"""Where the time of an adaptive render goes, against ``mi.render`` at the same samples.
 
 Per scene of the bench's oracle rows (:attr:`phonglab.bench.config.Config.adaptive_oracle_scenes`:
 each planner-bench scene at its target E, full depth, and the uniform-variance furnace),

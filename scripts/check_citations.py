@@ -1,4 +1,4 @@
-"""Check every conformance finding's citation against Mitsuba 3.9.1's source (#52).
+"""Check every conformance finding's citation against Mitsuba 3.9.1's source.
 
     python scripts/check_citations.py --src DIR        # a v3.9.1 source tree (checkout/archive)
     python scripts/check_citations.py --mirror GITDIR [--rev REV]    # a git repository holding

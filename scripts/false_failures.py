@@ -10,7 +10,7 @@ cases · N · 0.01 failing runs in all; the script prints P(≥ that many | ALPH
 and ``lambert`` sample the same cosine density from the same random numbers at one seed, so
 their χ² outcomes coincide.
 
-With ``--sweep`` each run is a parameter sweep (issues #29, #36), over every kind: BSDFs
+With ``--sweep`` each run is a parameter sweep, over every kind: BSDFs
 ``diffuse``, ``lambert``, ``phong``, GGX ``roughconductor`` and GGX ``roughplastic`` (the
 Beckmann pdfs are a Mitsuba finding) across their parameters, emitters ``point`` and ``area``
 across theirs, integrators ``path`` (over ``rr_depth``) and ``direct`` (over its emitter and

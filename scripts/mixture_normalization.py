@@ -1,4 +1,4 @@
-"""An independent ∫pdf dω_o of tests/authors/narrow_broad_mixture.py (issue #55), to judge the
+"""An independent ∫pdf dω_o of tests/authors/narrow_broad_mixture.py, to judge the
 ``normalization`` topic's quadrature against.
 
 (a) float64: the plugin's pdf formula is normalized lobe by lobe, so

@@ -133,8 +133,8 @@ def watchdog(seconds: float):
 
 def run_cli(argv, seconds: float = 120) -> tuple[int, str, str]:
     """``phonglab ARGV`` in-process under a :func:`watchdog`: (exit status, stdout, stderr); a
-    SystemExit that escapes (a plugin's sys.exit(0), before #52) is returned as its status, as
-    a shell would see it."""
+    SystemExit that escapes (a plugin's sys.exit(0) past phonglab's guard) is returned as its
+    status, as a shell would see it."""
     out, err = io.StringIO(), io.StringIO()
     with watchdog(seconds), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:

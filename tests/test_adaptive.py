@@ -288,7 +288,7 @@ def test_bench_part_writes_chart_speedups_and_report(tmp_path, monkeypatch, vari
     text = "\n".join(adaptive_sweeps.report_section(tmp_path, "docs/bench"))
     assert "Adaptive sampling" in text and "docs/bench/adaptive_error_time.png" in text
     assert "adaptive" in bench_config.PARTS
-    for o in data["oracle"]:          # the cost-aware limit beside the sample one (issue 39)
+    for o in data["oracle"]:          # the cost-aware limit beside the sample one
         assert o["oracle_time"] >= 1 - 1e-9 and o["share_time"] > 0
     assert "oracle (time)" in text
 
@@ -303,10 +303,10 @@ def test_fit_time_sizes_a_pass_to_the_time_left():
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_an_unreachable_target_stops_at_the_time_limit_without_overflow(variant_llvm_rgb):
-    """E = 1e-6 asked for more samples than int64 holds ('invalid value encountered in
-    cast') and, at --max-seconds 2, ran three times past it; now the counts are capped before
-    the cast and each pass is sized to the time left (fit_time), so the render ends within
-    one pass of the limit (the assertion allows the pilot and twice the limit)."""
+    """E = 1e-6 asks for more samples than int64 holds: the counts are capped before the cast
+    (no 'invalid value encountered in cast') and each pass is sized to the time left
+    (fit_time), so at --max-seconds 2 the render ends within one pass of the limit (the
+    assertion allows the pilot and twice the limit)."""
     r = adaptive.render_adaptive(_load("gray_direct", res=32), 1e-6, seed=1, max_seconds=2.0)
     assert r.stopped == "max_seconds"
     assert r.seconds <= 2 * 2.0 + r.passes[0]["seconds"], r.passes

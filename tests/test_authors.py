@@ -1,6 +1,6 @@
-"""Author-facing entry points (#38): --timeout / timeout=, --plugin for check, fit and render, the
+"""Author-facing entry points: --timeout / timeout=, --plugin for check, fit and render, the
 types a Python plugin returns checked before Dr.Jit sees them; and every message about an
-author's plugin whole (#52): which parameters `check` sets on it, an emitter named as such, a
+author's plugin whole: which parameters `check` sets on it, an emitter named as such, a
 parameter it never reads named whatever its value, its own errors in `fit` and `check`, a file
 that switches the variant."""
 
@@ -44,8 +44,8 @@ def test_timeout_turns_a_hanging_eval_into_a_failing_row():
                           quick=True, topics=["finite", "chi2"], timeout=1)
     text = str(info.value)
     assert "did not finish within 1 s" in text and "finite" in text
-    assert "chi2" not in text              # sample and pdf only: it still passes (component
-    #                                        now evaluates eval below the surface too)
+    assert "chi2" not in text              # sample and pdf only: it passes (component
+    #                                        evaluates eval below the surface too)
     assert time.perf_counter() - t0 < 60
 
 
@@ -83,7 +83,8 @@ def test_plugin_files_checked_before_work(command, tmp_path):
 
 
 def test_integrator_returning_the_wrong_type_is_one_sentence_not_an_abort():
-    """Before: exit 134 inside Dr.Jit ("Referenced an unknown variable"), no report."""
+    """One sentence naming the method and its expected returns, exit 2 -- not an abort inside
+    Dr.Jit (exit 134, "Referenced an unknown variable") with no report."""
     r = cli("validate", "defect_wrong_return", "--plugin", AUTHORS / "wrong_return_integrator.py",
             "--quick", "--no-sweep")
     assert r.returncode == 2, (r.returncode, r.stderr[-1500:])
@@ -139,7 +140,8 @@ def test_timeout_stops_an_integrator_looping_inside_a_render():
 
 
 def test_phase_function_returning_the_wrong_type_names_the_method(tmp_path):
-    """Before: every topic failed with "too many values to unpack (expected 2)"."""
+    """The method and what it returns are named, not "too many values to unpack (expected 2)"
+    in every topic."""
     text = (HERE / "defects_phase" / "hg_control.py").read_text()
     assert "return mi.Spectrum(p), p" in text
     bad = tmp_path / "badphase.py"
@@ -152,7 +154,7 @@ def test_phase_function_returning_the_wrong_type_names_the_method(tmp_path):
     assert "eval_pdf() of the phase function 'bad_phase_return' returned Color3f" in r.stderr
 
 
-# --- every message whole (#52) ------------------------------------------------------------------
+# --- every message whole -----------------------------------------------------------------------
 
 def _as(tmp_path, name: str, source: Path = AUTHORS / "my_lambert.py") -> Path:
     """``source`` registered as ``name``, in tmp_path."""
@@ -175,7 +177,8 @@ mi.register_emitter("mypoint", lambda props: MyPoint(props))
 
 
 def test_check_says_which_parameters_it_sets_on_the_named_plugin(tmp_path, capsys):
-    """It said "cannot load BSDF 'mybp' (0.5, 0.5, 0.5])": a fragment of Mitsuba's list."""
+    """The parameters check sets, by name -- not "cannot load BSDF 'mybp' (0.5, 0.5, 0.5])",
+    a fragment of Mitsuba's list."""
     err = fails_in_one_sentence(capsys, ["check", "--phong", "mybp", "--plugin",
                                          str(_as(tmp_path, "mybp")), "--only", "sanity",
                                          "--no-progress"],
@@ -187,7 +190,7 @@ def test_check_says_which_parameters_it_sets_on_the_named_plugin(tmp_path, capsy
 
 
 def test_check_names_an_emitter_given_as_the_lambertian(tmp_path, capsys):
-    """It said "cannot load BSDF 'mypoint' (0.7, 0.7, 0.7])"."""
+    """'mypoint' is named an emitter, not a BSDF that cannot load with (0.7, 0.7, 0.7)."""
     (tmp_path / "mypoint.py").write_text(MY_POINT)
     fails_in_one_sentence(capsys, ["check", "--lambert", "mypoint", "--plugin",
                                    str(tmp_path / "mypoint.py"), "--only", "sanity",
@@ -228,7 +231,7 @@ def _raising(tmp_path) -> Path:
 
 
 def test_fit_of_a_plugin_that_raises_is_one_sentence(tmp_path, capsys):
-    """It ended in the plugin's RuntimeError traceback, exit 1."""
+    """One sentence naming the plugin's error and its line, not its traceback."""
     plugin = _raising(tmp_path)
     fails_in_one_sentence(capsys, ["fit", "raise_rt", "--plugin", str(plugin), "--model",
                                    "lambert", "--maxiter", "2"],
@@ -236,8 +239,8 @@ def test_fit_of_a_plugin_that_raises_is_one_sentence(tmp_path, capsys):
 
 
 def test_the_full_check_of_a_plugin_that_raises_fails_its_rows(tmp_path, capsys):
-    """`check --lambert` of it ended in a traceback: now each check it breaks is a failing row
-    naming the plugin's error, and the others still report."""
+    """`check --lambert` of it: each check it breaks is a failing row naming the plugin's
+    error, and the others still report."""
     plugin = _raising(tmp_path)
     assert phonglab(["check", "--lambert", "raise_rt", "--plugin", str(plugin), "--spp", "8",
                      "--no-progress"]) == 1
@@ -249,7 +252,7 @@ def test_the_full_check_of_a_plugin_that_raises_fails_its_rows(tmp_path, capsys)
 
 
 def test_a_plugin_file_that_switches_the_variant_is_named_for_it(tmp_path, capsys):
-    """It was reported as "registered nothing"."""
+    """Named for switching the variant, not reported as "registered nothing"."""
     path = _as(tmp_path, "switches")
     path.write_text(path.read_text().replace("import mitsuba as mi\n",
                                              "import mitsuba as mi\nmi.set_variant('scalar_rgb')\n",

@@ -11,7 +11,7 @@ import pytest
 from phonglab.validate import conformance, markdown
 from phonglab.validate.bsdf import builtins
 from phonglab.validate.bsdf.topics import TOPICS, Row
-from phonglab.validate.bsdf import findings, validator_issues
+from phonglab.validate.bsdf import findings
 from phonglab.verdict import Report
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -102,7 +102,7 @@ def test_markdown_renders_a_given_json():
 
 def test_markdown_lists_a_finding_only_under_the_rows_it_explains():
     # roughdielectric/polarized (eta 1.5): its normalization row is Beckmann's, never the
-    # index-matched finding's (eta in [0.999, 1.001]), though both name the case (#52)
+    # index-matched finding's (eta in [0.999, 1.001]), though both name the case
     label = "roughdielectric/polarized"
     case = next(c for c in CASES if c.label == label)
     rows = [Row("normalization", "∫ pdf dω_o = P(sample counted)", 0.998, 1.0, 1e-5, 1e-4,
@@ -140,13 +140,6 @@ def test_script_renders_from_json(tmp_path):
     assert Path(out).stat().st_size > 0
 
 
-def test_validator_issues_name_existing_cases():
-    labels = {c.label for c in CASES}
-    for v in validator_issues.VALIDATOR_ISSUES:
-        assert set(v.labels) <= labels, v.key
-        assert v.topic in TOPICS
-
-
 def test_without_plot_data_keeps_the_numbers():
     data = {"meta": {}, "reports": [{"meta": {"case": "x"}, "results": [
         {"topic": "energy", "details": {"albedo": [0.5], "lobes": {"theta": [1, 2]}}},
@@ -168,35 +161,27 @@ def _one_row(label, topic, status):
 
 
 def test_open_validator_issue_shown_only_for_its_failing_rows(monkeypatch):
-    fixed = validator_issues.VALIDATOR_ISSUES[0]
-    issue = conformance.ValidatorIssue("open-issue", fixed.topic, fixed.labels, "why")
-    monkeypatch.setattr(validator_issues, "VALIDATOR_ISSUES", (issue,))
+    labels = ("roughconductor/beckmann-novisible", "roughdielectric/beckmann-a0.1")
+    issue = conformance.ValidatorIssue("open-issue", "weight", labels, "why")
+    monkeypatch.setattr(builtins, "VALIDATOR_ISSUES", (issue,))
     label = issue.labels[0]
+    assert builtins.catalogue().open_issues() == {(x, "weight"): issue for x in labels}
     md = markdown.render_markdown(_one_row(label, issue.topic, "fail"))
     assert "### open-issue" in md and "**Unexplained fail**" not in md
+    assert f"* cases: `{label}`\n" in md            # only the case whose row shows
     assert "because of the validator" not in markdown.render_markdown(
         _one_row(label, issue.topic, "pass"))
-    skipped = conformance.ValidatorIssue("open-skip", "chi2", fixed.labels, "why", ("skipped",))
-    monkeypatch.setattr(validator_issues, "VALIDATOR_ISSUES", (skipped,))
+    skipped = conformance.ValidatorIssue("open-skip", "chi2", labels, "why", ("skipped",))
+    monkeypatch.setattr(builtins, "VALIDATOR_ISSUES", (skipped,))
     assert "### open-skip" in markdown.render_markdown(_one_row(label, "chi2", "skipped"))
 
 
-def test_fixed_validator_issue_is_history_and_hides_no_fail():
-    v = next(v for v in validator_issues.VALIDATOR_ISSUES if v.fixed)
-    assert (v.labels[0], v.topic) not in validator_issues.validator_issues()
-    md = markdown.render_markdown(_one_row(v.labels[0], v.topic, "pass"))
-    assert f"### {v.key} (fixed)" in md and f"* fixed by: {v.fixed_by}" in md
-    assert "* rows now: 1 pass\n" in md
-    md = markdown.render_markdown(_one_row(v.labels[0], v.topic, "fail"))
-    assert f"**Unexplained fail** ({v.topic})" in md and "**still failing**" in md
-
-
 def test_committed_conformance_json_has_no_unexplained_fail():
-    """docs/conformance.json: every fail row is explained by an OPEN validator issue (the
-    Mitsuba findings' rows are KNOWN), so no fixed entry can hide a failing row."""
+    """docs/conformance.json: every fail row is explained by an open validator issue (the
+    Mitsuba findings' rows are KNOWN)."""
     import json
     data = json.loads((REPO_ROOT / "docs" / "conformance.json").read_text())
-    open_issues = validator_issues.validator_issues()
+    open_issues = builtins.catalogue().open_issues()
     fails = [(rep["meta"]["case"], r["topic"]) for rep in data["reports"]
              for r in rep["results"] if r["status"] == "fail"]
     assert [f for f in fails if f not in open_issues] == []

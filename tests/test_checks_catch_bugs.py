@@ -67,7 +67,7 @@ def _register_broken() -> None:
                                   active)
 
     class PhongBadPdf(_Rebroken):
-        """pdf() of the specular lobe with (p+2)/(2π): no longer the density sample() draws."""
+        """pdf() of the specular lobe with (p+2)/(2π): not the density sample() draws."""
 
         def _break(self):
             self.pdf_factor = (self.exponent + 2.0) * dr.inv_two_pi

@@ -1,4 +1,4 @@
-"""Every conformance finding cites its line exactly (#52): scripts/check_citations.py against the
+"""Every conformance finding cites its line exactly: scripts/check_citations.py against the
 headers the mitsuba wheel ships (always) and against a Mitsuba v3.9.1 source tree (when one is
 at hand: $MITSUBA_SRC, a folder, or the workplace's git mirror)."""
 

@@ -126,7 +126,7 @@ def test_bad_input_is_one_sentence_and_exit_2(tmp_path, capsys, argv, patterns, 
 
 @pytest.mark.parametrize("where", ["before", "after"])
 def test_debug_shows_the_traceback(tmp_path, where, variant_llvm_rgb, capsys):
-    """--debug adds the traceback and keeps the exit status (it turned exit 2 into 1, #52)."""
+    """--debug adds the traceback and keeps the exit status (2 stays 2, not 1)."""
     bad = _files(tmp_path)["unknown_py_param"]
     argv = ["--debug", "render", str(bad)] if where == "before" else ["render", str(bad), "--debug"]
     assert cli.main(argv) == 2
@@ -193,10 +193,10 @@ def test_no_command_prints_help_and_exits_2(capsys):
     assert "usage: phonglab" in capsys.readouterr().out
 
 
-# --- messages whole (#52) ------------------------------------------------------------------------
+# --- messages whole -----------------------------------------------------------------------------
 
 def test_plan_makes_a_reference_as_the_readme_says(tmp_path, monkeypatch, capsys):
-    """`plan gray_direct --make-reference 16` ended in ModuleNotFoundError 'phonglab.outputs'."""
+    """`plan gray_direct --make-reference 16` makes the reference and plans against it."""
     from phonglab.engine import references
 
     monkeypatch.setattr(references, "CACHE_DIR", tmp_path / "cache")
@@ -206,8 +206,9 @@ def test_plan_makes_a_reference_as_the_readme_says(tmp_path, monkeypatch, capsys
 
 
 def test_a_given_depth_whose_bias_alone_misses_the_target_is_one_sentence(capsys, tmp_path):
-    """`render cornell_phong --target-error 0.05 --max-depth 3` ended in "math domain error"
-    (the planner took the root of E² − bias², negative, while writing its reason)."""
+    """`render cornell_phong --target-error 0.05 --max-depth 3`: the bias of depth 3 alone
+    exceeds E, so E² − bias² is negative; the planner says so in one sentence, exit 2 (no
+    "math domain error" from its root)."""
     assert cli.main(["render", "cornell_phong", "--target-error", "0.05", "--max-depth", "3",
                      "-D", "res=16", "-o", str(tmp_path / "c.exr")]) == 2
     err = capsys.readouterr().err.split("\r")[-1].strip()

@@ -16,8 +16,8 @@ from helpers import fails_in_one_sentence as _fails_in_one_sentence
 # --- compare: no NaN, no tautology, the output rules of render ----------------------------------
 
 def test_compare_of_identical_images_says_why_the_test_is_undefined(tmp_path, capsys):
-    """Two black images (or any two equal ones) have SE = 0: z and p used to print as nan
-    and --json wrote a bare NaN (invalid JSON)."""
+    """Two black images (or any two equal ones) have SE = 0: the test is undefined, and says
+    why (z and p are not printed as nan, nor --json written with a bare NaN, invalid JSON)."""
     a, b = tmp_path / "a.exr", tmp_path / "b.exr"
     for p in (a, b):
         exr.write(p, np.zeros((4, 6, 3), np.float32))
@@ -31,7 +31,7 @@ def test_compare_of_identical_images_says_why_the_test_is_undefined(tmp_path, ca
 
 
 def test_compare_of_a_render_with_itself_is_not_evidence(tmp_path, capsys):
-    """The same file compared with itself used to report 'same expected image, p = 1'."""
+    """The same file compared with itself is no evidence (not 'same expected image, p = 1')."""
     a = tmp_path / "a.exr"
     assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(a)]) == 0
     copy = tmp_path / "copy.exr"

@@ -60,7 +60,7 @@ def test_findings_name_cases_source_lines_and_reproducers(cat):
 def test_volpathmis_signatures_hold_exactly_where_roulette_meets_a_counted_hit(variant_llvm_rgb):
     """volpathmis.cpp: roulette runs at depth > rr_depth (line 238), an emitter hit counts at
     depth < max_depth (line 244): the bias needs rr_depth <= D - 2, and each signature holds
-    there and nowhere else (#52); a point that leaves rr_depth unset has its default, 5."""
+    there and nowhere else; a point that leaves rr_depth unset has its default, 5."""
     import types
 
     import mitsuba as mi
@@ -85,7 +85,7 @@ def test_sun_rim_lanes_are_the_findings_never_a_tolerance(variant_llvm_rgb):
     """sunsky.h:430 counts a sun sample as a sun hit untested, 946 tests it: on the cone's rim
     the same ds.d is sun to one, sky to the other.  No sensitivity allowance absorbs those
     lanes; the findings explain them, timed_sunsky's too (its sun read back from its own
-    sample_direction, bit for bit sunsky's where both are known) (#52)."""
+    sample_direction, bit for bit sunsky's where both are known)."""
     import drjit as dr
     import mitsuba as mi
     import numpy as np

@@ -18,7 +18,7 @@ N-sample estimate averages N/2 pairs: N → N/2 above); σ̂²'s own relative st
 √((2 + γ₂)/n_ref) widens the band by z_a times that on each side.
 
 The slope of log RMSE_N against log N (ordinary least squares, N = 2⁸ … 2¹⁶) must
-lie in [−0.55, −0.45] (issue 4).  By the delta method Var[log RMSE_N] ≈ (2 + γ₂/N)/(4S);
+lie in [−0.55, −0.45].  By the delta method Var[log RMSE_N] ≈ (2 + γ₂/N)/(4S);
 each case takes the smallest S (a power of two) for which z_a · SE(slope) ≤ 0.05, so a
 correct estimator fails the slope check with probability below a.
 

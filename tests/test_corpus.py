@@ -68,9 +68,9 @@ CONTROLS = [n for n, c in CATALOG.items() if c["bug"] is None]
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "aov_depth"
                                   else n for n in CONTROLS])
 def test_a_control_passes_with_its_physics_judged(tmp_path_factory, name):
-    """Before: the tutorial-style BSDFs and phase function failed every topic with
-    "missing 1 required positional argument: 'active'"; the Python environment light exited 3
-    (power judged nothing); the AOV integrator passed on ``finite`` alone."""
+    """The tutorial-style BSDFs and phase function (``active`` positional without a default)
+    are called as Mitsuba calls them; the Python environment light's power is judged; the AOV
+    integrator is judged on more than ``finite``."""
     rc, report, err = validate(tmp_path_factory, name)
     assert rc == 0, err[-2000:]
     assert report["meta"]["not_covered"] == []
@@ -115,8 +115,8 @@ def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path_factory, name)
 
 
 def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path_factory):
-    """Before: "no parameter swept" for a BSDF whose parameters are mi.Textures, so its energy
-    gain at small roughness (albedo 1.2 at 0.1) was invisible."""
+    """A BSDF whose parameters are mi.Textures is swept (not "no parameter swept"), so its
+    energy gain at small roughness (albedo 1.2 at 0.1) fails."""
     rc, report, _ = validate(tmp_path_factory, "textured_plastic_gain",
                              *DEFECTS["textured_plastic_gain"][2])
     assert rc == 1
@@ -128,7 +128,7 @@ def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path_fact
 
 
 def test_a_traverse_that_raises_is_one_sentence_with_the_plugins_file_and_line(tmp_path_factory):
-    """Before: a raw traceback, exit 1."""
+    """Not a raw traceback: one sentence, exit 2."""
     rc, report, err = validate(tmp_path_factory, "traverse_renamed_api")
     assert rc == 2 and report is None
     assert "traverse() of the BSDF 'traverse_renamed_api' raised AttributeError" in err
@@ -145,8 +145,8 @@ def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(tmp_pa
 
 
 def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path_factory):
-    """Before: Dr.Jit's "error while performing a custom differentiable operation. (see
-    above)" in every row, the plugin's message in the JSON's traceback alone."""
+    """Each row gives the plugin's message and line, not Dr.Jit's "error while performing a
+    custom differentiable operation. (see above)"."""
     rc, report, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
     assert rc == 1
     for r in report["results"]:
@@ -157,7 +157,7 @@ def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path
 
 
 def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(tmp_path_factory):
-    """Before: an integrator's report was titled "phonglab validate: ? (...)"."""
+    """An integrator's report is titled by its kind and name (not "phonglab validate: ?")."""
     rc, _, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
     text = html_of("sample_name_error", "--no-sweep")
     assert rc == 1

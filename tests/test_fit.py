@@ -215,7 +215,7 @@ def test_table_row_and_markdown(fitlib, tmp_path):
 
 @pytest.mark.slow
 def test_docs_table_is_the_command_output(variant_llvm_rgb):
-    """docs/fitting.md shows exactly what `make fitting-table` computes now."""
+    """docs/fitting.md shows exactly what `make fitting-table` computes."""
     from pathlib import Path
 
     from phonglab.fit import table

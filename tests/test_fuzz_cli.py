@@ -10,7 +10,7 @@ Properties checked on every example:
 The default suite runs a bounded, derandomized profile (reproducible in CI); the ``slow``
 test reruns the same properties with many more examples.
 
-Outputs never harm what is there (#52): every output option of every command given a FIFO, a
+Outputs never harm what is there: every output option of every command given a FIFO, a
 socket, a character device (made in the test's own folder), a link to one, one of the command's
 own inputs (the same file, a hard link or a symbolic link to it), an empty name or a name
 ending in '/' is refused in one sentence (exit 2) and leaves what was there as it was; a link
@@ -306,7 +306,7 @@ def test_name_too_long_is_one_sentence(tmp_path, tiny, variant_llvm_rgb):
     assert rc == 2 and "File name too long" in err
 
 
-# --- outputs never harm what is there (#52) ---------------------------------------------------
+# --- outputs never harm what is there --------------------------------------------------------
 
 #: What an output path may name that must be refused, and what is written through.
 HARM_KINDS = (*SPECIAL_KINDS, "link_to_fifo", "link_to_device", "the_input", "hardlink_to_input",

@@ -11,8 +11,8 @@ evaluated at its texel centres.  The property:
   non-negative pixels -- lambert's equal to Mitsuba's ``diffuse`` with the same texture;
 * otherwise the load is refused with one ``MaterialError`` sentence naming a parameter.
 
-An ordinary 8-bit PNG used to be refused because the check read its stored bytes (123..232)
-as reflectances (tests/test_plugin_hardening.py pins that case); this searches the rest.
+An ordinary 8-bit PNG is accepted: the check reads its reflectances, not its stored bytes
+(123..232) (tests/test_plugin_hardening.py pins that case); this searches the rest.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ scene (8 x 8, 1 spp, llvm_ad_rgb) that is finite and non-negative everywhere.
 The default suite runs a bounded, derandomized search (reproducible in CI); the ``slow``
 variants search a few hundred examples each.
 
-Plugin files that do not return (#52): a correct Lambertian that calls ``sys.exit(0)``,
+Plugin files that do not return: a correct Lambertian that calls ``sys.exit(0)``,
 ``sys.exit(3)`` or ``os._exit(0)``, or loops forever, at import, in its constructor, in
 ``traverse`` or in any query method, given to ``validate``, ``check``, ``fit`` (each with
 ``--timeout``) or :func:`phonglab.testing.assert_bsdf_valid`.  The property: when the command
@@ -164,7 +164,7 @@ def test_fuzz_update_long(case):
     _update_case(*case)
 
 
-# --- plugin files that exit or hang, at import or in any method (#52) --------------------------
+# --- plugin files that exit or hang, at import or in any method -------------------------------
 
 #: How each entry point is asked about the plugin NAME in FILE, cheaply, with a 1 s limit.
 COMMANDS = {

@@ -1,6 +1,6 @@
 """Every input answered before the work, across the commands: folders where files are expected,
 every output path, symbolic links, time limits, and ``doctor`` telling the truth about the
-libLLVM it loaded.  Outputs never harm what is there (#52): for every output option of every
+libLLVM it loaded.  Outputs never harm what is there: for every output option of every
 command, a device, FIFO or socket (or a link to one), an output that is one of the command's
 inputs, an empty name and a name ending in '/' are refused before the work, and what was there
 is left as it was."""
@@ -152,7 +152,7 @@ def test_doctor_fails_when_the_libllvm_path_is_not_a_libllvm(tmp_path, library, 
     assert "variant : scalar_rgb" in done.stdout
 
 
-# --- outputs never harm what is there (#52) ---------------------------------------------------
+# --- outputs never harm what is there --------------------------------------------------------
 
 #: Every output option of every command: (name, argv with {out} for the path, suffix, "file"
 #: or "folder", the command's work (never reached when the path is refused)).

@@ -28,11 +28,12 @@ def test_ctrl_c_at_any_point_of_a_render_is_one_line(tmp_path, delay):
     """SIGINT at points from start-up to mid-render.  Not inside the first ~0.1 s (0.08 s on
     a quiet machine, so the first point is twice that): there the interpreter is still
     importing the console script's `phonglab.cli`, before any phonglab code can catch it,
-    and Python prints its own traceback.  During the variant's set-up it used to surface as `SystemError: <built-in function __import__> returned a result with an
-    exception set` (exit 1, ~60 lines); inside a plugin's constructor as 'could not load the
-    scene: KeyboardInterrupt' (exit 2); during the subcommand imports as a traceback, or an
-    abort (exit -6) when the error handler then imported Dr.Jit or when the interpreter
-    finalised a half-imported Dr.Jit ("PyThreadState_Get ... finalizing")."""
+    and Python prints its own traceback.  Anywhere later it ends as the one interrupt line
+    (exit 130, the files intact), never as `SystemError: <built-in function __import__>
+    returned a result with an exception set` (during the variant's set-up), 'could not load
+    the scene: KeyboardInterrupt' (inside a plugin's constructor), a traceback (during the
+    subcommand imports) or an abort (exit -6, an error handler importing Dr.Jit or the
+    interpreter finalising a half-imported Dr.Jit: "PyThreadState_Get ... finalizing")."""
     out = tmp_path / "x.exr"
     assert cli.main(["render", "gray_direct", "--spp", "4", "-o", str(out)]) == 0
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}

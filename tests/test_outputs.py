@@ -110,8 +110,8 @@ def _fill(folder: Path) -> None:
 
 def test_a_render_onto_a_full_disk_fails_in_one_sentence_and_keeps_the_old_set(small_disk,
                                                                                 capsys):
-    """On a full disk OpenEXR's failed close went unnoticed: the old image was replaced by a
-    0-byte file and `render` said nothing (exit 0)."""
+    """On a full disk OpenEXR's failed close is noticed: the old image stays (not a 0-byte
+    file) and `render` says why, not exit 0."""
     out = small_disk / "x.exr"
     assert cli.main(["render", "gray_direct", "--spp", "16", "-o", str(out)]) == 0
     files = sorted(small_disk.iterdir())
@@ -148,8 +148,8 @@ def test_exr_write_beyond_the_file_size_limit_is_refused(tmp_path, limit):
 # --- one render, one file set: the spp map is a member --------------------------------------------
 
 def test_a_uniform_render_removes_the_spp_map_of_an_earlier_adaptive_one(tmp_path, capsys):
-    """The spp map was written after the set and never removed: a later uniform render left
-    an old x.spp.exr / x.spp.png beside its new image."""
+    """A uniform render removes an earlier adaptive render's x.spp.exr / x.spp.png, which
+    would otherwise sit beside its new image."""
     out = tmp_path / "x.exr"
     assert cli.main(["render", "gray_direct", "--adaptive", "--target-noise", "0.2",
                      "-D", "res=16", "-o", str(out)]) == 0

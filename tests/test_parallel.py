@@ -328,8 +328,8 @@ def scene_pixels(scene) -> int:
 
 
 def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
-    """A Job whose argument is a loaded Scene ran serially but raised Dask's pickling
-    traceback on a cluster; now it is one sentence before any job is sent."""
+    """A Job whose argument is a loaded Scene (it runs serially, but Dask cannot pickle it for
+    a cluster) is one sentence before any job is sent, not Dask's pickling traceback."""
     import mitsuba as mi
 
     scene = mi.load_dict(mi.cornell_box())
@@ -344,8 +344,9 @@ def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
 
 @pytest.mark.slow
 def test_ctrl_c_of_a_workers_run_is_one_line_and_leaves_no_worker(tmp_path):
-    """Ctrl-C reaches the whole process group: each LocalCluster worker used to print its own
-    KeyboardInterrupt traceback (88 lines for `validate --all-builtins --workers 2`)."""
+    """Ctrl-C reaches the whole process group and ends as one line: no LocalCluster worker
+    prints its own KeyboardInterrupt traceback (which for `validate --all-builtins
+    --workers 2` would be 88 lines)."""
     proc = subprocess.Popen([str(BIN / "phonglab"), "validate", "--all-builtins", "--quick",
                              "--workers", "2", "--json", str(tmp_path / "all.json")],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,

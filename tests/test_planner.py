@@ -284,7 +284,7 @@ def test_explicit_settings_override_the_plan():
 
 @pytest.mark.parametrize("name", ["gray_direct", "cornell_phong", "glass_slab"])
 def test_achieved_error_is_near_the_target(plans, name):
-    """The planned render's relative RMSE lies in [0.5, 1.5] x the target (issue 6).
+    """The planned render's relative RMSE lies in [0.5, 1.5] x the target.
 
     The reference has 16x the planned spp (its noise, about E/4, is subtracted by
     metrics.relative_rmse); the achieved error of one render over 32 x 32 x C values scatters by a few
@@ -763,7 +763,7 @@ def test_plans_price_the_stratified_sampler_and_its_render_meets_the_target(plan
     assert metrics.relative_rmse(result.image, ref.image, ref_stderr=ref.stderr) <= 1.15 * target
 
 
-# --- the pilot's samples reused by the render (issue 28) -------------------------------------------
+# --- the pilot's samples reused by the render ----------------------------------------------------
 
 def _fake_render(rng, mean, sigma, spp, passes):
     """A RenderResult of ``passes`` Gaussian pass images of ``spp`` samples in all, each
@@ -905,7 +905,7 @@ def test_a_render_cheaper_than_the_pilot_is_planned_straight_away(monkeypatch):
 
 def test_a_rest_of_a_few_first_renders_goes_straight(monkeypatch):
     """gray_room at 32², E = 0.008: the rest of the image needs more spp than the first pilot
-    render took (the rule before issue 39 ran the whole pilot then) but at most
+    render took (it does not run the whole pilot then) but at most
     STRAIGHT_RENDERS times as many, as the straight reason says: the plan goes straight;
     with the threshold at one first render the depth search runs."""
     import re

@@ -1,4 +1,4 @@
-"""No exit 0 without a verdict (#52): a plugin that calls ``sys.exit`` or ``os._exit``, at import
+"""No exit 0 without a verdict: a plugin that calls ``sys.exit`` or ``os._exit``, at import
 or in a method, or that loops forever at import, ends as a failing row or as one sentence with a
 non-zero exit status -- for ``validate``, ``check``, ``fit`` and :mod:`phonglab.testing` -- and
 ``--timeout`` covers loading the plugin file; a reader that closes the pipe (``| head``) ends

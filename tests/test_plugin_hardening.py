@@ -216,7 +216,7 @@ def test_load_refuses_non_finite_denormal_and_out_of_range_values(spec, name, ne
     {"type": "whitted", "max_depth": 2, "ambient": -0.5},
 ], ids=["denormal-a", "inf-b", "negative-ambient"])
 def test_whitted_never_renders_nan_inf_or_negative_pixels(integrator):
-    """The reported cases: each is refused at load (it used to render NaN, black or < 0)."""
+    """The reported cases: each is refused at load (rendered, it gives NaN, black or < 0)."""
     try:
         scene = mi.load_dict(tiny_scene({"type": "phong"}, integrator))
     except Exception as exc:
@@ -327,8 +327,8 @@ def test_8bit_png_energy_is_checked_on_the_decoded_texels(tmp_path):
 @pytest.mark.parametrize("bad_key, bad", [("exponent", -5.0), ("exponent", NAN),
                                           ("diffuse_reflectance.value", 1.5)])
 def test_a_refused_update_restores_every_object_it_touched(one_thread, bad_key, bad):
-    """One update that scaled the light by 10 and set an invalid phong parameter was refused,
-    yet the light's new intensity stayed (the next render 10x brighter)."""
+    """One update that scales the light by 10 and sets an invalid phong parameter is refused
+    whole: the light keeps its intensity (the next render is not 10x brighter)."""
     scene = mi.load_dict(tiny_scene({"type": "phong"}))
     params = mi.traverse(scene)
     light, key = _full_key(params, "intensity.value"), _full_key(params, bad_key)

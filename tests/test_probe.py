@@ -267,8 +267,8 @@ def test_sample_in_scalar_variant_matches_llvm():
 
 
 def test_a_return_of_another_width_is_refused_before_numpy_copies_it(variant_llvm_rgb):
-    """A Python eval returning 2 lanes for N queried was broadcast against N lanes downstream
-    (a validate run grew past 20 GB); now one sentence, before the copy."""
+    """A Python eval returning 2 lanes for N queried is one sentence, before the copy (broadcast
+    against N lanes downstream, it can grow a validate run past 20 GB)."""
     import drjit as dr
     import mitsuba as mi
 

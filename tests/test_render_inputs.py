@@ -102,8 +102,9 @@ def test_the_render_id_ties_image_and_stderr(tmp_path):
                                      ["compare-models", "gray_direct"]])
 @pytest.mark.parametrize("bad", ["-1", str(1 << 32), "1e3"])
 def test_a_seed_outside_32_bits_is_refused_before_any_work(command, bad, capsys):
-    """-1 and 2³² − 1 used to render the same image (pass seeds are taken mod 2³²) while the
-    headers recorded different seeds; `validate --seed -1` reported seven failing topics."""
+    """-1 and 2³² − 1 would render the same image (pass seeds are taken mod 2³²) under
+    different recorded seeds, and `validate --seed -1` would fail seven topics: both are bad
+    input, exit 2."""
     with pytest.raises(SystemExit) as info:
         cli.main([*command, "--seed", bad])
     assert info.value.code == 2
@@ -148,7 +149,7 @@ def _content(tmp_path, integrator=PATH, fmt="rgb", name="s.xml") -> Path:
                                         ("xyza", ["X", "Y", "Z", "A"])])
 def test_a_film_of_another_pixel_format_keeps_its_channel_names(variant_llvm_rgb, tmp_path, capsys,
                                                                 fmt, names):
-    """An xyz or luminance_alpha film was written as if it were RGB (channels R, G, B)."""
+    """An xyz or luminance_alpha film is written with its own channels, not as RGB (R, G, B)."""
     import OpenEXR
 
     out = tmp_path / "x.exr"
@@ -188,8 +189,8 @@ ADAPTIVE = ["--adaptive", "--target-noise", "0.1"]
 ], ids=["aov", "aov-nested", "aov-adaptive", "ptracer-adaptive"])
 def test_integrators_phonglab_cannot_sample_are_one_sentence(tmp_path, capsys, integrator,
                                                              route, needle):
-    """An aov integrator was written as RGBA (its 4 AOV channels), and --adaptive reported
-    'error 0, meets the target' on it; --adaptive on ptracer raised a nanobind TypeError."""
+    """An aov integrator's render (its 4 AOV channels are no RGBA) and --adaptive on it (no
+    'error 0, meets the target') or on ptracer (no nanobind TypeError) are one sentence."""
     out = tmp_path / "x.exr"
     _fails_in_one_sentence(capsys, ["render", str(_content(tmp_path, integrator)), "-o", str(out),
                                     *(route or ["--spp", "4"])], needle)

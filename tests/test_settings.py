@@ -91,9 +91,9 @@ def test_load_plugin_forms(variant_llvm_rgb, tmp_path):
 
 
 def test_a_constant_textures_value_key_sets_the_parameter_itself():
-    """Before: ``reflectance.value=0.5,0.5,0.5`` (mi.traverse's key of a constant texture) was
-    wrapped twice, {"reflectance": {"value": {"type": "rgb", ...}}}, and Mitsuba refused it
-    ("missing 'type' attribute")."""
+    """``reflectance.value=0.5,0.5,0.5`` (mi.traverse's key of a constant texture) sets the
+    texture itself, not {"reflectance": {"value": {"type": "rgb", ...}}}, which Mitsuba
+    refuses ("missing 'type' attribute")."""
     from phonglab.settings import parse_sets
     assert parse_sets(["diffuse_reflectance.value=0.5,0.5,0.5", "roughness.value=0.2"]) == {
         "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}, "roughness": 0.2}

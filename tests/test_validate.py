@@ -30,7 +30,7 @@ def _check_schema(d: dict) -> None:
     assert set(d) == {"meta", "results"}
     assert d["results"]
     for r in d["results"]:
-        # a sweep's row also names its parameter point (#29); nothing else changes
+        # a sweep's row also names its parameter point; nothing else differs
         assert set(r) == ROW_FIELDS | ({"point"} if "point" in r else set())
         assert isinstance(r.get("point", {}), dict)
         assert r["topic"] in TOPICS and r["status"] in STATUSES
@@ -304,8 +304,8 @@ def test_a_plugin_file_that_registers_another_name_says_which(variant_llvm_rgb, 
 
 def test_all_builtins_keeps_each_case_and_resumes(variant_llvm_rgb, tmp_path, capsys,
                                                   monkeypatch):
-    """Ctrl-C after 45 s of --all-builtins lost every finished case (the JSON was written only
-    at the end); now each case is kept as it finishes and a rerun runs only the rest."""
+    """Ctrl-C during --all-builtins keeps every finished case: each is kept as it finishes
+    (not only in the JSON written at the end), and a rerun runs only the rest."""
     from phonglab.validate import batch
     from phonglab.validate.bsdf import builtins
 
@@ -357,9 +357,9 @@ def test_a_bad_seed_is_bad_input_not_failing_topics(variant_llvm_rgb, seed):
     ("roughconductor", {"specular_reflectance": 0.0, "alpha": 0.3}),
 ], ids=["diffuse", "lambert", "phong", "roughconductor"])
 def test_a_black_bsdf_passes_on_what_is_defined(variant_llvm_rgb, spec, params):
-    """A black BSDF (every weight 0) failed χ² (the histogram of non-zero weights was empty
-    against ∫pdf = 1) and its weight/pdf rows were 'nothing to compare for a purely delta
-    BSDF'; its directions are now histogrammed as drawn, and the rows say it is black."""
+    """A black BSDF (every weight 0) passes χ²: its directions are histogrammed as drawn (a
+    histogram of non-zero weights alone would be empty against ∫pdf = 1), and its weight/pdf
+    rows say it is black (not 'nothing to compare for a purely delta BSDF')."""
     report = validate_bsdf(spec, params=params, quick=True,
                            topics=["finite", "weight", "pdf", "chi2"])
     assert report.passed, report.table(report.failing)
@@ -385,8 +385,8 @@ def test_weights_of_zero_where_eval_is_not_fail_the_weight_topic(variant_llvm_rg
 
 
 def test_a_failing_row_shows_its_worst_lane_in_plain_numbers(variant_llvm_rgb):
-    """'measured 1023, tolerance 1' told the author nothing to act on; the table and the
-    assert_bsdf_valid message now give the worst lane's wi, wo and both sides (#26)."""
+    """Beyond 'measured 1023, tolerance 1', which tells an author nothing to act on, the table
+    and the assert_bsdf_valid message give the worst lane's wi, wo and both sides."""
     with pytest.raises(AssertionError) as info:
         assert_bsdf_valid("defect_weight_noise", plugins=[DEFECTS / "weight_noise.py"],
                           quick=True, topics=["weight"])
@@ -405,7 +405,7 @@ def test_the_html_report_shows_the_worst_lane(variant_llvm_rgb, tmp_path):
 
 
 def test_a_builtin_named_by_its_type_carries_its_documented_findings(capsys):
-    """`phonglab validate roughconductor` used to exit 1 on the Beckmann pdf's normalization
+    """`phonglab validate roughconductor` exits 0 though the Beckmann pdf's normalization fails
     (a documented Mitsuba 3.9.1 finding, microfacet.h): the conformance table's causes of the
     plugin apply by default, each only inside its signature; --no-known shows the raw fail."""
     args = ["validate", "roughconductor", "--quick", "--no-sweep", "--only", "normalization"]
@@ -434,9 +434,9 @@ def test_a_builtins_findings_follow_its_microfacet_distribution():
 
 
 def test_a_gradient_skip_of_the_checks_own_making_does_not_blame_the_plugin(variant_llvm_rgb):
-    """#36 item 6: conductor's eval is 0 (a delta lobe), so the eval-based gradient has no
-    dependence to follow; that skip said "the BSDF refused the update".  It now says it is
-    the check's limit -- and AD that lost a dependence eval has still fails."""
+    """Conductor's eval is 0 (a delta lobe), so the eval-based gradient has no dependence to
+    follow: the skip says it is the check's limit (not "the BSDF refused the update") -- and
+    AD that lost a dependence eval has still fails."""
     report = validate_bsdf("conductor", topics=["gradient"])
     rows = [r for r in report.rows if r.status == "skipped"]
     assert rows and all("refused" not in r.reason for r in rows)

@@ -1,14 +1,14 @@
-"""A built-in's documented findings follow it wherever it appears (#56): matched by what is
+"""A built-in's documented findings follow it wherever it appears: matched by what is
 loaded (its C++ class and what it was loaded from), not by how it was named, so a type name, a
 dict, an XML file and a scene's material get the same verdict; a wrapper's row that fails
 because of a built-in child's finding reads KNOWN, inherited from that child, only when the
 child judged alone shows it as much.
 
-Before: ``phonglab validate material.xml`` (a Beckmann roughconductor at alpha 0.3) failed
-``normalization`` (0.9973 against 1) and ``gradient`` (eta.value) with no word of the findings
+So ``phonglab validate material.xml`` (a Beckmann roughconductor at alpha 0.3) reads its
+``normalization`` (0.9973 against 1) and ``gradient`` (eta.value) rows KNOWN by the findings
 that make ``phonglab validate roughconductor --set alpha=0.3`` pass; a Python wrapper that
-only tints such a child failed the same two rows, blamed on the wrapper; a scene's material
-could not be validated at all.
+only tints such a child has the same two rows KNOWN, inherited, not blamed on the wrapper;
+and a scene's material is validated as itself.
 """
 
 from __future__ import annotations

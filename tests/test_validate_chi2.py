@@ -249,8 +249,8 @@ def _corner_lobe(q: float, grid: sphere_bins.Grid, shift: float = 0.0):
 
 @pytest.mark.parametrize("shift, passes", [(0.0, True), (3e-6, False)])
 def test_a_lobe_narrower_than_any_node_is_integrated_where_its_samples_are(shift, passes):
-    """#36 item 4: roughdielectric at η ≈ 1 (int_ior = 1, ext_ior = 1.000277) has a
-    transmission lobe α|1 − η|/η = 2.8·10⁻⁶ rad wide; every tensor rule missed it (expected
+    """Roughdielectric at η ≈ 1 (int_ior = 1, ext_ior = 1.000277) has a
+    transmission lobe α|1 − η|/η = 2.8·10⁻⁶ rad wide; every tensor rule misses it (expected
     10⁻⁹ against 5·10⁵ observed).  A cos^q lobe of that width on a corner of four bins: its
     expected counts, by panels graded toward the samples' mean, match a correct sampler's
     split; a sampler whose lobe sits 3·10⁻⁶ rad off (one lobe width) still fails."""

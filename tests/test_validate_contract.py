@@ -58,8 +58,8 @@ def test_chi2_counts_a_sample_whose_weight_is_0_because_the_bsdf_is_black_there(
 def test_a_spike_beside_a_broad_lobe_is_integrated(variant_llvm_rgb):
     """principled with every parameter 1 (a sweep corner) at cos θ_i = 1e-4: ~1 % of the
     samples fall in a clearcoat spike ~7e-4 rad wide beside a GGX lobe 0.3 rad wide. A rule
-    of the broad lobe's width gave ∫pdf 0.8625 for 0.9004 counted (a fail; independent Monte
-    Carlo: 0.905 ± 0.0015); the layout now centres the rule on the spike."""
+    of the broad lobe's width gives ∫pdf 0.8625 for 0.9004 counted (a fail; independent Monte
+    Carlo: 0.905 ± 0.0015); the layout centres the rule on the spike."""
     import mitsuba as mi
 
     from phonglab.validate.bsdf import lobes

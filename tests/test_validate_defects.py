@@ -55,8 +55,8 @@ def test_defect_fails_its_topic_only(variant_llvm_rgb, name):
 
 
 def test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes(variant_llvm_rgb):
-    """The defect issue #26 found passing at default sizes: ∫pdf = 1.01 against P = 1 (no
-    rejection), a band of z²/(√2 N) + the quadrature's error, ~3e-5."""
+    """A pdf 1 % too large fails at default sizes: ∫pdf = 1.01 against P = 1 (no rejection),
+    a band of z²/(√2 N) + the quadrature's error, ~3e-5."""
     report = validate_bsdf("defect_pdf_scaled_1pct", plugins=[DEFECTS / "pdf_scaled_1pct.py"],
                            seed=0)
     assert {r.topic for r in report.failing} == {"normalization"}, report.table(report.failing)
@@ -70,7 +70,7 @@ def test_pdf_scaled_1pct_fails_normalization_alone_at_default_sizes(variant_llvm
 def test_normalization_defects_fail_it_at_default_sizes(variant_llvm_rgb, name):
     """The other planted defects that fail ``normalization`` today (pdf_scaled_1pct has its own
     test above; at --quick the 1 % and 2 % ones fail it in test_defect_fails_its_topic_only)
-    still fail it at default sizes now that a BSDF's lobes are placed one by one (issue #55)."""
+    fail it at default sizes too, a BSDF's lobes being placed one by one."""
     report = validate_bsdf(f"defect_{name}", plugins=[DEFECTS / f"{name}.py"], seed=0,
                            topics=["normalization"])
     assert {r.topic for r in report.failing} == {"normalization"}, report.table(report.rows)

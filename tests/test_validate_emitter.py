@@ -246,9 +246,10 @@ def test_assert_emitter_valid_names_the_failing_rows(variant_llvm_rgb):
 
 
 def test_a_builtin_emitter_carries_the_findings_of_its_shape(capsys):
-    """`phonglab validate area` on an inside-out sphere used to exit 1 on the documented
-    sphere-emitter finding (sphere.cpp:256); the findings of the catalogue's cases of the same
-    shape apply by default (never the sphere's to a rectangle), --no-known shows the raw fail."""
+    """`phonglab validate area` on an inside-out sphere exits 0 though its pdf row fails by the
+    documented sphere-emitter finding (sphere.cpp:256): the findings of the catalogue's cases of
+    the same shape apply by default (never the sphere's to a rectangle), --no-known shows the raw
+    fail."""
     from phonglab.cli import main
     from phonglab.validate.emitter.kind import known_for
 

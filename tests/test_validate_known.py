@@ -156,7 +156,7 @@ def test_a_cause_at_a_parameter_interval_holds_inside_it_only():
 
 
 def test_principled_sweep_findings_hold_only_at_their_points():
-    """The principled findings of the sweep (#29) explain their points and no others: the
+    """The principled findings of the sweep explain their points and no others: the
     shifted component numbering needs spec_trans on and clearcoat off, the by-design energy
     gains a white base_color or roughness 0.1, the metal's diffuse reflectance metallic 1
     and specular 0, principledthin's grazing NaN and transmission asymmetry spec_trans > 0."""
@@ -179,7 +179,7 @@ def test_principled_sweep_findings_hold_only_at_their_points():
 
 
 def test_roughdielectric_index_matched_energy_explains_its_signature_only(variant_llvm_rgb):
-    """#36: roughdielectric's energy row fails near eta = 1 (the sweep's corner int_ior 1
+    """Roughdielectric's energy row fails near eta = 1 (the sweep's corner int_ior 1
     against the default ext_ior, air: eta 0.99972); the finding explains that row at
     eta in [0.998, 1.015] and nothing else: not the same row at eta 1.5 or 0.99, not
     another topic's failing row at eta 0.99972."""
@@ -223,7 +223,7 @@ def test_roughdielectric_index_matched_energy_explains_its_signature_only(varian
 
 def test_roughdielectric_index_matched_normalization_explains_its_signature_only(
         variant_llvm_rgb):
-    """#36: roughdielectric's normalization row fails near eta = 1 for GGX too (int_ior 1
+    """Roughdielectric's normalization row fails near eta = 1 for GGX too (int_ior 1
     against air: eta 0.99972; the float32 product wo * eta in pdf()'s half vector); the
     finding explains that row at eta in [0.999, 1.001] and incidence |cos θ_i| ≥ 0.03 only
     (the energy grid's 0.05 is in, 0.01 is out): not at eta 0.998 or 1.5, not a failing
@@ -286,7 +286,7 @@ def test_roughdielectric_index_matched_normalization_explains_its_signature_only
     ("llvm_ad_spectral_polarized", ["int_ior=3", "alpha=1"], "reciprocity",
      "pplastic-polarized-grazing")])
 def test_pplastic_sweep_corners_are_known_by_their_findings(tmp_path, variant, sets, topic, key):
-    """Two corners of pplastic's sweep failed unexplained (#36/#37, --quick): both
+    """Two corners of pplastic's sweep fail (--quick), each by its finding: both
     reflectances 0 (the 0/0 sampling weight, pplastic.cpp:239) and int_ior = 3 (the polarized
     grazing cancellation, pplastic.cpp:377, whose band widens with eta to min cos 0.0197).
     Typed on the command line as an author would: an integer int_ior loads (settings.IOR_NAMES),

@@ -1,12 +1,12 @@
-"""``normalization`` on a mixture of a very narrow lobe and a broad one (issue #55).
+"""``normalization`` on a mixture of a very narrow lobe and a broad one.
 
 tests/authors/narrow_broad_mixture.py is a correct BSDF: a normalized Blinn-Phong lobe of
 exponent 10³-10⁴ beside a Lambertian one, lobe chosen with probability w_s = k_s/(k_d + k_s).
-The topic used to place its quadrature on the mixture's most probable samples only: where the
-broad lobe dominates (w_s = 2e-4) those are Lambertian, the narrow lobe fell between the nodes
-of every rule, and ∫pdf read 0.9998 (= 1 − w_s) with an error estimate |Q16 − Q8| of 1e-7
-against a count of 1.  Now each component's lobe is placed from its own samples and refines
-the rule (validate/bsdf/lobes.py).
+A quadrature placed on the mixture's most probable samples only would miss it: where the
+broad lobe dominates (w_s = 2e-4) those are Lambertian, the narrow lobe falls between the
+nodes of every rule, and ∫pdf reads 0.9998 (= 1 − w_s) with an error estimate |Q16 − Q8| of
+1e-7 against a count of 1.  So each component's lobe is placed from its own samples and
+refines the rule (validate/bsdf/lobes.py).
 
 Checked here, seed 0: the mixture passes over w_s from 1e-4 to 1 − 1e-4 at exponents 10³ and
 10⁴; its ∫pdf at every incidence cell agrees with an independent float64 value (the formula

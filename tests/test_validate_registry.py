@@ -91,8 +91,8 @@ def test_detect_refuses_another_kind_of_plugin_in_one_sentence(variant_llvm_rgb)
 @pytest.mark.parametrize("name", ["diffuse", "lambert"])
 def test_a_plugin_file_shadowing_a_name_is_refused_before_work(variant_llvm_rgb, tmp_path, capsys,
                                                                name):
-    """mine.py registering 'diffuse' validated Mitsuba's built-in and passed; registering
-    'lambert' validated phonglab's plugin: both are now exit 2 naming the collision."""
+    """mine.py registering 'diffuse' (Mitsuba's built-in) or 'lambert' (phonglab's plugin) is
+    exit 2 naming the collision, not a validation of the plugin it shadows."""
     plugin = tmp_path / "mine.py"
     plugin.write_text(SHADOWS_DIFFUSE.replace('"diffuse"', f'"{name}"'))
     assert main(["validate", name, "--quick", "--plugin", str(plugin)]) == 2
@@ -103,7 +103,7 @@ def test_a_plugin_file_shadowing_a_name_is_refused_before_work(variant_llvm_rgb,
 
 
 def test_a_plugin_file_runs_once_per_validation(variant_llvm_rgb, tmp_path):
-    """The CLI ran a --plugin file once per kind it tried (an emitter's file twice); now once."""
+    """The CLI runs a --plugin file once, not once per kind it tries."""
     plugin = tmp_path / "light.py"
     plugin.write_text(COUNTS_ITS_RUNS + (HERE / "defects_emitter" / "point_control.py").read_text())
     assert main(["validate", "defect_point_control", "--quick", "--only", "finite",

@@ -1,4 +1,4 @@
-"""The parameter sweep of ``phonglab validate`` (#29): a plugin, not one parameter point.
+"""The parameter sweep of ``phonglab validate``: a plugin, not one parameter point.
 
 The planted defects of tests/defects/sweep fire only at a parameter edge: a lobe-selection
 weight k_s/(k_d + k_s) that is 0/0 at k_d = k_s = 0, and a pdf normalization wrong only for
@@ -109,8 +109,8 @@ def test_an_undeclared_parameter_named_as_mitsuba_names_it_carries_that_domain(v
 
 def test_a_bright_lambert_without_declared_ranges_fails_energy_at_reflectance_1(
         variant_llvm_rgb, tmp_path):
-    """Before: 3 % too bright at reflectance 1 passed with an advice row (a probed range is
-    no domain); now ``reflectance`` carries Mitsuba's [0, 1] and the bound is judged there."""
+    """3 % too bright at reflectance 1 fails: ``reflectance`` carries Mitsuba's [0, 1] and the
+    bound is judged there (a probed range, no domain, would give an advice row only)."""
     text = (Path(__file__).parent / "authors" / "my_lambert.py").read_text()
     bright = tmp_path / "bright.py"
     bright.write_text(text.replace("self.reflectance * dr.inv_pi", "self.reflectance * 1.03 * dr.inv_pi")
@@ -165,7 +165,7 @@ def test_assert_bsdf_valid_sweeps_and_names_the_point(variant_llvm_rgb):
 
 
 def test_an_emitter_is_swept_over_its_documented_range(variant_llvm_rgb):
-    """The sweep is every kind's (#35): a built-in emitter across its emitted quantity, from 0
+    """The sweep is every kind's: a built-in emitter across its emitted quantity, from 0
     (where the identity topics' ratios are 0/0 and the gradient's sampling factor is undefined:
     skipped there, saying why) to 10; a correct emitter passes at every point."""
     from phonglab.validate import validate_emitter
@@ -194,7 +194,7 @@ def test_a_dark_surface_emitter_is_still_chi2_tested(variant_llvm_rgb):
 
 def test_an_energy_excess_outside_the_domain_is_advice_not_a_fail(variant_llvm_rgb, tmp_path,
                                                                   capsys):
-    """#36 item 2: a correct author-style Lambert whose plain-float kd is accepted up to 10⁴
+    """A correct author-style Lambert whose plain-float kd is accepted up to 10⁴
     (probed, no PARAMETER_RANGES) passes, the albedo 10⁴ at kd = 10⁴ being advice shown in the
     text, the JSON and the HTML report."""
     out, page = tmp_path / "r.json", tmp_path / "r.html"
@@ -246,8 +246,8 @@ def test_a_declared_domain_keeps_the_bound_a_fail():
 
 @pytest.mark.parametrize("value", ["-1", "1e30"])
 def test_a_set_value_outside_its_documented_range_is_bad_input(variant_llvm_rgb, capsys, value):
-    """#36 item 2: --set alpha=-1 or 1e30 ran 23 s and failed; now exit 2 in one sentence
-    naming the range and where it comes from, before any topic runs."""
+    """--set alpha=-1 or 1e30 is exit 2 in one sentence naming the range and where it comes
+    from, before any topic runs (not a 23 s run of failing rows)."""
     import time
     t0 = time.perf_counter()
     assert main(["validate", "roughplastic", "--set", f"alpha={value}"]) == 2
@@ -283,7 +283,7 @@ def test_a_count_is_swept_over_whole_numbers_up_to_its_sweep_extent():
 
 
 def test_an_integrators_estimator_controls_are_swept_and_direct_is_pinned(variant_llvm_rgb):
-    """#35: the sweep is every kind's.  direct's emitter_samples and bsdf_samples run 1..4;
+    """The sweep is every kind's.  direct's emitter_samples and bsdf_samples run 1..4;
     at emitter_samples 4 the plane under a point light reads 4x the exact value (Mitsuba
     3.9.1's direct.cpp:180 sums a delta light's emitter samples; mitsuba3 #1861): KNOWN by the
     table's finding there, a pass at the given point and wherever emitter_samples is 1."""

@@ -55,8 +55,8 @@ def test_table_cells_relation_stderr_and_reasons():
 
 
 def test_the_summary_line_says_measured_and_expected_not_against_the_tolerance():
-    """#36 item 6: ``(1.005 against 6.919e-05)`` put the tolerance where a reader expects the
-    expected value; a ratio-to-tolerance row says what its number is."""
+    """The summary puts the expected value where a reader expects it, the tolerance beside it
+    (not ``(1.005 against 6.919e-05)``); a ratio-to-tolerance row says what its number is."""
     energy = Row("energy", "directional albedo ≤ 1", 1.005, 1.0, None, 6.919e-05, "fail", "r",
                  {"relation": "<="}, point={})
     assert verdict.summary(energy) == "measured 1.005, expected ≤ 1 (tolerance 6.919e-05)"
@@ -91,7 +91,7 @@ def test_a_chi2_cell_is_rejected_for_its_real_reason():
 
 
 def test_every_html_figure_is_labelled_with_its_point():
-    """#36 item 6: a sweep's figure blocks were seven identical unlabelled sections."""
+    """A sweep's figure blocks are labelled with their points, not identical sections."""
     from phonglab.validate import html
     details = {"relation": "<=", "theta_deg": [0.0, 45.0], "albedo": [0.5, 0.5],
                "band": [1e-5, 1e-5]}

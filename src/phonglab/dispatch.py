@@ -25,8 +25,8 @@ library) and :func:`describe` words it as the plugin's: ``NameError: name 'x' is
 defined (my_bsdf.py:41, in eval)``.  Dr.Jit's wrapper for an exception raised inside a
 custom operation or a symbolic loop ("error while performing a custom differentiable
 operation. (see above)") is unwrapped to the plugin's own exception (its ``__cause__``).  A
-method the plugin leaves unimplemented (``raise NotImplementedError``) is
-:class:`NotImplementedByPlugin`'s "not implemented: <method>", never a physics failure.
+method the plugin leaves unimplemented (``raise NotImplementedError``) is "not implemented:
+<method>" (:func:`not_implemented`, :func:`describe`), never a physics failure.
 """
 
 from __future__ import annotations

@@ -203,7 +203,7 @@ def to_numpy(x, n: int | None = None) -> np.ndarray:
     x = _intensity(x)
     if n is not None and dr.is_jit_v(x) and dr.width(x) not in (1, n):
         # checked before numpy copies it: a return of another width is a plugin's defect, and
-        # broadcasting it against n lanes is how a probe once grew past 20 GB
+        # broadcasting it against n lanes can grow a probe past 20 GB
         raise ValueError(f"the plugin returned {dr.width(x)} lanes where {n} were queried; "
                          f"Mitsuba expects one value per lane (or one for all lanes)")
     if not dr.is_jit_v(x):

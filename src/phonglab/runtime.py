@@ -246,9 +246,9 @@ def interrupts_routed():
     handler runs at all, and Python raises ``KeyboardInterrupt`` at the main thread's next
     bytecode, or calls the Python handler then installed (:func:`deferred_interrupt`'s).
 
-    Costs, stated: a render pass in a JIT variant was never interruptible from Python anyway
-    (the kernel runs to its end); a ``scalar_*`` pass is no longer cancelled midway by
-    Mitsuba, it ends first.  A main thread blocked in a system call (``time.sleep``, waiting
+    Costs, stated: a render pass in a JIT variant is not interruptible from Python in any case
+    (the kernel runs to its end); a ``scalar_*`` pass, which Mitsuba's handler would cancel
+    midway, ends first.  A main thread blocked in a system call (``time.sleep``, waiting
     for a child) is not woken: the interrupt is raised when the call returns.  Children started
     inside the block inherit the blocked mask (phonglab's own commands route it again; embedded
     Dask workers ignore SIGINT anyway).  Only in the main thread, and only where Python's own

@@ -1,5 +1,5 @@
 """A plugin author's two-lobe BSDF, correct: a normalized Blinn-Phong lobe of exponent in the
-thousands beside a Lambertian lobe (issue #55).
+thousands beside a Lambertian lobe.
 
     D(h)     = (p + 1)/(2π) cos^p θ_h                    (the density of h it samples)
     f_s      = k_s D(h) / (4 (ω_i·h) max(cos θ_i, cos θ_o))   (reciprocal, albedo ≤ k_s)

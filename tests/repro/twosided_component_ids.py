@@ -12,7 +12,7 @@ which flags(0) = DiffuseReflection | FrontSide does not contain.  (A context res
 component 0 also wraps to (uint32_t) -1, every component, on the back side (eval() at
 lines 171-172):
 Σ_k eval_k is twice eval there.)  Only ω_i below
-the surface shows it, which phonglab's identity topics draw since #36.
+the surface shows it, which phonglab's identity topics draw.
 
 Run: python tests/repro/twosided_component_ids.py  -> exit 1 while the bug is present.
 """

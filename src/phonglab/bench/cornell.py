@@ -74,12 +74,12 @@ def cornell_xml(boxes: str = "phong", exponent: float = 30.0, rfilter: str = "bo
     if rfilter != "gaussian":
         text, count = re.subn(r'<rfilter type="gaussian"\s*/>', f'<rfilter type="{rfilter}"/>', text)
         if count != 1:
-            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml no longer has its gaussian <rfilter>; "
+            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml has no gaussian <rfilter>; "
                                 "update phonglab.bench.cornell.cornell_xml")
     if block is not None:
         text, count = _GLOSSY_BLOCK.subn(block, text)
         if count != 1:
-            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml no longer has its "
+            raise PhonglabError("phonglab/scenes_xml/cornell_phong.xml has no "
                                 "<bsdf type=\"phong\" id=\"glossy\"> block; update phonglab.bench")
     return text
 

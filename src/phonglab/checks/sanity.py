@@ -21,9 +21,7 @@ cos θ_i ∈ {0.8, 0.5, 0.2}, φ_i = 0, 61 × 122 bins) and the check's χ² sam
   pdf() over the three incidences, which must all pass at the level below; an empty histogram
   with a non-zero pdf fails.  ``histogram_min_sum`` is the smallest histogram's sample count.
 
-Before the validator was the harness, this check had its own probes and fixed float budgets:
-32·2⁻²⁴·(p + 1) on the relative reciprocity difference and 64·2⁻²⁴ on the weight's; the
-sensitivity model replaces both.
+No tolerance is this check's own: each row's is the validator's sensitivity model.
 
 Family-wise α.  The validator tests each χ² cell of one BSDF at the Šidák level of its m
 cells, so a correct BSDF fails by chance with probability α = :data:`phonglab.stats.ALPHA`.

@@ -32,7 +32,7 @@ import re
 import drjit as dr
 import mitsuba as mi
 
-#: Probe samples per pixel of :func:`cost_map`.
+#: Probe samples per pixel of :meth:`~phonglab.engine.wavefront.Wavefront.cost_map`.
 PROBE_SPP = 4
 #: a of c = a + s: the cost of a sample besides its rays, in rays.
 FIXED_COST = 0.25

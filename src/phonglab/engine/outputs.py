@@ -13,13 +13,13 @@ standard error, when the render has two or more passes) and ``x.png`` (a preview
   that is a symbolic link is checked, and written, at the file it points to: the link stays
   (:func:`phonglab.engine.exr.atomic_paths` replaces the target, not the link).
 * **Never harm what is there.**  A write is a new file renamed over the target, and a rename
-  replaces *whatever* the name holds: run as root, ``--json /dev/null`` once turned the null
-  device into a regular file, and ``--json /dev/full`` "succeeded".  So an output must be, or
+  replaces *whatever* the name holds: run as root, ``--json /dev/null`` would turn the null
+  device into a regular file, and ``--json /dev/full`` would "succeed".  So an output must be, or
   become, a regular file: a character or block device, a FIFO or a socket (or a link to one)
   is refused before the work, as a folder is.  An output that is one of the command's own
   inputs (the ``--plugin`` file, the scene, an image compared) is refused too: overwriting
-  an input is never what a user meant.  An empty name is refused (it names nothing, and was
-  once skipped silently with exit 0).  :func:`check_output_file` and
+  an input is never what a user meant.  An empty name is refused (it names nothing: skipping
+  it would end with exit 0 and no output).  :func:`check_output_file` and
   :func:`check_output_folder` are the one home of these rules; every command's every output
   option goes through them, and :func:`phonglab.engine.exr.atomic_paths` refuses a rename
   over anything but a regular file at the last moment too.

@@ -19,7 +19,8 @@ plugins, BSDF probing in :mod:`phonglab.probe`; these modules only arrange and p
   :func:`fig_convergence`, :func:`efficiency_table`, :func:`fig_plan_depths`;
 * :mod:`.fitting`     notebook 05 (fitting Phong to physics; imported as
   ``phonglab.figures.fitting``, not re-exported: it loads :mod:`phonglab.fit` and scipy):
-  :func:`fig_lobe_cuts`, :func:`fig_fit_albedo`, :func:`fig_image_fit`, :func:`fig_image_history`;
+  :func:`~.fitting.fig_lobe_cuts`, :func:`~.fitting.fig_fit_albedo`,
+  :func:`~.fitting.fig_image_fit`, :func:`~.fitting.fig_image_history`;
 * :mod:`.docs`        :func:`write_doc_images`, the one figure per notebook that
   docs/notebooks.md shows (``python -m phonglab.figures DIR``).
 

@@ -3,8 +3,8 @@ r"""The records of the conformance tables, one per plugin kind: what ``make conf
 are rendered from (:mod:`phonglab.validate.markdown`).
 
 A :class:`Catalogue` names a kind's cases, the validator function that checks one case, its
-topics, its documented Mitsuba findings (:class:`~.findings.Finding`, matched by signature),
-its open and fixed validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
+topics, its documented Mitsuba findings (:class:`Finding`, matched by signature),
+its open validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
 is :mod:`phonglab.validate.bsdf.builtins`; the emitter and integrator ones are
 :mod:`phonglab.validate.emitter.builtins` and :mod:`phonglab.validate.integrator.builtins`,
 whose cases are :class:`KindCase` (a BSDF :class:`~phonglab.validate.bsdf.builtins.Case` has a
@@ -18,7 +18,8 @@ scripts/check_citations.py checks against a v3.9.1 source tree), one sentence of
 correct plugin gives and a reproducer in ``tests/repro/`` that exits 1 while the behaviour is
 present; :func:`known_causes` turns findings into the ``known`` entries of the cases (their
 rows are reported as KNOWN).  A :class:`ValidatorIssue` is a row traced to the validator (it
-stays a fail in the JSON); one with ``fixed_by`` is history.
+stays a fail in the JSON) while the validator's fix is open; the fixed ones are told in
+docs/validator-fixes.md.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from .core import Known
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
 MITSUBA_VERSION = "3.9.1"
 #: The release commit the annotated tag v3.9.1 points to (``git rev-parse v3.9.1^{commit}``;
-#: ``a8c3ffd763c8…``, quoted here before, is the tag object itself).
+#: not ``a8c3ffd763c8…``, the tag object itself).
 MITSUBA_COMMIT = "478e193a183c21723f4a8251afc3ad29a8da4c5e"
 SOURCE_URL = f"https://github.com/mitsuba-renderer/mitsuba3/blob/v{MITSUBA_VERSION}/"
 
@@ -78,22 +79,14 @@ class Finding:
 
 @dataclass(frozen=True)
 class ValidatorIssue:
-    """A failing row traced to the validator itself, not to Mitsuba (stays a fail in the JSON).
-
-    An issue with ``fixed_by`` is history: it no longer explains any row (a row of its cases
-    that fails again is an unexplained fail), and docs/conformance.md lists it with its fix.
-    """
+    """A failing row traced to the validator itself, not to Mitsuba, whose fix in the validator
+    is open (the row stays a fail in the JSON; the table names the issue beside it)."""
 
     key: str
     topic: str
     labels: tuple[str, ...]
     explanation: str         #: what the validator did wrong, with the measurement showing it
-    statuses: tuple[str, ...] = ("fail",)   #: the row statuses it explains (while open)
-    fixed_by: str = ""       #: the commit (subject) and mechanism that fixed it; "" while open
-
-    @property
-    def fixed(self) -> bool:
-        return bool(self.fixed_by)
+    statuses: tuple[str, ...] = ("fail",)   #: the row statuses it explains
 
 
 @dataclass(frozen=True)
@@ -143,8 +136,7 @@ class Catalogue:
 
     def open_issues(self) -> dict[tuple[str, str], ValidatorIssue]:
         """(label, topic) -> the open validator issue explaining that row's fail."""
-        return {(label, v.topic): v for v in self.validator_issues if not v.fixed
-                for label in v.labels}
+        return {(label, v.topic): v for v in self.validator_issues for label in v.labels}
 
     def find(self, label: str):
         for c in self.cases():

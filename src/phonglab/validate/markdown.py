@@ -206,12 +206,13 @@ def _signature(f) -> str:
 
 
 def _validator_section(data: dict, cat: Catalogue) -> list[str]:
-    """Open validator issues whose rows show in this run, then every fixed one (history)."""
+    """Open validator issues whose rows show in this run (docs/validator-fixes.md tells the
+    fixed ones)."""
     shown = {(_label(rep), r["topic"], r["status"]) for rep in data["reports"]
              for r in rep["results"]}
     issues = [(v, [label for label in v.labels
                    if any((label, v.topic, st) in shown for st in v.statuses)])
-              for v in cat.validator_issues if not v.fixed]
+              for v in cat.validator_issues]
     issues = [(v, labels) for v, labels in issues if labels]
     out = []
     if issues:
@@ -221,33 +222,13 @@ def _validator_section(data: dict, cat: Catalogue) -> list[str]:
         for v, labels in issues:
             out += [f"### {v.key}", "", f"*{v.topic}* -- {v.explanation}.", "",
                     f"* cases: {', '.join(f'`{x}`' for x in labels)}", ""]
-    fixed = [v for v in cat.validator_issues if v.fixed]
-    if fixed:
-        out += ["## Validator mistakes found and fixed", "",
-                "Rows of earlier conformance runs that failed (or were skipped) because of the "
-                "validator, not Mitsuba, and what fixed the validator.  A fixed entry explains "
-                "nothing: a row of its cases that fails again is reported as an unexplained "
-                "fail above.  *Rows now* are this run's statuses of the entry's rows.", ""]
-        for v in fixed:
-            now = {}
-            for rep in data["reports"]:
-                if _label(rep) in v.labels:
-                    for r in rep["results"]:
-                        if r["topic"] == v.topic:
-                            now[r["status"]] = now.get(r["status"], 0) + 1
-            rows_now = ", ".join(f"{n} {s}" for s, n in sorted(now.items())) or "not in this run"
-            out += [f"### {v.key} (fixed)", "", f"*{v.topic}* -- {v.explanation}.", "",
-                    f"* fixed by: {v.fixed_by}",
-                    f"* cases: {', '.join(f'`{x}`' for x in v.labels)}",
-                    f"* rows now: {rows_now}"
-                    + (" -- **still failing**" if now.get("fail") else ""), ""]
     return out
 
 
 def render_markdown(data: dict, cat: Catalogue | None = None) -> str:
     """docs/conformance.md from the JSON of ``phonglab validate --all-builtins --json``
     (:func:`phonglab.validate.batch.run_all`: ``{"meta": {...}, "reports": [...]}``);
-    ``cat``: the kind's :class:`~.kinds.Catalogue` (default: the JSON's ``options["kind"]``,
+    ``cat``: the kind's :class:`~.conformance.Catalogue` (default: the JSON's ``options["kind"]``,
     else the BSDFs')."""
     meta = data.get("meta", {})
     options = meta.get("options") or {}

@@ -1,4 +1,4 @@
-"""An author-style Lambert with a plain-float ``kd`` and no PARAMETER_RANGES (#36 item 2).
+"""An author-style Lambert with a plain-float ``kd`` and no PARAMETER_RANGES.
 
 ``author_lambert`` is correct: f = kd/π, albedo kd.  It accepts any kd at load time, so the
 sweep probes kd up to 10⁴, where the albedo is 10⁴: advice (declare a range), not a fail.

@@ -30,7 +30,8 @@ class Problem:
 
     Attributes:
         bsdf: ``"phong"`` or ``"lambert"`` (phonglab's plugins, whose exact values
-            :func:`exact_value` knows), or a Mitsuba built-in (``"diffuse"``; no exact value).
+            :func:`~.exact.exact_value` knows), or a Mitsuba built-in (``"diffuse"``; no
+            exact value).
         diffuse_reflectance: k_d (ρ for ``lambert``/``diffuse``), grey.
         specular_reflectance: k_s (``phong`` only), grey.
         exponent: p (``phong`` only).

@@ -43,7 +43,7 @@ def _delta_part(bsdf, thetas, opts, ctx):
     """(mean, standard error) per cell of weight · 1{delta sample}."""
     n = opts.energy_samples
     wi, _ = lanes.incident(np.column_stack([thetas, np.zeros_like(thetas)]), n)
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["energy"] + 1,
+    s = probe.sample_random(bsdf, wi, len(wi), seed=lanes.STREAMS.int_seed(opts.seed, "energy", 1),
                             ctx=ctx)
     x = np.where(lanes.delta_mask(s.sampled_type), s.weight.mean(axis=1), 0.0)
     x = np.where(np.isfinite(x), x, 0.0).reshape(len(thetas), n)
@@ -82,7 +82,7 @@ def energy(bsdf, opts, m_tests: int) -> list[Row]:
     narrow = np.zeros(len(thetas), bool)
     if not only_delta:
         cells = np.column_stack([thetas, np.zeros_like(thetas)])
-        layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["energy"],
+        layout = lobes.layout(bsdf, cells, lanes.STREAMS.int_seed(opts.seed, "energy"),
                               samples=opts.energy_layout_samples)
 
         def albedo(wi, wo):

@@ -109,7 +109,7 @@ def eval_pdf(bsdf, opts) -> list[Row]:
     # the lanes below the surface come after the upper ones: their random wo from a stream
     # of their own, so the upper lanes are those of every earlier run
     wi = whole_sphere(wi)
-    wo = np.concatenate([wo, lanes.sphere(np.random.default_rng([opts.seed, 12, 1]),
+    wo = np.concatenate([wo, lanes.sphere(lanes.rng(opts.seed, "eval_pdf", 1),
                                           len(wi) - len(wo))])
     ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
     ev2, pd2 = probe.eval_pdf(bsdf, wi, wo)
@@ -135,7 +135,7 @@ def _samples(bsdf, opts):
     u1, u2 = r.random(len(wi)), r.random((len(wi), 2))
     n_up = len(wi)
     wi = whole_sphere(wi)              # the lanes below: sample values of a stream of their own
-    r_below = np.random.default_rng([opts.seed, 13, 1])
+    r_below = lanes.rng(opts.seed, "weight", 1)
     u1 = np.concatenate([u1, r_below.random(len(wi) - n_up)])
     u2 = np.concatenate([u2, r_below.random((len(wi) - n_up, 2))])
     s = probe.sample(bsdf, wi, u1, u2)
@@ -269,7 +269,7 @@ def front_side_row(bsdf, opts) -> Row | None:
     name = "FrontSide only: eval = pdf = 0 and no sample for ω_i below"
     up, _ = lanes.incident(opts.cells(), opts.n_identity // 4)
     wi = up[up[:, 2] > 0] * np.array([1.0, 1.0, -1.0])
-    r = np.random.default_rng([opts.seed, lanes.SEED_OFFSETS["component"], 2])
+    r = lanes.rng(opts.seed, "component", 2)
     wo = lanes.sphere(r, len(wi))
     ev, pd = probe.eval(bsdf, wi, wo), probe.pdf(bsdf, wi, wo)
     s = probe.sample(bsdf, wi, r.random(len(wi)), r.random((len(wi), 2)))
@@ -311,7 +311,7 @@ def component(bsdf, opts) -> list[Row]:
     cell = np.concatenate([cell, cell[:n_up][wi[:n_up, 2] > 0] + len(opts.cells())])
     k_count = bsdf.component_count()
     flags = [int(bsdf.flags(k)) for k in range(k_count)]
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["component"])
+    s = probe.sample_random(bsdf, wi, len(wi), seed=lanes.STREAMS.int_seed(opts.seed, "component"))
     live = np.any(s.weight != 0, axis=1)
     comp, stype = s.sampled_component[live], s.sampled_type[live]
     in_range = (comp >= 0) & (comp < k_count)

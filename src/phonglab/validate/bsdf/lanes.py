@@ -2,8 +2,8 @@
 
 One numpy array per quantity, all cells stacked (cell-major), so that a topic makes one
 :mod:`phonglab.probe` call -- one kernel -- for the whole grid.  Random numbers come from
-``np.random.default_rng`` seeded with the run's seed and a fixed per-topic offset, so every
-topic is reproducible on its own and independent of which other topics run.
+each topic's own stream (:data:`STREAMS`, :mod:`phonglab.validate.seeds`), so every topic is
+reproducible on its own and independent of which other topics run.
 """
 
 from __future__ import annotations
@@ -13,21 +13,18 @@ import numpy as np
 
 from ... import probe
 from ..directions import ONE_MINUS, sphere  # noqa: F401  (the lanes every topic draws)
+from ..seeds import Streams
 
-#: 1 − ε for a float32 sample value: the largest float32 below 1.
-
-#: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
-SEED_OFFSETS = {"finite": 11, "eval_pdf": 12, "weight": 13, "pdf": 13, "chi2": 14, "energy": 15,
-                "reciprocity": 16, "component": 17, "gradient": 18, "cost": 19,
-                "normalization": 20, "eval_null_transmission": 21,
-                "eval_diffuse_reflectance": 22,
-                # the polarized topics (:mod:`.polarization`)
-                "mueller": 31, "intensity": 32, "mueller_identities": 33,
-                "mueller_reciprocity": 34}
-
-
-def rng(seed: int, topic: str) -> np.random.Generator:
-    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
+#: The BSDF topics' random streams (``weight`` and ``pdf`` check the same samples, drawn from
+#: ``weight``'s).
+STREAMS = Streams("bsdf", {
+    "finite": 11, "eval_pdf": 12, "weight": 13, "chi2": 14, "energy": 15, "reciprocity": 16,
+    "component": 17, "gradient": 18, "cost": 19, "normalization": 20,
+    "eval_null_transmission": 21, "eval_diffuse_reflectance": 22,
+    # the polarized topics (:mod:`.polarization`)
+    "mueller": 23, "intensity": 24, "mueller_identities": 25, "mueller_reciprocity": 26})
+#: ``rng(seed, topic)``: the generator of a topic's stream.
+rng = STREAMS.rng
 
 
 def exact(v: np.ndarray) -> np.ndarray:

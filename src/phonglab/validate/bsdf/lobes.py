@@ -26,10 +26,10 @@ Only the panels depend on the samples: the value is Σ_k w_k g(ω_k), independen
 Lobes that ``sample`` rarely picks (``layout(components=True, extra=...)``, the
 ``normalization`` topic).  The mixture's most probable samples find the lobe that dominates
 it, not a narrow one it picks with probability 10⁻⁴: a normalized Blinn-Phong lobe of
-exponent 2000 at w_s = 2e-4 beside a Lambertian one (tests/authors/narrow_broad_mixture.py,
-issue #55) had ~0.4 of the 2048 placing samples, the rule was centred on the Lambertian lobe
-(width 0.3 rad), and at cos θ_i ≤ 0.15 the narrow lobe fell between the nodes of all three
-rules: ∫pdf 0.99980 = 1 − w_s with |Q16 − Q8| = 3e-7 against 1 counted.  So each non-delta
+exponent 2000 at w_s = 2e-4 beside a Lambertian one (tests/authors/narrow_broad_mixture.py)
+has ~0.4 of the 2048 placing samples, a rule placed from them is centred on the Lambertian
+lobe (width 0.3 rad), and at cos θ_i ≤ 0.15 the narrow lobe falls between the nodes of all
+three rules: ∫pdf 0.99980 = 1 − w_s with |Q16 − Q8| = 3e-7 against 1 counted.  So each non-delta
 component is also sampled alone (``ctx.component = k``, :func:`_component_lobes`), and the
 caller's own samples are grouped by (sampled_component, sampled_type) (:func:`group_lobes`,
 for a plugin that ignores ``ctx.component``; a group needs :data:`MIN_GROUP` samples in a
@@ -39,7 +39,7 @@ one that its panels do not already resolve (:func:`arrange`;
 :func:`phonglab.physics.quadrature.lobe_quadrature`'s ``refine``): every lobe has panels
 graded to its own width, so the coarser rules resolve it too and their differences measure
 convergence, not a lobe all of them miss.  A plugin that neither honours ``ctx.component``
-nor labels its lobes' samples gives one group: its placement is the mixture's, as before.
+nor labels its lobes' samples gives one group: its placement is the mixture's alone.
 
 Error.  :func:`integrate` returns Q(n) per cell; ``energy`` estimates the error as
 |Q(n) − Q(n/2)| (Gauss-Legendre converges fast, so Q(n) is far closer than that).

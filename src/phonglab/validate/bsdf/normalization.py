@@ -20,7 +20,7 @@ returns weight 0 where eval is not 0 still fails: those samples are not counted.
 Why a topic of its own.  A pdf scaled by a constant c ≠ 1 everywhere, with ``sample`` exact
 and weight = eval / pdf (so the ``weight`` and ``pdf`` identities hold, and every render is
 darker by 1/c), is seen by χ² only through its normalization, where at 10⁵–10⁶ samples it has
-no power for c = 1.01 (issue #26).  Here Q = c·P against P: a deterministic quadrature and a
+no power for c = 1.01.  Here Q = c·P against P: a deterministic quadrature and a
 count, which see 1 % at once.
 
 Estimators.  Q by :mod:`.lobes` (``lobe_quadrature`` centred on the sampled lobe, the same rule
@@ -41,7 +41,7 @@ float32 spacings of ω wide (below :data:`.lobes.QUANTISED`) is the mean of
 (:func:`.lobes.integrate_rounded`, as in ``energy``).
 Where a BSDF has several lobes, each is placed from samples of its own (each component
 sampled alone, and the counted samples grouped by sampled_component and sampled_type) and the
-rule, centred on the narrowest, is refined towards the others (:mod:`.lobes`, issue #55): a
+rule, centred on the narrowest, is refined towards the others (:mod:`.lobes`): a
 lobe the mixture picks with probability 10⁻⁴ is integrated as one it picks half the time.
 Measured on tests/authors/narrow_broad_mixture.py (normalized Blinn-Phong, p = 2000, beside
 Lambert, w_s = 2.0e-4: ``specular_reflectance`` = 1e-4), at cos θ_i = 0.15, 0.05, 0.01,
@@ -49,8 +49,8 @@ Lambert, w_s = 2.0e-4: ``specular_reflectance`` = 1e-4), at cos θ_i = 0.15, 0.0
 lobe by lobe, (1 − w_s) + w_s·P_s with P_s from 8.4·10⁶ float64 half-vector samples,
 σ ≤ 3e-8), the plugin's float32 pdf to the same within 6e-8 (Monte Carlo of pdf32 − pdf64
 against the float64 mixture density, σ ≤ 1e-7), 2¹⁹ samples count 1, 0.9999657, 0.9999294,
-0.9998798; the rule placed on the mixture's samples alone read (φ_i = 2.1) 0.99983, 0.99980,
-0.99980, 0.99980 with |Q16 − Q8| ≤ 3e-5 (a fail: the quadrature was wrong, not the pdf), the rule
+0.9998798; the rule placed on the mixture's samples alone reads (φ_i = 2.1) 0.99983, 0.99980,
+0.99980, 0.99980 with |Q16 − Q8| ≤ 3e-5 (a fail: the quadrature is wrong, not the pdf), the rule
 placed per lobe reads 0.9999999, 0.9999736, 0.9999177, 0.9999001.
 P by the fraction k/N of N counted samples (:attr:`~.config.Options.normalization_samples`).
 Its counting error is binomial, sqrt(p(1 − p)/N); p is the Agresti–Coull centre
@@ -130,7 +130,7 @@ def normalization(bsdf, opts, m_tests: int) -> list[Row]:
     cells = opts.cells(opts.energy_cos)
     n = opts.normalization_samples
     k, n_f, blacks, groups = _counts(bsdf, cells, n, opts)
-    layout = lobes.layout(bsdf, cells, opts.seed + 1000 * lanes.SEED_OFFSETS["normalization"],
+    layout = lobes.layout(bsdf, cells, lanes.STREAMS.int_seed(opts.seed, "normalization"),
                           whole_sphere=True, components=True, extra=groups)
 
     def density(wi, wo):

@@ -23,10 +23,10 @@ weight 0 at a direction drawn inside the support where the BSDF is black
 (:func:`.lanes.black_at_wo`: the ``normalization`` topic's rule, the same per sample), not a
 delta lobe's (``pdf`` has no density for it: a mixture such as ``plastic`` is histogrammed on
 its non-delta part only, whose ∫pdf is then < 1 in step with the histogram), a finite
-direction.  Without the black-at-wo part, plastic at int_ior 1 (η = 0.99972 < 1) failed:
+direction.  Without the black-at-wo part, plastic at int_ior 1 (η = 0.99972 < 1) would fail:
 its diffuse samples beyond the critical angle (cos θ_o < 0.0236, 0.056 % of them) have eval
 0 -- the coating reflects that light back in -- so their weight is 0, and the histogram's
-first row was empty against pdf's cos θ_o share there (p = 3.5e-13 at default sizes).
+first row would be empty against pdf's cos θ_o share there (p = 3.5e-13 at default sizes).
 
 A cell is rejected, as ``mi.chi2`` rejects it, when samples fall in a bin of expected count
 0, a bin's expected count is negative, ∫pdf > 1.1, or dof < 1 -- except a cell whose
@@ -258,7 +258,7 @@ def delta_directions(bsdf, opts) -> Row:
     """Delta-only BSDF: every sampled wo obeys reflection or Snell's law with bs.eta."""
     wi, _ = lanes.incident(opts.cells(), opts.n_identity)
     wi = wi[wi[:, 2] > 0]
-    s = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 1000 * lanes.SEED_OFFSETS["chi2"])
+    s = probe.sample_random(bsdf, wi, len(wi), seed=lanes.STREAMS.int_seed(opts.seed, "chi2"))
     live = lanes.some(s.weight != 0) & lanes.every(np.isfinite(s.wo))
     wi, wo, eta = wi[live], s.wo[live], s.eta[live]
     reflect = wo[:, 2] * wi[:, 2] > 0

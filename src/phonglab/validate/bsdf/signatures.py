@@ -345,8 +345,8 @@ class Chi2Excess(Region):
 
 
 def bin_mask(bins: str, shape) -> np.ndarray:
-    """The bins of a (−cos θ_o, φ_o) histogram of ``shape`` (:class:`.sphere_bins.Grid`) in
-    the named set:
+    """The bins of a (−cos θ_o, φ_o) histogram of ``shape``
+    (:class:`phonglab.validate.sphere_bins.Grid`) in the named set:
     ``below_horizon`` every row with some wo below the horizon, ``normal_plane`` the φ_o
     columns that hold 0 or ±π (wo.y = 0; a value on a column edge marks both columns)."""
     rows, cols = shape

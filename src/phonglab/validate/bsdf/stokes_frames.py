@@ -111,7 +111,7 @@ def isotropy(bsdf, opts, n_eval: int) -> Row:
     if lanes.delta_only(bsdf):
         return Row("mueller_identities", ISOTROPY, None, None, None, None, "skipped",
                    "every lobe is a delta: eval is 0, nothing to compare", {NOT_APPLICABLE: True})
-    r = np.random.default_rng([opts.seed, lanes.SEED_OFFSETS["mueller_identities"], 1])
+    r = lanes.rng(opts.seed, "mueller_identities", 1)
     wi, _ = lanes.incident(opts.cells(), n_eval)
     wo = lanes.sphere(r, len(wi))
     keep = ((np.hypot(wi[:, 0], wi[:, 1]) >= MIN_SIN) & (np.hypot(wo[:, 0], wo[:, 1]) >= MIN_SIN))

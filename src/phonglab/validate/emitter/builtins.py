@@ -333,70 +333,9 @@ LEFT_OUT: dict[str, str] = {
                        "delta-direction surface emitter (DeltaDirection | Surface) yet",
 }
 
-#: Rows of emitter conformance runs that failed because of the validator.
-VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
-    ValidatorIssue(
-        "chi2-mesh-shading-normal-and-occlusion", "chi2",
-        ("area (obj mesh, vertex normals)",),
-        "the chi2 expectation integrated pdf_direction over the shape with dω = |d·ps.n| "
-        "dA/dist², ps.n being a mesh's interpolated shading normal, and the histogram counted "
-        "samples of surface points hidden behind the shape's near side (with interpolated "
-        "normals the far side of the octahedron faces p: 11.7 % of the samples from 3 "
-        "bounding radii) that the expectation, counting first hits only, leaves out",
-        fixed_by="commit 7eb35bf (emitter/sampling: the Jacobian takes the geometric normal of "
-                 "the ray's own hit; samples whose point is not the first hit from p leave the "
-                 "histogram, their share recorded as 'occluded'); the row still fails, for "
-                 "finding mesh-vertex-normal-solid-angle"),
-    ValidatorIssue(
-        "cost-baseline-mesh", "cost", ("area (obj mesh, face normals)",
-                                       "area (obj mesh, vertex normals)"),
-        "cost timed a surface emitter against `area` on a shape of the same plugin type, named "
-        "from the shape's class (`objmesh`), which is no plugin: the row raised 'Plugin "
-        "\"objmesh\" not found'",
-        fixed_by="commit 7eb35bf (emitter/cost.baseline: a mesh of another loader is timed against "
-                 "area on a cube, itself a mesh)"),
-    ValidatorIssue(
-        "power-env-concentrated-feature", "power", ("sunsky",),
-        "the expected power of an environment was 4π²R² times the mean radiance over uniform "
-        "directions, which hit sunsky's 0.53 deg sun (6.8e-5 sr) about once in 2e5: expected "
-        "20.21 against sample_ray's 53.98; 2e7 directions stratified into the cone of 1.5 deg "
-        "about the sun and the rest give 54.43 (the cone 34.12)",
-        fixed_by="commit 7eb35bf (emitter/power: a cone of PEAK_CONE/pdf_max sr about "
-                 "sample_direction's most probable direction is integrated apart when that "
-                 "density exceeds PEAK_RATIO/4π)"),
-    ValidatorIssue(
-        "chi2-env-feature-between-nodes", "chi2", ("sunsky", "timed_sunsky"),
-        "an environment's chi2 expectation integrated pdf_direction per bin on 12 x 12 nodes "
-        "(48 x 48 in bins whose nodes disagree); sunsky's 0.53 deg sun fell between the nodes "
-        "of its bin, which therefore looked smooth: ∫ pdf = 0.951 over the sphere and "
-        "χ² = 1.5e7 on 1599 degrees of freedom at default sizes (timed_sunsky: 0.971, "
-        "p = 1e-239); --quick sizes passed",
-        fixed_by="commit 4e48694 (emitter/sampling: a bin where a sample saw a density above "
-                 "all its nodes is refined, and refined bins are subdivided until two levels "
-                 "agree to 0.02 of the bin's Poisson error: ∫ pdf = 1.002, p = 0.47 and 0.10)"),
-    ValidatorIssue(
-        "weight-sun-edge-conditioning", "weight", ("timed_sunsky",),
-        "commit 4e48694 took 7 of 8188 lanes of timed_sunsky, where weight·ds.pdf and "
-        "eval_direction(ds) differ by the sun's whole radiance (3819 against 0.217), for a "
-        "conditioning problem of the check and gave 'weight x ds.pdf = eval_direction(ds)' the "
-        "radiance's sensitivity to an 8u move of the ray; that allowance, and the ones of the "
-        "pdf and traced-point rows, absorbed every sun-rim lane of timed_sunsky (the rows read "
-        "0.999) and some of sunsky (equator).  Both sides are evaluated at the same ds: the "
-        "lanes are Mitsuba's (sample_direction counts a sun hit without testing it, "
-        "sunsky.h:430, pdf_direction and eval test it, sunsky.h:946), findings "
-        "sunsky-sun-rim-pdf and -weight",
-        fixed_by="#52 (emitter/identities: the eval_direction(ds) row has the round-off "
-                 "tolerance alone again, and no sensitivity allowance covers a lane on the sun's "
-                 "rim, sun_rim; timed_sunsky's sun is read back from its sample_direction, "
-                 "setup.sun_cone, so the findings' signature reaches its lanes)"),
-    ValidatorIssue(
-        "gradient-read-only-parameter", "gradient", ("sunsky",),
-        "the gradient topic took every parameter not flagged NonDifferentiable, including "
-        "ReadOnly ones: sunsky computed from a date and place traverses sun_direction as "
-        "ReadOnly (src/emitters/sunsky.cpp:291), and setting it raised 'sun_direction is a "
-        "Read-Only parameter!' (a failing 'ran to completion' row)",
-        fixed_by="commit 7eb35bf (emitter/gradient: ReadOnly parameters are left out too)"),
-)
+#: Rows of the emitter table that fail because of the validator while its fix is open (the
+#: fixed ones are told in docs/validator-fixes.md).
+VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
     "emitter", "emitters", "emitter", catalogue_cases, TOPICS, "validate_emitter",

@@ -10,15 +10,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
+from ..seeds import Streams
 
-#: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
-SEED_OFFSETS = {"finite": 31, "weight": 32, "pdf": 33, "chi2": 34, "power": 35, "gradient": 36,
-                "cost": 37, "refs": 38}
-
-
-def rng(seed: int, topic: str) -> np.random.Generator:
-    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
+#: The emitter topics' random streams (:mod:`phonglab.validate.seeds`; ``refs``: the reference
+#: points every topic shares).
+STREAMS = Streams("emitter", {"finite": 31, "weight": 32, "pdf": 33, "chi2": 34, "power": 35,
+                              "gradient": 36, "cost": 37, "refs": 38})
+#: ``rng(seed, topic)``: the generator of a topic's stream.
+rng = STREAMS.rng
 
 
 @dataclass

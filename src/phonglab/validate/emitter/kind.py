@@ -1,6 +1,6 @@
 """The parts of the emitter kind (:data:`phonglab.validate.emitter.KIND`): its statistical tests,
 its runners, its loading (an area emitter attached to a shape, an environment placed in a scene:
-:mod:`.setup`) and :func:`validate_emitter`.
+:mod:`.setup`); the package face :mod:`phonglab.validate` gives it ``validate_emitter``.
 
 The statistical tests of an emitter are its χ² reference points (non-delta emitters) and the
 Monte Carlo estimate of its power from ``sample_ray``; the other topics are identities at

@@ -51,6 +51,7 @@ from ... import probe, stats
 from . import lanes as lanes_
 from .identities import bounded, lane_inputs
 from ..directions import basis
+from .config import STREAMS
 from .setup import Setup, float_, interaction, point2, ref_groups
 from .topics import Row
 
@@ -296,10 +297,12 @@ def chi2(setup: Setup, opts, m_tests: int) -> list[Row]:
         return [delta_directions(setup, opts)]
     level = stats.sidak(stats.ALPHA, m_tests)
     groups = [g for g in ref_groups(setup, 1, opts.seed) if g.chi2]
-    dark = not emits(setup, [g.p[0] for g in groups], [opts.seed, 35])
+    # whether it emits at all: the power topic's lanes
+    dark = not emits(setup, [g.p[0] for g in groups], STREAMS.key(opts.seed, "power"))
     records = []
     for k, g in enumerate(groups):
-        rec = chi2_at(setup, g.p[0], opts, level, seed=[opts.seed, 34, k], dark=dark)
+        rec = chi2_at(setup, g.p[0], opts, level, seed=STREAMS.key(opts.seed, "chi2", k),
+                      dark=dark)
         rec.update(group=g.label, where=g.where)
         sph = setup.sphere
         if sph is not None:

@@ -183,32 +183,9 @@ LEFT_OUT: dict[str, str] = {
                         "the validator's scenes hold surfaces and emitters it does not shade",
 }
 
-#: Rows of integrator conformance runs that failed because of the validator.
-VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = (
-    ValidatorIssue(
-        "settable-depth-refused", "finite", ("whitted/radiance",),
-        "an integrator that takes max_depth but refuses a value (whitted: 1..10) raised out of "
-        "validate_integrator while it counted the statistical tests (Target.at_depth loaded "
-        "it at the glass scene's D = 64): the whole case was one failing row",
-        fixed_by="commit 4481d54 (integrator/setup.Target.at_depth: a refused depth is a skipped "
-                 "scene that quotes the refusal)"),
-    ValidatorIssue(
-        "gradient-forward-mode-only", "gradient", ("prbvolpath",),
-        "the gradient topic differentiated with forward mode only; prbvolpath implements "
-        "reverse mode alone and raises 'PRBVolpathIntegrator doesn't support forward-mode "
-        "differentiation!' (src/python/python/ad/integrators/prbvolpath.py:108-110), which "
-        "the topic reported as a failing 'ran to completion' row",
-        fixed_by="commit 4481d54 (integrator/gradient: an integrator that refuses forward mode "
-                 "is differentiated in reverse mode, the gradient's components summed; the row "
-                 "says which mode)"),
-    ValidatorIssue(
-        "depth-integrator-not-radiance", "bias", ("depth",),
-        "`depth` returns the distance to the first hit in every channel with aov_names() "
-        "empty, so the validator held it to radiance: the plane read 2.075 against 0.4249 and "
-        "both convergence slopes failed",
-        fixed_by="commit 4481d54 (integrator/setup.NOT_RADIANCE: DepthIntegrator is checked for "
-                 "finite output only, as an AOV integrator)"),
-)
+#: Rows of the integrator table that fail because of the validator while its fix is open (the
+#: fixed ones are told in docs/validator-fixes.md).
+VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
     "integrator", "integrators", "integrator", catalogue_cases, TOPICS, "validate_integrator",

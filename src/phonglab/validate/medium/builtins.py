@@ -219,7 +219,8 @@ def catalogue_cases() -> list[KindCase]:
 #: Mitsuba 3.9.1 medium plugins (src/media/*.cpp) not validated by the table, and why.
 LEFT_OUT: dict[str, str] = {}
 
-#: Rows of medium conformance runs that failed because of the validator.
+#: Rows of the medium table that fail because of the validator while its fix is open (the
+#: fixed ones are told in docs/validator-fixes.md).
 VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(

@@ -9,16 +9,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
+from ..seeds import Streams
 
-#: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
-SEED_OFFSETS = {"probe": 51, "finite": 52, "majorant": 53, "albedo": 54, "transmittance": 55,
-                "bounds": 56, "flags": 57, "overrides": 58, "phase": 59, "cost": 60,
-                "gradient": 61}
-
-
-def rng(seed: int, topic: str) -> np.random.Generator:
-    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
+#: The medium topics' random streams (:mod:`phonglab.validate.seeds`; ``probe``: the rays every
+#: topic shares).
+STREAMS = Streams("medium", {"probe": 51, "finite": 52, "majorant": 53, "albedo": 54,
+                             "transmittance": 55, "bounds": 56, "flags": 57, "overrides": 58,
+                             "phase": 59, "cost": 60,
+                             "gradient": 61})
+#: ``rng(seed, topic)``: the generator of a topic's stream.
+rng = STREAMS.rng
 
 
 @dataclass

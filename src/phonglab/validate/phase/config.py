@@ -9,15 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
+from ..seeds import Streams
 
-#: Per-topic offsets of the seed (fixed: changing one topic never changes another's numbers).
-SEED_OFFSETS = {"finite": 41, "weight": 42, "pdf": 43, "chi2": 44, "normalization": 45,
-                "reciprocity": 46, "gradient": 47, "cost": 48}
-
-
-def rng(seed: int, topic: str) -> np.random.Generator:
-    return np.random.default_rng([seed, SEED_OFFSETS[topic]])
+#: The phase-function topics' random streams (:mod:`phonglab.validate.seeds`).
+STREAMS = Streams("phase", {"finite": 41, "weight": 42, "pdf": 43, "chi2": 44,
+                            "normalization": 45, "reciprocity": 46, "gradient": 47, "cost": 48})
+#: ``rng(seed, topic)``: the generator of a topic's stream.
+rng = STREAMS.rng
 
 
 @dataclass
