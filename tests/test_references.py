@@ -35,11 +35,7 @@ BARE = re.compile(r"(?<![\w/.`~<-])(phonglab(?:\.\w+)+)(?![\w/`>-])")
 
 #: References in modules another change is reworking (planner/, validate/gradient.py), fixed
 #: there: each must still fail to resolve, so that its line goes with the fix.
-ELSEWHERE = {
-    ("phonglab.planner.ladder", "DepthLadder"),
-    ("phonglab.planner.pilot", ".ladder.DepthLadder"),
-    ("phonglab.validate.gradient", ".setup.ref_groups"),
-}
+ELSEWHERE: set = set()
 
 
 @dataclass(frozen=True)

@@ -7,15 +7,15 @@ body: "Direct emission", "Emitter sampling", then BSDF sampling and Russian roul
 estimate at depth m is therefore a *prefix sum* of the contributions of one full-depth path,
 provided the path's random decisions do not depend on m — which holds: the emitter and BSDF
 samples and the roulette draw of segment k use the same sampler dimensions whatever m is, and
-truncating at m only drops the terms after it.  :func:`ladder` (class ``DepthLadder``) traces the full-depth path
-once (Russian roulette from ``rr_depth``, as ``path``) and returns, besides the full image, one
-AOV group per depth d of :attr:`DepthLadder.depths`: the sum of the terms a depth-d render would
+truncating at m only drops the terms after it.  :func:`ladder` (class ``DepthLadder``) traces
+the full-depth path once (Russian roulette from ``rr_depth``, as ``path``) and returns, besides the full image, one
+AOV group per depth d of ``DepthLadder.depths``: the sum of the terms a depth-d render would
 keep.  One render (one JIT kernel, one set of samples) thus replaces one render per depth of the
 planner's depth search (:mod:`.pilot`), and the difference D = full − depth-d is formed sample by
 sample, exactly as two renders with the same seeds would give it.
 
 The ladder also counts, over every sample it traces, the vertices its full-depth path found
-(:attr:`DepthLadder.lengths`, one ``dr.scatter_reduce`` per sample into a small histogram):
+(``DepthLadder.lengths``, one ``dr.scatter_reduce`` per sample into a small histogram):
 :func:`work` turns them into the mean rays a ``path`` render casts per sample at any depth,
 which the pilot uses to decide whether a shallower depth can save more than its search costs.
 
@@ -45,7 +45,7 @@ def _mis(pdf_a, pdf_b):
     return dr.select(dr.isfinite(w), w, 0.0)
 
 
-#: Bins of :attr:`DepthLadder.lengths` (vertices 0 .. LENGTH_BINS - 2, then "more").
+#: Bins of ``DepthLadder.lengths`` (vertices 0 .. LENGTH_BINS - 2, then "more").
 LENGTH_BINS = 66
 
 #: variant -> the DepthLadder class of that variant (mi.SamplingIntegrator is per variant)
@@ -53,7 +53,7 @@ _CLASSES: dict[str, type] = {}
 
 
 def ladder_class() -> type:
-    """The :class:`DepthLadder` integrator class of the active variant (defined on first use)."""
+    """The ``DepthLadder`` integrator class of the active variant (defined on first use)."""
     if mi.variant() not in _CLASSES:
         _CLASSES[mi.variant()] = _define()
     return _CLASSES[mi.variant()]
@@ -144,15 +144,15 @@ def _define() -> type:
 
 
 def applies(info) -> bool:
-    """True when :class:`DepthLadder` can stand for the scene's ``path`` integrator in the
-    active variant: RGB or mono (AOVs are not converted from spectral samples, and a polarized
+    """True when ``DepthLadder`` (:func:`ladder_class`) can stand for the scene's ``path``
+    integrator in the active variant: RGB or mono (AOVs are not converted from spectral samples, and a polarized
     path would carry Mueller matrices), and emitters not hidden."""
     hide = info.integrator_props.get("hide_emitters", "false").lower() == "true"
     return (mi.is_rgb or mi.is_monochromatic) and not mi.is_polarized and not hide
 
 
 def ladder(depths, info):
-    """A :class:`DepthLadder` for ``depths`` keeping the scene's ``rr_depth``."""
+    """A ``DepthLadder`` (:func:`ladder_class`) for ``depths`` keeping the scene's ``rr_depth``."""
     props = mi.Properties("depth_ladder")
     props["depths"] = ",".join(str(int(d)) for d in depths)
     if "rr_depth" in info.integrator_props:
@@ -162,7 +162,7 @@ def ladder(depths, info):
 
 def work(lengths, depth: int) -> float:
     """Mean ray casts per sample of a ``path`` render at max_depth ``depth`` (-1: unbounded),
-    from a :attr:`DepthLadder.lengths` histogram of full-depth paths: a path that found k
+    from a ``DepthLadder.lengths`` histogram of full-depth paths: a path that found k
     vertices casts k + 1 rays (the last one escapes or is not cast when roulette ends it:
     counting it errs high), at most ``depth`` of them."""
     lengths = np.asarray(lengths, dtype=np.float64)

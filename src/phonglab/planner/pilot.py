@@ -295,7 +295,7 @@ class Pilot:
 
     def _render_ladder(self, depths, seed: int | None = None,
                        **size) -> tuple[np.ndarray, dict[int, np.ndarray]]:
-        """One :class:`.ladder.DepthLadder` render (the pilot's seed unless given): its
+        """One ``DepthLadder`` (:func:`.ladder.ladder_class`) render (the pilot's seed unless given): its
         full-depth pass images and those of every depth in ``depths`` (the same samples, so
         ``full − depth`` is what two renders with the same seeds would give)."""
         integrator = ladder.ladder(depths, self.info)
