@@ -9,9 +9,9 @@ provided the path's random decisions do not depend on m — which holds: the emi
 samples and the roulette draw of segment k use the same sampler dimensions whatever m is, and
 truncating at m only drops the terms after it.  :func:`ladder` (class ``DepthLadder``) traces
 the full-depth path once (Russian roulette from ``rr_depth``, as ``path``) and returns,
-besides the full image, one AOV group per depth d of ``DepthLadder.depths``: the sum of the terms a depth-d render would
-keep.  One render (one JIT kernel, one set of samples) thus replaces one render per depth of the
-planner's depth search (:mod:`.pilot`), and the difference D = full − depth-d is formed sample by
+besides the full image, one AOV group per depth d of ``DepthLadder.depths``: the sum of the
+terms a depth-d render would keep.  One render (one JIT kernel, one set of samples) thus
+replaces one render per depth of the planner's depth search (:mod:`.pilot`), and the difference D = full − depth-d is formed sample by
 sample, exactly as two renders with the same seeds would give it.
 
 The ladder also counts, over every sample it traces, the vertices its full-depth path found
