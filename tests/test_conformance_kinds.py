@@ -171,23 +171,23 @@ def test_kind_options_reach_the_runner(variant_llvm_rgb):
 
 
 def test_refused_depth_is_a_skipped_scene_and_depth_is_not_radiance(variant_llvm_rgb):
-    from phonglab.validate import core, registry
+    from phonglab.validate import loading, registry
     kind = registry.by_name("integrator")
 
-    whitted = core.prepare(kind, {"type": "whitted", "units": "radiance"}).plugin
+    whitted = loading.prepare(kind, {"type": "whitted", "units": "radiance"}).plugin
     assert whitted.depth == "settable"
     integ, why = whitted.at_depth(64)            # whitted takes max_depth in 1..10
     assert integ is None and "refuses max_depth 64" in why
     assert whitted.at_depth(2)[0] is not None
-    assert core.prepare(kind, "depth").plugin.aov
+    assert loading.prepare(kind, "depth").plugin.aov
 
 
 def test_mesh_cost_baseline(variant_llvm_rgb):
     from phonglab.validate.emitter import builtins as eb
     from phonglab.validate.emitter.cost import baseline
-    from phonglab.validate import core, registry
+    from phonglab.validate import loading, registry
 
-    setup = core.prepare(registry.by_name("emitter"), {"type": "area"},
+    setup = loading.prepare(registry.by_name("emitter"), {"type": "area"},
                          params={"shape": {"type": "obj", "filename": eb.mesh_file()}}).plugin
     _, name, _ = baseline(setup)
     assert name == "area on a cube"

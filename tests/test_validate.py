@@ -121,7 +121,7 @@ def test_runner_is_kind_independent(variant_llvm_rgb):
     def runners(plugin, opts, topics, m):
         return {"cost": lambda: [Row("cost", "c", 1.0, 1.0, None, None, "pass", "")],
                 "finite": boom}
-    kind = core.Kind(name="toy", word="toy", class_name="Object", register="register_toy",
+    kind = core.Kind(name="toy", word="toy", plural="toys", class_name="Object", register="register_toy",
                      topics=("finite", "cost"), options=lambda quick, seed, topics: None,
                      statistical_tests=lambda plugin, opts, topics: 3, runners=runners)
     report = core.run(kind, Loaded(object(), "toy-1", None), topics=("finite", "cost"),

@@ -45,7 +45,7 @@ def test_every_face_iterates_the_one_kinds_sequence():
     for k in registry.KINDS:
         assert callable(getattr(face, k.function)) and k.function in face.__all__
         assert callable(getattr(testing, k.assert_helper)) and k.assert_helper in testing.__all__
-        assert k.impl.startswith("phonglab.validate.") and k.tag and k.object_type
+        assert k.module().__name__ == f"phonglab.validate.{k.name}.kind" and k.tag and k.object_type
     assert registry.names() == tuple(names)
     for k in registry.KINDS:
         assert registry.catalogue(k.name).kind == k.name

@@ -342,7 +342,7 @@ def run(args) -> int:
     if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
-    from ..validate.core import topic_timeout   # lazy: Mitsuba loads only for a run
+    from ..validate.timeout import topic_timeout   # lazy: Mitsuba loads only for a run
 
     if args.all_builtins:
         with topic_timeout(args.timeout):

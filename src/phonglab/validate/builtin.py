@@ -7,7 +7,7 @@ as a dict, in an XML file, as a material of a scene, or as the child of a plugin
 * :func:`identify`: which built-in the loaded object is and its load-time parameters (the
   kind's ``identify`` part, :mod:`phonglab.validate.bsdf.identify`: its C++ class and what
   it was loaded from), so a type name, a dict, an XML file and a scene's object carrying the
-  same built-in get the same findings by the same rule (:func:`phonglab.validate.core.mark_known`:
+  same built-in get the same findings by the same rule (:func:`phonglab.validate.known.mark_known`:
   a lane outside every signature stays a fail; ``at=`` conditions held against its parameters,
   those the XML gives included; ``given=`` settings against what it loaded);
 * :func:`mark_inherited`: a plugin whose result flows through built-in children (a Python
@@ -38,6 +38,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..verdict import Row
+from .known import known_entries
 
 #: ``known`` value asking for the loaded built-in's findings and its children's (module
 #: docstring).
@@ -132,9 +133,7 @@ def mark_inherited(rows: list[Row], kids: list[Child], judge: Callable,
     """Mark the failing ``rows`` inherited from ``kids`` (module docstring), in place; one
     record per inherited row.  ``judge(child, topic)``: the child's own rows on ``topic``;
     ``covered(row, causes)``: (all lanes covered?, the causes used) as
-    :func:`phonglab.validate.core.mark_known` decides it."""
-    from .core import known_entries
-
+    :func:`phonglab.validate.known.mark_known` decides it."""
     records = []
     for r in rows:
         if r.status != "fail":

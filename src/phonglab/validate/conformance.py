@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 from .. import runtime
-from .core import Known
+from .known import Known
 
 
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
@@ -72,7 +72,7 @@ class Finding:
         return f"{self.source}: {self.cause}"
 
     def known(self) -> Known:
-        """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
+        """The case's :class:`~phonglab.validate.known.Known`: the cause with its signature."""
         return Known(self.known_text(), self.rows, self.region, self.key, self.at)
 
 

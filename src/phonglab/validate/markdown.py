@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from ..verdict import point_label
 from .conformance import MITSUBA_COMMIT, MITSUBA_VERSION, SOURCE_URL, Catalogue
-from .core import at_text
+from .known import at_text
 from .registry import catalogue as catalogue_of
 
 #: Row details that only feed the HTML report's plots (lobe slices, chi2 histograms).

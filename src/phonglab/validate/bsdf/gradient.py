@@ -37,7 +37,7 @@ import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ... import dispatch, probe
+from ... import probe
 from . import lanes
 from ..gradient import unconverged
 from ..roundoff import EPS32
@@ -80,7 +80,7 @@ def _ad(bsdf, params, key, v, wi, wo, c) -> np.ndarray:
     params.update()
     try:
         dr.set_grad(x, v)
-        out = dispatch.bsdf(bsdf).eval(probe.context(), probe.interaction(wi), probe.to_vectors(wo))
+        out = probe.view(bsdf).eval(probe.context(), probe.interaction(wi), probe.to_vectors(wo))
         dr.forward_to(out)
         g = probe.to_numpy(dr.grad(out), len(wi))
     finally:

@@ -24,7 +24,7 @@ import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ... import dispatch, probe
+from ... import probe
 from ..gradient import verdict
 from . import lanes
 from .config import rng
@@ -35,7 +35,7 @@ class _Fixed:
     """The emitter verdict's view of a phase function at fixed directions wo."""
 
     def __init__(self, phase):
-        self.phase = dispatch.phase(phase)
+        self.phase = lanes.view(phase)
 
     def sample_direction(self, it, wo):
         return wo, self.eval_direction(it, wo)
