@@ -14,8 +14,8 @@ import pytest
 from phonglab.cli import main
 from phonglab.settings import ParameterError, parse_sets
 from phonglab.testing import assert_bsdf_valid
-from phonglab.validate import TOPICS, validate_bsdf
-from phonglab.validate.bsdf.topics import Row
+from phonglab.validate import validate_bsdf
+from phonglab.validate.bsdf.topics import TOPICS, Row
 from phonglab.validate.gradient import unconverged
 from phonglab.validate.inputs import ValidateError
 from phonglab.validate.kind import topic_page, topic_url
@@ -191,7 +191,7 @@ def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys
     (["validate", "missing.xml"], "does not exist"),
     (["validate"], "name the plugin to validate"),
     (["validate", "diffuse", "--report", "out.txt"], "must end in .html"),
-    (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no BSDF"),
+    (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no plugin"),
 ])
 def test_cli_bad_input_exit_2(variant_llvm_rgb, capsys, argv, message):
     assert main(argv) == 2

@@ -48,7 +48,7 @@ def test_every_face_iterates_the_one_kinds_sequence():
         assert k.module().__name__ == f"phonglab.validate.{k.name}.kind" and k.tag and k.object_type
     assert registry.names() == tuple(names)
     for k in registry.KINDS:
-        assert registry.catalogue(k.name).kind == k.name
+        assert registry.catalogue(k.name).kind is k
     assert set(registry.every_topic()) == {t for k in registry.KINDS for t in k.topics}
 
 

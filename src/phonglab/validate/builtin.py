@@ -185,13 +185,14 @@ def mark_inherited(rows: list[Row], kids: list[Child], judge: Callable,
     return records
 
 
-def scene_material(kind, path, ident: str):
-    """The BSDF with ``id="ident"`` of the scene file ``path`` as the scene loads it (the
-    variant set, the plugin files run): a :class:`~phonglab.settings.Loaded` whose ``origin``
-    names the scene and the id (its XML element gives the load-time parameters its findings'
-    ``at=`` conditions hold against).  Found on the scene's shapes (``shape.bsdf()``) and
-    inside them (the kind's ``children``: a material nested in a two-sided shell); a missing
-    id is a :class:`~phonglab.validate.inputs.ValidateError` listing the ids there are."""
+def scene_object(kind, path, ident: str):
+    """The plugin of ``kind`` with ``id="ident"`` in the scene file ``path`` as the scene loads
+    it (the variant set, the plugin files run): a :class:`~phonglab.settings.Loaded` whose
+    ``origin`` names the scene and the id (its XML element gives the load-time parameters its
+    findings' ``at=`` conditions hold against).  Found among those the kind's ``in_scene`` part
+    lists (a scene's shapes' materials) and inside them (the kind's ``children``: a material
+    nested in a two-sided shell); a missing id is a
+    :class:`~phonglab.validate.inputs.ValidateError` listing the ids there are."""
     from pathlib import Path
 
     from ..engine.scenes import load_scene
@@ -205,16 +206,13 @@ def scene_material(kind, path, ident: str):
         raise ValidateError(str(exc)) from exc
     nested = kind.part("children") or (lambda plugin: [])
     found: dict = {}
-    for shape in scene.shapes():
-        top = shape.bsdf()
-        if top is None:
-            continue
+    for top in kind.part("in_scene")(scene):
         for obj in [top] + [c for _, c in nested(top)]:
             found.setdefault(obj.id(), obj)
     if ident not in found:
         named = sorted(i for i in found if i and not i.startswith("_"))
         raise ValidateError(f"{path} has no {kind.word} with id {ident!r} on its shapes; "
-                            + (f"its {kind.word}s with an id: {', '.join(named)}" if named
+                            + (f"its {kind.plural} with an id: {', '.join(named)}" if named
                                else f"give a <{kind.tag}> of it an id=\"...\""))
     plugin = found[ident]
     name = (identify(kind, plugin) or Identity(type(plugin).__name__, {})).type

@@ -11,7 +11,8 @@ raised before any topic runs:
    (:func:`~phonglab.validate.loading.load_plugins`);
 3. the kind: given, or detected from the target and what the files registered
    (:func:`phonglab.validate.registry.detect`), and every file registered a plugin of it; a
-   material of a scene (``scene_bsdf``: a ``<bsdf id=...>`` of the scene file ``spec``) is a BSDF;
+   plugin of a scene (``scene_id``: the id of an object of ``kind`` in the scene file ``spec``,
+   a material) is of the kind given;
 4. the topics checked against the kind's;
 5. the plugin loaded once (:func:`~phonglab.validate.loading.load`: its ``traverse`` and the returns
    of its Python methods checked);
@@ -32,18 +33,18 @@ import time
 from ..registration import PLUGINS
 from ..verdict import Report
 from . import core, loading, registry, sweep as sweep_
-from .builtin import BUILTIN
-from .kind import Kind
+from .builtin import BUILTIN, scene_object
+from .kind import Kind, ValidateError
 
 __all__ = ["validate"]
 
 
 def validate(spec, *, kind: Kind | str | None = None, variant=None, params=None, plugins=(),
              topics=None, seed=0, quick=False, known=None, sweep=True, runner=None,
-             progress=None, family=1, sizes=None, scene_bsdf: str | None = None) -> Report:
+             progress=None, family=1, sizes=None, scene_id: str | None = None) -> Report:
     """Validate ``spec`` (a type name, a dict, an XML file, a loaded object; with
-    ``scene_bsdf``, the scene file holding the material of that id) as its ``kind`` (a Kind, a
-    kind's name, or None: detected); the steps are the module docstring's.  ``known``: topic ->
+    ``scene_id``, the scene file holding the plugin of ``kind`` with that id) as its ``kind``
+    (a Kind, a kind's name, or None: detected); the steps are the module docstring's.  ``known``: topic ->
     documented causes, or :data:`phonglab.validate.builtin.BUILTIN`: the documented findings
     of the Mitsuba built-in that is loaded (and those a wrapper inherits from its built-in
     children; for a kind that cannot identify a loaded built-in, those of its type name)."""
@@ -52,11 +53,12 @@ def validate(spec, *, kind: Kind | str | None = None, variant=None, params=None,
         kind = registry.by_name(kind)
     loading.start(variant, spec, kind)
     registered = loading.load_plugins(plugins)
-    if scene_bsdf is not None:
-        from .builtin import scene_material
-        kind = registry.by_name("bsdf")
+    if scene_id is not None:
+        if kind is None:
+            raise ValidateError(f"give the kind of the scene's plugin with id {scene_id!r} "
+                                f"(kind=...): a scene holds plugins of several kinds")
         topics = kind.check_topics(topics)
-        found = scene_material(kind, spec, scene_bsdf)
+        found = scene_object(kind, spec, scene_id)
         target = loading.load(kind, found.plugin, None, registered)._replace(
             label=found.label, origin=found.origin)
     else:

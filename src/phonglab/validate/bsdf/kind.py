@@ -96,6 +96,11 @@ def returns(plugin, name: str = "BSDF") -> None:
             checked(probe.view(plugin), "BSDF", name, method, args, expects)
 
 
+def in_scene(scene) -> list:
+    """The BSDFs a loaded scene holds at its top: its shapes' materials (``shape.bsdf()``)."""
+    return [bsdf for bsdf in (shape.bsdf() for shape in scene.shapes()) if bsdf is not None]
+
+
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.
 parameters = ranges.parameters
 domain = ranges.domain

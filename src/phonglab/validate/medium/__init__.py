@@ -65,7 +65,7 @@ def _parts():
 
 
 #: The participating-medium kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="medium", word="medium", plural="media", class_name="Medium",
+KIND = Kind(name="medium", word="medium", plural="participating media", class_name="Medium",
             register="mi.register_medium", topics=TOPICS, informational=("cost",),
             bounds=("albedo",), object_type="Medium", tag="medium",
             implementation=_parts, conformance="docs/conformance-media.md")
