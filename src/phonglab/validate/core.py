@@ -95,7 +95,7 @@ def _raised(topic: str, exc: Exception) -> list[Row]:
         reason = f"raised {type(cause).__name__}: {_first_line(cause)}"
     if missing is not None:
         details["not_implemented"] = missing
-        reason = (f"{dispatch.describe(cause)}: the topic needs it (Mitsuba's integrators call "
+        reason = (f"{dispatch.describe(cause)}: the topic needs it (Mitsuba's rendering calls "
                   f"it), so nothing was judged")
     return [Row(topic, f"{topic}: the check ran to completion", None, None, None, None,
                 "fail", reason, details)]

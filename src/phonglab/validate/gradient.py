@@ -118,16 +118,16 @@ def _quotients(setup, params, key, x0, v, h, it, fixed, c, s0):
     return fd[0], fd[1], (s[0] - s0) / (h / 2), (s0 - s[1]) / (h / 2)
 
 
-def _refused(key, h, exc) -> Row:
+def _refused(key, h, exc, word: str) -> Row:
     if "does not depend on the input" in str(exc):
         return Row("gradient", key, None, None, None, None, "skipped",
                    "sample_direction's weight does not depend on this parameter (Dr.Jit: the "
                    "output does not depend on it; e.g. a spot's texture when none is given)", {})
     return Row("gradient", key, None, None, None, None, "skipped",
                f"the validator's own finite-difference step x ± {h:g}·v left the values the "
-               f"emitter accepts (it raised: "
+               f"{word} accepts (it raised: "
                f"{(str(exc).splitlines() or [type(exc).__name__])[0][:160]}): a limit of the "
-               f"check's step, not a defect of the emitter", {})
+               f"check's step, not a defect of the {word}", {})
 
 
 def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
@@ -151,9 +151,10 @@ def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:
     return out
 
 
-def verdict(setup, params, key, it, u, c) -> Row:
+def verdict(setup, params, key, it, u, c, word: str) -> Row:
     """One parameter's gradient row: forward-mode AD of Σ c·weight along v against the
-    central differences with the samples held (module docstring)."""
+    central differences with the samples held (module docstring); ``word``: what the plugin
+    is, for a row's reason."""
     x0 = params[key]
     if not dr.is_diff_v(x0) or dr.type_v(x0) not in (dr.VarType.Float32, dr.VarType.Float64):
         return Row("gradient", key, None, None, None, None, "skipped",
@@ -180,7 +181,7 @@ def verdict(setup, params, key, it, u, c) -> Row:
                 break
     except Exception as exc:
         _set(params, key, x0)
-        return _refused(key, h, exc)
+        return _refused(key, h, exc, word)
     nonfinite = ~np.isfinite(g)
     # no radiance arrives, yet the weight moves with x: the FD side's factor w₀/e₀ is 0/0
     undefined = dark & (g != 0) & ~nonfinite

@@ -54,4 +54,4 @@ def gradient(setup: Setup, opts) -> list[Row]:
     it = interaction(p)
     u = point2(with_edges(r.random((len(p), 2)), n))
     c = 0.5 + r.random(len(p))
-    return [verdict(setup, params, key, it, u, c) for key in keys]
+    return [verdict(setup, params, key, it, u, c, "emitter") for key in keys]

@@ -73,4 +73,5 @@ def gradient(phase, opts) -> list[Row]:
     wo[: n // 2] = d / np.linalg.norm(d, axis=1)[:, None]
     setup = SimpleNamespace(emitter=_Fixed(phase), calls=_Fixed(phase))
     it, u, c = lanes.interaction(wi), probe.to_vectors(wo), 0.5 + r.random(n)
-    return [_phase_row(verdict(setup, params, key, it, u, c)) for key in keys]
+    return [_phase_row(verdict(setup, params, key, it, u, c, "phase function"))
+            for key in keys]
