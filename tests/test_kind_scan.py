@@ -29,6 +29,7 @@ from pathlib import Path
 
 import pytest
 
+from phonglab.validate.kind import Kind
 from phonglab.validate.registry import KINDS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -171,27 +172,35 @@ def test_the_scanned_files_are_there():
     assert {"core.py", "sweep.py", "batch.py", "markdown.py", "Makefile"} <= {p.name for p in SCANNED}
 
 
+#: Two made-up kinds the scanner's own tests plant (independent of which kinds are registered).
+TOYS = (Kind(name="gizmo", word="gizmo", plural="gizmos", class_name="Gizmo",
+             register="mi.register_gizmo", topics=("finite",), object_type="Gizmo", tag="gizmo"),
+        Kind(name="flux", word="flux function", plural="flux functions",
+             class_name="FluxFunction", register="mi.register_flux", topics=("finite",),
+             object_type="FluxFunction", tag="flux"))
+
+
 @pytest.mark.parametrize("source, kind", [
-    ('if kind == "bsdf":\n    pass\n', "bsdf"),                     # a branch on a kind
-    ('x = f"{n} calls mi.register_emitter"\n', "emitter"),            # inside an f-string
-    ("def scene_bsdf(args):\n    return args\n", "bsdf"),            # an identifier's part
-    ("base = mi.SamplingIntegrator\n", "integrator"),                 # a Mitsuba class
-    ("base = mi.PhaseFunction\n", "phase"),
-    ('TITLE = "the built-in participating media"\n', "medium"),     # a plural
-    ('WORD = "phase function"\n', "phase"),
+    ('if kind == "gizmo":\n    pass\n', "gizmo"),                     # a branch on a kind
+    ('x = f"{n} calls mi.register_flux"\n', "flux"),                  # inside an f-string
+    ("def scene_gizmo(args):\n    return args\n", "gizmo"),          # an identifier's part
+    ("base = mi.SamplingGizmo\n", "gizmo"),                          # a Mitsuba class
+    ("base = mi.FluxFunction\n", "flux"),
+    ('TITLE = "the built-in flux functions"\n', "flux"),             # a plural
+    ('WORD = "Flux function"\n', "flux"),                            # a word, any case
 ])
 def test_the_scanner_catches_a_planted_mention(source, kind):
-    assert [m.kind for m in scan_python(source)] == [kind]
+    assert [m.kind for m in scan_python(source, kinds=TOYS)] == [kind]
 
 
 def test_the_scanner_reads_no_prose_and_no_other_word():
-    source = ('"""A BSDF, an emitter, an integrator."""\n'
+    source = ('"""A gizmo, a flux function."""\n'
               "def f(x):\n"
-              '    """The phase function of a medium."""\n'
-              "    return x  # an emitter's\n"
-              'NAME = "mybsdf"\n'                     # a plugin's name, not the kind's
-              'TEXT = "a phased array of emitting diodes"\n')
-    assert scan_python(source) == []
-    assert scan_lines("conformance:  # every BSDF\n\tpython run.py\n") == []
-    assert [m.kind for m in scan_lines("x: docs/conformance-media.md --kind medium\n")] \
-        == ["medium"]
+              '    """The flux function of a gizmo."""\n'
+              "    return x  # a gizmo's\n"
+              'NAME = "mygizmo"\n'                    # a plugin's name, not the kind's
+              'TEXT = "a fluxion of gizmology"\n')
+    assert scan_python(source, kinds=TOYS) == []
+    assert scan_lines("tables:  # every gizmo\n\tpython run.py\n", kinds=TOYS) == []
+    assert [m.kind for m in scan_lines("x: docs/conformance-gizmos.md --kind flux\n",
+                                       kinds=TOYS)] == ["gizmo", "flux"]
