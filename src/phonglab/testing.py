@@ -1,5 +1,4 @@
-"""Helpers for the test suites of BSDF, emitter and integrator authors: one line validates a
-plugin inside pytest.
+"""Helpers for the test suites of plugin authors: one line validates a plugin inside pytest.
 
 ::
 

@@ -1,7 +1,7 @@
 r"""What a plugin kind is: one :class:`Kind` record, all the validator needs to know of it.
 
-A kind (BSDF, emitter, integrator, phase function) is one folder of :mod:`phonglab.validate`
-and one line of :data:`phonglab.validate.registry.KINDS`.  Its folder's ``__init__`` declares
+A plugin kind is one folder of :mod:`phonglab.validate` and one line of
+:data:`phonglab.validate.registry.KINDS`; no other module names it.  Its folder's ``__init__`` declares
 its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its input
 from these records); its *implementation module* (the folder's ``kind`` module, which imports
 Mitsuba: the zero-argument function :attr:`Kind.implementation` the folder gives its record
@@ -28,7 +28,8 @@ imports it when a part is first asked for) holds the parts that run, looked up b
                     findings follow what is loaded, not how it was named)
 ``children``        plugin -> [(path, child)]: the plugins of the kind it holds (a wrapper's
                     nested BSDF), whose findings its rows may inherit (:mod:`.builtin`)
-``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
+``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`; the table
+                    is given its kind by :func:`.registry.catalogue`)
 ``returns``         (plugin, label) -> None: the types its Python methods return, checked on
                     one lane right after the default load (:mod:`.returns`); a mismatch is a
                     :class:`ValidateError`
