@@ -1,9 +1,9 @@
 r"""What a plugin kind is: one :class:`Kind` record, all the validator needs to know of it.
 
 A plugin kind is one folder of :mod:`phonglab.validate` and one line of
-:data:`phonglab.validate.registry.KINDS`; no other module names it.  Its folder's ``__init__`` declares
-its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its input
-from these records); its *implementation module* (the folder's ``kind`` module, which imports
+:data:`phonglab.validate.registry.KINDS`; no other module names it.  Its folder's ``__init__``
+declares its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its
+input from these records); its *implementation module* (the folder's ``kind`` module, which imports
 Mitsuba: the zero-argument function :attr:`Kind.implementation` the folder gives its record
 imports it when a part is first asked for) holds the parts that run, looked up by name with
 :meth:`Kind.part`:
