@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from phonglab.cli import main
+from phonglab.registration import PLUGINS
 from phonglab.validate import registry
 from phonglab.validate.inputs import ValidateError
 
@@ -50,6 +51,8 @@ def test_every_face_iterates_the_one_kinds_sequence():
     for k in registry.KINDS:
         assert registry.catalogue(k.name).kind is k
     assert set(registry.every_topic()) == {t for k in registry.KINDS for t in k.topics}
+    for _, _, name in PLUGINS:      # registration.py registers them with mi.register_<kind>
+        assert registry.by_name(name).register == f"mi.register_{name}"
 
 
 def test_importing_the_registry_imports_no_mitsuba():
