@@ -14,8 +14,9 @@ name, word (and its plural), Mitsuba class, ``ObjectType`` member, XML tag or re
 * in the Makefile and pyproject.toml: every line, its comment cut off.
 
 A mention that means something else than the kind is listed in :data:`EXCEPTIONS` with why.
-The scanner itself is tested on planted mentions (:func:`test_the_scanner_catches_a_planted_mention`),
-so a scan that finds nothing is a scan that works.
+The scanner itself is tested on planted mentions of two made-up kinds
+(:func:`test_the_scanner_catches_a_planted_mention`), so a scan that finds nothing is a scan
+that works.
 """
 
 from __future__ import annotations
@@ -169,7 +170,8 @@ def test_every_exception_is_still_needed():
 
 def test_the_scanned_files_are_there():
     assert all(p.is_file() for p in SCANNED)
-    assert {"core.py", "sweep.py", "batch.py", "markdown.py", "Makefile"} <= {p.name for p in SCANNED}
+    names = {p.name for p in SCANNED}
+    assert {"core.py", "sweep.py", "batch.py", "markdown.py", "Makefile"} <= names
 
 
 #: Two made-up kinds the scanner's own tests plant (independent of which kinds are registered).

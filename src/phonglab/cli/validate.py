@@ -26,6 +26,7 @@ from ..validate.inputs import ValidateError, check_plugin_file, check_topics
 from ..verdict import Report
 from .options import add_seed, check_timeout
 
+
 def _scene_kinds() -> list:
     """The kinds a plugin of a scene file can be picked from by id (``--<tag> ID``)."""
     return [k for k in registry.KINDS if k.scene_noun]
@@ -181,7 +182,7 @@ def _check_scene(args) -> None:
              and xml_root_tag(args.target) == "scene")
     picked = scene_pick(args)
     if picked is None:
-        if scene:
+        if scene and _scene_kinds():     # else the kind's detection refuses the <scene>
             raise ValidateError(f"{args.target} is a scene; name the "
                                 + " or ".join(f"{k.scene_noun} to validate with --{k.tag} ID "
                                               f"(the id of one of its <{k.tag}> elements)"

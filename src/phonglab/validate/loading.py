@@ -179,8 +179,9 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
     hint = ("check the type name and --set values, or register it with --plugin FILE.py"
             if not names else f"the plugin files registered {', '.join(map(repr, names))}")
     own = kind.part("load")
+    limit = timeout.limit()
     try:
-        with timeout.alarm(timeout.limit()) as state:  # the constructor, traverse(), each method once
+        with timeout.alarm(limit) as state:  # the constructor, traverse(), each method once
             try:
                 if own is not None:
                     loaded = own(spec, params, hint)
@@ -199,8 +200,8 @@ def load(kind: Kind, spec, params=None, registered=()) -> Loaded:
         name = f" {spec!r}" if isinstance(spec, str) else ""
         raise ValidateError(f"loading the {kind.word}{name} (its constructor, "
                             f"traverse() and one call of each method) did not finish within "
-                            f"{timeout.limit():g} s (stopped by the timeout: does the plugin's Python "
-                            f"code loop forever?)") from None
+                            f"{limit:g} s (stopped by the timeout: does the plugin's Python code "
+                            f"loop forever?)") from None
     files = tuple(str(Path(f).resolve()) for f in getattr(registered, "by_file", {}))
     return loaded._replace(files=files) if files else loaded
 

@@ -83,5 +83,6 @@ def alarm(seconds: float | None):
 
 def within_topic_limit():
     """:func:`alarm` at the limit :func:`topic_timeout` set (none: no limit), for a call that
-    runs a plugin's Python code outside a topic (the return-type check of :mod:`.returns`, a ``--plugin`` file loading)."""
+    runs a plugin's Python code outside a topic (the return-type check of :mod:`.returns`,
+    ``phonglab fit``)."""
     return alarm(_TIMEOUT)
