@@ -101,20 +101,13 @@ fitting-table: setup
 validate-false-failures: setup
 	$(BIN)/python scripts/false_failures.py --seeds 20
 
-# docs/conformance.json + docs/conformance.md: every built-in BSDF of Mitsuba 3.9.1 validated
-# (phonglab.validate.bsdf.builtins); docs/conformance-emitters.* and docs/conformance-integrators.*:
-# the built-in emitters and integrators, docs/conformance-phase.*: the phase functions,
-# docs/conformance-media.*: the participating media
-# (phonglab.validate.registry.catalogue(kind));
-# CONFORMANCE_ARGS=--quick for the fast sizes.  Each run resumes from its .partial.jsonl.
-# The emitter, integrator and phase tables run every case through its parameter sweep
-# (--sweep); the BSDF table's 63 cases stay at their given points (through the sweep at
-# default sizes they take over an hour on 2 cores): its sweep is run at --quick
-# (scripts/conformance.py --sweep --quick), and what it found is in docs/validate.md.
+# Every kind's conformance table (phonglab.validate.registry.KINDS, each its catalogue part):
+# the built-in plugins of Mitsuba 3.9.1 validated, written to the kind's docs/conformance*.md
+# and the JSON beside it.  Each table runs its cases through their parameter sweep or at their
+# given points as it says (the BSDF table's 63 cases stay at their given points: through the
+# sweep at default sizes they take over an hour on 2 cores; its sweep is run at --quick,
+# scripts/conformance.py --kind bsdf --sweep --quick, and what it found is in docs/validate.md).
+# CONFORMANCE_ARGS=--quick for the fast sizes.  Each table resumes from its .partial.jsonl.
 .PHONY: conformance
 conformance: setup
-	$(BIN)/python scripts/conformance.py $(CONFORMANCE_ARGS) --json docs/conformance.json --markdown docs/conformance.md
-	$(BIN)/python scripts/conformance.py --kind emitter --sweep $(CONFORMANCE_ARGS) --json docs/conformance-emitters.json --markdown docs/conformance-emitters.md
-	$(BIN)/python scripts/conformance.py --kind integrator --sweep $(CONFORMANCE_ARGS) --json docs/conformance-integrators.json --markdown docs/conformance-integrators.md
-	$(BIN)/python scripts/conformance.py --kind phase --sweep $(CONFORMANCE_ARGS) --json docs/conformance-phase.json --markdown docs/conformance-phase.md
-	$(BIN)/python scripts/conformance.py --kind medium --sweep $(CONFORMANCE_ARGS) --json docs/conformance-media.json --markdown docs/conformance-media.md
+	$(BIN)/python scripts/conformance.py --all-kinds $(CONFORMANCE_ARGS)

@@ -134,8 +134,8 @@ def test_script_renders_from_json(tmp_path):
     src.write_text(json.dumps(data))
     out = tmp_path / "c.md"
     subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "conformance.py"),
-                    "--from-json", str(src), "--markdown", str(out)], check=True,
-                   capture_output=True)
+                    "--kind", "bsdf", "--from-json", str(src), "--markdown", str(out)],
+                   check=True, capture_output=True)
     assert out.read_text().startswith("# Conformance of Mitsuba 3.9.1")
     assert Path(out).stat().st_size > 0
 

@@ -36,7 +36,7 @@ def test_catalogue_loads_and_covers_3_9_1(cat):
     cases = cat.cases()
     labels = [c.label for c in cases]
     assert len(labels) == len(set(labels))
-    assert MITSUBA[cat.kind] <= {c.plugin for c in cases} | set(cat.left_out)
+    assert MITSUBA[cat.kind.name] <= {c.plugin for c in cases} | set(cat.left_out)
     for c in cases:
         assert c.skip or c.plugin not in cat.left_out, c.label
         assert cat.find(c.label).label == c.label
@@ -46,11 +46,11 @@ def test_findings_name_cases_source_lines_and_reproducers(cat):
     labels = {c.label for c in cat.cases()}
     for f in cat.findings:
         assert set(f.labels) <= labels, f.key
-        assert f.topic in cat.topics and f.rows, f.key
+        assert f.topic in cat.kind.topics and f.rows, f.key
         assert SOURCE_LINE.match(f.source), f.source
         assert (REPO_ROOT / f.reproducer).is_file(), f.reproducer
     for v in cat.validator_issues:
-        assert set(v.labels) <= labels and v.topic in cat.topics, v.key
+        assert set(v.labels) <= labels and v.topic in cat.kind.topics, v.key
     known = {c.label: c.known for c in cat.cases() if c.known}
     for f in cat.findings:                  # each finding reaches its cases as a signature
         for label in f.labels:
@@ -142,7 +142,7 @@ def test_markdown_renders_emitter_and_integrator_json():
     assert "`docs/conformance-emitters.json`" in md and "validate_emitter" in md
     row = next(line for line in md.splitlines() if line.startswith("| `area (sphere)`"))
     cells = [c.strip() for c in row.strip("|").split("|")][3:]
-    assert dict(zip(emitter.topics, cells)) == {
+    assert dict(zip(emitter.kind.topics, cells)) == {
         "finite": "pass", "weight": "", "pdf": "KNOWN", "chi2": "", "power": "**fail**",
         "gradient": "", "cost": ""}
     assert "src/shapes/sphere.cpp#L256" in md and "tests/repro/sphere_emitter_inside.py" in md
@@ -171,23 +171,23 @@ def test_kind_options_reach_the_runner(variant_llvm_rgb):
 
 
 def test_refused_depth_is_a_skipped_scene_and_depth_is_not_radiance(variant_llvm_rgb):
-    from phonglab.validate import core, registry
+    from phonglab.validate import loading, registry
     kind = registry.by_name("integrator")
 
-    whitted = core.prepare(kind, {"type": "whitted", "units": "radiance"}).plugin
+    whitted = loading.prepare(kind, {"type": "whitted", "units": "radiance"}).plugin
     assert whitted.depth == "settable"
     integ, why = whitted.at_depth(64)            # whitted takes max_depth in 1..10
     assert integ is None and "refuses max_depth 64" in why
     assert whitted.at_depth(2)[0] is not None
-    assert core.prepare(kind, "depth").plugin.aov
+    assert loading.prepare(kind, "depth").plugin.aov
 
 
 def test_mesh_cost_baseline(variant_llvm_rgb):
     from phonglab.validate.emitter import builtins as eb
     from phonglab.validate.emitter.cost import baseline
-    from phonglab.validate import core, registry
+    from phonglab.validate import loading, registry
 
-    setup = core.prepare(registry.by_name("emitter"), {"type": "area"},
+    setup = loading.prepare(registry.by_name("emitter"), {"type": "area"},
                          params={"shape": {"type": "obj", "filename": eb.mesh_file()}}).plugin
     _, name, _ = baseline(setup)
     assert name == "area on a cube"

@@ -1,8 +1,8 @@
 """An installed phonglab is the whole phonglab: the distribution ships every subpackage and
 every file the package reads at run time.
 
-Default tier: pyproject's explicit package list against src/; every data file under
-src/phonglab declared as package data; the shipped scenes found with importlib.resources
+Default tier: the packages setup.py finds (none listed by hand) against src/; every data file
+under src/phonglab declared as package data; the shipped scenes found with importlib.resources
 inside the package, with every file they name beside them; no module reaching out of its
 package folder.  Slow tier: the wheel built from the checkout, installed with
 constraints.txt into a fresh venv, and the commands a user runs, from a folder outside the
@@ -14,6 +14,7 @@ from __future__ import annotations
 import fnmatch
 import os
 import re
+import runpy
 import shutil
 import subprocess
 import sys
@@ -33,6 +34,8 @@ from phonglab.engine.scenes import SCENES_DIR, scene_path
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = Path(phonglab.__file__).resolve().parent
 SETUPTOOLS = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+#: The packages the distribution ships (setup.py finds them).
+PACKAGES = runpy.run_path(str(ROOT / "setup.py"), run_name="setup")["PACKAGES"]
 #: Modules allowed to name a path outside their package, and why: nothing there is read.
 OUTSIDE_ALLOWED = {
     "src/phonglab/engine/references.py": "the reference cache defaults to the checkout's .bench_cache/ when "
@@ -42,28 +45,31 @@ OUTSIDE_ALLOWED = {
 }
 
 
-def test_every_subpackage_is_listed_in_pyproject():
-    listed = set(SETUPTOOLS["packages"])
+def test_every_subpackage_ships():
+    """Every package under src/ and phonglab.plugins (plugins/) is one the distribution ships:
+    found by setup.py, so a new one (a validator kind's folder) needs no list edited."""
     src = ROOT / "src"
     found = {".".join(p.parent.relative_to(src).parts) for p in src.rglob("__init__.py")}
-    missing = sorted(found - listed)
-    assert not missing, f"add {missing} to [tool.setuptools] packages in pyproject.toml"
+    missing = sorted((found | {"phonglab.plugins"}) - set(PACKAGES))
+    assert not missing, f"setup.py's find leaves out {missing}"
+    assert not [p for p in PACKAGES if "__pycache__" in p]
+    assert "packages" not in SETUPTOOLS, "pyproject.toml lists packages; setup.py finds them"
 
 
-def test_every_package_pyproject_lists_exists():
-    """A package moved away but still listed breaks `pip install` (and so `make setup`) on a
+def test_every_package_shipped_exists():
+    """A package moved away but still named breaks `pip install` (and so `make setup`) on a
     fresh clone: "package directory 'src/phonglab/validate/builtins' does not exist"."""
-    dirs = {"phonglab.plugins": ROOT / "plugins"}
-    gone = sorted(p for p in SETUPTOOLS["packages"]
+    dirs = {p: ROOT / d for p, d in SETUPTOOLS["package-dir"].items() if p}
+    gone = sorted(p for p in PACKAGES
                   if not dirs.get(p, ROOT / "src" / Path(*p.split("."))).is_dir())
-    assert not gone, f"remove {gone} from [tool.setuptools] packages in pyproject.toml"
+    assert not gone, f"{gone} are shipped but have no folder"
 
 
 def _declared(path: Path) -> bool:
     """Whether pyproject's package-data ships ``path`` (a file under src/phonglab)."""
     rel = path.relative_to(ROOT / "src")
     package = ".".join(rel.parent.parts)
-    if package not in SETUPTOOLS["packages"]:
+    if package not in PACKAGES:
         return False
     globs = SETUPTOOLS.get("package-data", {}).get(package, [])
     return any(fnmatch.fnmatch(rel.name, g) for g in globs)
@@ -76,8 +82,8 @@ def test_every_data_file_in_the_package_is_declared_package_data():
             if p.is_file() and p.suffix not in (".py", ".pyc") and "__pycache__" not in p.parts]
     assert data, "no data files found under src/phonglab (the scenes moved?)"
     missing = [str(p.relative_to(ROOT)) for p in data if not _declared(p)]
-    assert not missing, (f"declare {missing} in [tool.setuptools] packages and package-data "
-                         f"of pyproject.toml, or the wheel leaves them out")
+    assert not missing, (f"declare {missing} in [tool.setuptools.package-data] of "
+                         f"pyproject.toml, or the wheel leaves them out")
 
 
 def test_shipped_scenes_resolve_inside_the_package_with_importlib_resources():

@@ -14,8 +14,8 @@ import pytest
 from phonglab.cli import main
 from phonglab.settings import ParameterError, parse_sets
 from phonglab.testing import assert_bsdf_valid
-from phonglab.validate import TOPICS, validate_bsdf
-from phonglab.validate.bsdf.topics import Row
+from phonglab.validate import validate_bsdf
+from phonglab.validate.bsdf.topics import TOPICS, Row
 from phonglab.validate.gradient import unconverged
 from phonglab.validate.inputs import ValidateError
 from phonglab.validate.kind import topic_page, topic_url
@@ -121,7 +121,7 @@ def test_runner_is_kind_independent(variant_llvm_rgb):
     def runners(plugin, opts, topics, m):
         return {"cost": lambda: [Row("cost", "c", 1.0, 1.0, None, None, "pass", "")],
                 "finite": boom}
-    kind = core.Kind(name="toy", word="toy", class_name="Object", register="register_toy",
+    kind = core.Kind(name="toy", word="toy", plural="toys", class_name="Object", register="register_toy",
                      topics=("finite", "cost"), options=lambda quick, seed, topics: None,
                      statistical_tests=lambda plugin, opts, topics: 3, runners=runners)
     report = core.run(kind, Loaded(object(), "toy-1", None), topics=("finite", "cost"),
@@ -191,7 +191,7 @@ def test_cli_fail_with_plugin_and_chi2_figure(variant_llvm_rgb, tmp_path, capsys
     (["validate", "missing.xml"], "does not exist"),
     (["validate"], "name the plugin to validate"),
     (["validate", "diffuse", "--report", "out.txt"], "must end in .html"),
-    (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no BSDF"),
+    (["validate", "diffuse", "--set", "alpha=0.2", "--all-builtins"], "takes no plugin"),
 ])
 def test_cli_bad_input_exit_2(variant_llvm_rgb, capsys, argv, message):
     assert main(argv) == 2

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from phonglab.validate import TOPICS, validate_bsdf
+from phonglab.validate import validate_bsdf
+from phonglab.validate.bsdf.topics import TOPICS
 
 DEFECTS = Path(__file__).parent / "defects"
 
@@ -124,7 +125,7 @@ def test_false_failure_rate_quick(variant_llvm_rgb):
 
     from phonglab import stats
     from phonglab.validate.batch import false_failures
-    result = false_failures(["lambert", "phong"], 20, quick=True)
+    result = false_failures(["lambert", "phong"], 20, quick=True, kind="bsdf")
     count = sum(bool(failing) for runs in result.values() for _, failing in runs)
     assert scipy_stats.binom.sf(2, 40, stats.ALPHA) < stats.ALPHA
     assert count <= 2, result

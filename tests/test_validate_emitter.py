@@ -113,7 +113,7 @@ def test_sunsky_equator_rows_are_known_by_the_sun_rim_and_a_lane_off_it_stays_a_
     import numpy as np
 
     from phonglab.validate import validate_emitter
-    from phonglab.validate.core import mark_known
+    from phonglab.validate.known import mark_known
     from phonglab.validate.emitter import builtins
 
     case = next(c for c in builtins.catalogue_cases() if c.label == "sunsky (equator)")

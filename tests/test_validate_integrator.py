@@ -52,11 +52,11 @@ def test_plane_values_are_the_solid_angle():
 
 
 def test_depth_detection(variant_llvm_rgb):
-    from phonglab.validate import core, registry
+    from phonglab.validate import loading, registry
     kind = registry.by_name("integrator")
 
     def prepare(spec):
-        return core.prepare(kind, spec)
+        return loading.prepare(kind, spec)
 
     t = {n: prepare(n).plugin for n in ("path", "direct", "direct_projective", "ptracer")}
     assert t["path"].depth == "settable"

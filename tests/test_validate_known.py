@@ -20,7 +20,7 @@ from phonglab.validate.bsdf.findings import FINDINGS
 from phonglab.validate.bsdf.signatures import (BelowHorizon, Chi2Outside, ComponentOfAnotherLobe,
                                                ComponentOutOfRange, GrazingIncidence, SamplePoint,
                                                bin_mask)
-from phonglab.validate.core import Known, mark_known
+from phonglab.validate.known import Known, mark_known
 from phonglab.verdict import Row
 
 DEFECTS = Path(__file__).parent / "defects"

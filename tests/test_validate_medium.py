@@ -207,7 +207,7 @@ def test_catalogue_covers_3_9_1_and_its_findings_are_pinned(variant_llvm_rgb):
     source = re.compile(r"^(src|include)/[\w/]+\.(cpp|h|py):\d+$")
     known = {c.label: c.known for c in cases}
     for f in cat.findings:
-        assert set(f.labels) <= set(labels) and f.topic in cat.topics and f.rows, f.key
+        assert set(f.labels) <= set(labels) and f.topic in cat.kind.topics and f.rows, f.key
         assert source.match(f.source) and (HERE.parent / f.reproducer).is_file(), f.key
         for label in f.labels:
             assert f.key in {k.key for k in known[label][f.topic]}

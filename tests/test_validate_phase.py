@@ -91,7 +91,7 @@ def test_hg_small_g_finding_holds_only_near_zero(variant_llvm_rgb):
     small = validate_phase({"type": "hg", "g": 1e-5}, quick=True, topics=["chi2"], known=known)
     assert small.rows[0].status == "KNOWN"
     # the cause holds at |g| ≤ 1e-3 only: a chi2 failure at g = 0.5 would stay a fail
-    from phonglab.validate.core import Known
+    from phonglab.validate.known import Known
     (k,) = known["chi2"]
     assert isinstance(k, Known) and not k.holds_at({"g": 0.5})
 

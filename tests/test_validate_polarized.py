@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 import phonglab
-from phonglab.validate import TOPICS, validate_bsdf
+from phonglab.validate import validate_bsdf
+from phonglab.validate.bsdf.topics import TOPICS
 from phonglab.validate.bsdf import mueller as pol, polarization, stokes_frames
 
 DEFECTS = Path(__file__).parent / "defects_polarized"

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from phonglab.cli import main
+from phonglab.registration import PLUGINS
 from phonglab.validate import registry
 from phonglab.validate.inputs import ValidateError
 
@@ -45,11 +46,13 @@ def test_every_face_iterates_the_one_kinds_sequence():
     for k in registry.KINDS:
         assert callable(getattr(face, k.function)) and k.function in face.__all__
         assert callable(getattr(testing, k.assert_helper)) and k.assert_helper in testing.__all__
-        assert k.impl.startswith("phonglab.validate.") and k.tag and k.object_type
+        assert k.module().__name__ == f"phonglab.validate.{k.name}.kind" and k.tag and k.object_type
     assert registry.names() == tuple(names)
     for k in registry.KINDS:
-        assert registry.catalogue(k.name).kind == k.name
+        assert registry.catalogue(k.name).kind is k
     assert set(registry.every_topic()) == {t for k in registry.KINDS for t in k.topics}
+    for _, _, name in PLUGINS:      # registration.py registers them with mi.register_<kind>
+        assert registry.by_name(name).register == f"mi.register_{name}"
 
 
 def test_importing_the_registry_imports_no_mitsuba():

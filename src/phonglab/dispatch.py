@@ -14,9 +14,11 @@ call lands in the kind's trampoline (``PyBSDF``, ``PyPhaseFunction``, ``PyEmitte
 
 Calling the method through the base class's binding -- ``mi.BSDF.eval(plugin, ctx, si, wo,
 active)`` -- enters the same virtual call, so a Python plugin goes through its trampoline
-and a built-in through its C++ code: what :func:`bsdf` and its siblings return is what a
-Mitsuba integrator would get.  Every probe and topic of ``phonglab validate`` calls plugins
-through these views, never through the Python methods directly.
+and a built-in through its C++ code: what :func:`view` returns is what a Mitsuba integrator
+would get.  Which methods go through the binding (those the trampoline forwards) is named by
+the caller: each kind's folder of :mod:`phonglab.validate` gives the list of its class.  Every
+probe and topic of ``phonglab validate`` calls plugins through these views, never through the
+Python methods directly.
 
 Errors.  An exception raised inside the plugin's Python code comes back through the
 trampoline with its type and traceback; :func:`origin` finds the innermost frame of that
@@ -37,49 +39,23 @@ import sys
 import sysconfig
 import traceback
 
-import mitsuba as mi
-
 from .runtime import PluginExited
 
-__all__ = ["METHODS", "Dispatched", "base_of", "bsdf", "describe", "emitter", "exit_call",
-           "integrator", "is_bad_cast", "raised_in", "not_implemented", "origin", "phase", "root_cause", "view"]
-
-#: The query methods each base class binds, called through the binding (Mitsuba's dispatch).
-METHODS = {
-    "BSDF": ("eval", "pdf", "eval_pdf", "eval_pdf_sample", "sample", "eval_null_transmission",
-             "eval_diffuse_reflectance"),
-    "PhaseFunction": ("eval_pdf", "sample"),
-    "Emitter": ("sample_ray", "sample_direction", "pdf_direction", "eval_direction",
-                "sample_position", "pdf_position", "eval", "sample_wavelengths"),
-    "SamplingIntegrator": ("sample",),
-    "Texture": ("eval", "eval_1", "eval_3"),
-    "Medium": ("intersect_aabb", "get_majorant", "get_scattering_coefficients",
-               "sample_interaction", "transmittance_eval_pdf", "phase_function",
-               "is_homogeneous", "has_spectral_extinction", "use_emitter_sampling"),
-}
-
-
-def base_of(plugin):
-    """The Mitsuba base class whose binding :func:`view` calls ``plugin`` through."""
-    for name in METHODS:
-        base = getattr(mi, name, None)
-        if base is not None and isinstance(plugin, base):
-            return base
-    raise TypeError(f"{type(plugin).__name__} is none of Mitsuba's {', '.join(METHODS)}")
+__all__ = ["Dispatched", "describe", "exit_call", "is_bad_cast", "raised_in", "not_implemented",
+           "origin", "root_cause", "view"]
 
 
 class Dispatched:
-    """``plugin`` seen through its base class: the query methods of :data:`METHODS` go through
-    the base class's binding (``active`` passed, returns cast as Mitsuba casts them); every
-    other attribute (``flags``, ``component_count``, ``traverse`` ...) is the plugin's own."""
+    """``plugin`` seen through its base class ``base``: the query ``methods`` go through the base
+    class's binding (``active`` passed, returns cast as Mitsuba casts them); every other
+    attribute (``flags``, ``component_count``, ``traverse`` ...) is the plugin's own."""
 
     __slots__ = ("plugin", "base", "_methods")
 
-    def __init__(self, plugin, base=None):
-        base = base_of(plugin) if base is None else base
+    def __init__(self, plugin, base, methods):
         object.__setattr__(self, "plugin", plugin)
         object.__setattr__(self, "base", base)
-        object.__setattr__(self, "_methods", METHODS[base.__name__])
+        object.__setattr__(self, "_methods", tuple(methods))
 
     def __getattr__(self, name):
         if name in self._methods:
@@ -90,29 +66,11 @@ class Dispatched:
         return f"Dispatched({self.plugin!r} as mi.{self.base.__name__})"
 
 
-def view(plugin, base=None) -> Dispatched:
-    """``plugin`` as Mitsuba calls it (a view is returned as it is)."""
-    return plugin if isinstance(plugin, Dispatched) else Dispatched(plugin, base)
-
-
-def bsdf(plugin) -> Dispatched:
-    """A BSDF as Mitsuba's integrators call it."""
-    return view(plugin, mi.BSDF)
-
-
-def phase(plugin) -> Dispatched:
-    """A phase function as Mitsuba's volumetric integrators call it."""
-    return view(plugin, mi.PhaseFunction)
-
-
-def emitter(plugin) -> Dispatched:
-    """An emitter as Mitsuba's integrators call it."""
-    return view(plugin, mi.Emitter)
-
-
-def integrator(plugin) -> Dispatched:
-    """A sampling integrator as Mitsuba's ``render`` calls its ``sample``."""
-    return view(plugin, mi.SamplingIntegrator)
+def view(plugin, base, methods) -> Dispatched:
+    """``plugin`` as Mitsuba calls it: ``methods`` (the query methods the trampoline of
+    ``base``, a Mitsuba class, forwards to a Python plugin; each kind's folder names its own)
+    through ``base``'s binding.  A view is returned as it is."""
+    return plugin if isinstance(plugin, Dispatched) else Dispatched(plugin, base, methods)
 
 
 # ----------------------------------------------------------------------------- errors

@@ -64,10 +64,10 @@ import numpy as np
 
 from . import dispatch, runtime
 
-__all__ = ["Sample", "context", "default_wavelengths", "direction", "eval",
+__all__ = ["METHODS", "Sample", "context", "default_wavelengths", "direction", "eval",
            "eval_diffuse_reflectance", "eval_null_transmission", "eval_pdf", "interaction",
            "mueller_eval", "mueller_eval_pdf", "mueller_sample", "pdf", "sample",
-           "sample_random", "to_numpy", "to_vectors"]
+           "sample_random", "to_numpy", "to_vectors", "view"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -345,9 +345,20 @@ def _probe(call, wi, matrices: bool = False, **args) -> list[np.ndarray]:
 
 
 # ----------------------------------------------------------------------------- BSDF queries
+#: The query methods ``mi.BSDF``'s trampoline forwards to a Python BSDF (``PyBSDF``,
+#: src/render/python/bsdf_v.cpp:35-77 at v3.9.1), called through the binding by :func:`view`.
+METHODS = ("eval", "pdf", "eval_pdf", "eval_pdf_sample", "sample", "eval_null_transmission",
+           "eval_diffuse_reflectance")
+
+
+def view(bsdf) -> dispatch.Dispatched:
+    """``bsdf`` as Mitsuba's integrators call it (:func:`phonglab.dispatch.view`)."""
+    return dispatch.view(bsdf, mi.BSDF, METHODS)
+
+
 def eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """``bsdf.eval`` = f_r(wi, wo) cos θ_o, all channels: (N, C)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
     return value
@@ -355,7 +366,7 @@ def eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def pdf(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """``bsdf.pdf``: the solid-angle density with which :func:`sample` picks wo, (N,)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (p,) = _probe(lambda si, v: (bsdf.pdf(ctx, si, v),), wi, wo=(mi.Vector3f, wo, 3))
     return p
@@ -363,7 +374,7 @@ def pdf(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     """``bsdf.eval_pdf``: (eval (N, C), pdf (N,)) in one call."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, wo=(mi.Vector3f, wo, 3))
     return value, p
@@ -372,7 +383,7 @@ def eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
 def eval_null_transmission(bsdf, wi) -> np.ndarray:
     """``bsdf.eval_null_transmission``: the un-scattered transmission (the ``Null`` lobe's
     weight along −wi) for light arriving along wi, all channels: (N, C)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     (value,) = _probe(lambda si: (bsdf.eval_null_transmission(si),), wi)
     return value
 
@@ -380,7 +391,7 @@ def eval_null_transmission(bsdf, wi) -> np.ndarray:
 def eval_diffuse_reflectance(bsdf, wi) -> np.ndarray:
     """``bsdf.eval_diffuse_reflectance``: the BSDF's diffuse reflectance at incidence wi, all
     channels: (N, C)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     (value,) = _probe(lambda si: (bsdf.eval_diffuse_reflectance(si),), wi)
     return value
 
@@ -390,7 +401,7 @@ def sample(bsdf, wi, sample1, sample2, ctx=None) -> Sample:
 
     sample1 usually picks the lobe, sample2 the direction within it.
     """
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
 
     def call(si, u1, u2):
@@ -417,7 +428,7 @@ def sample_random(bsdf, wi, n: int, seed: int = 0, ctx=None) -> Sample:
 # ----------------------------------------------------------------------------- Mueller matrices
 def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
     """:func:`eval` in a polarized variant, the Mueller matrices whole: (N, C, 4, 4)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     (value,) = _probe(lambda si, v: (bsdf.eval(ctx, si, v),), wi, matrices=True,
                       wo=(mi.Vector3f, wo, 3))
@@ -426,7 +437,7 @@ def mueller_eval(bsdf, wi, wo, ctx=None) -> np.ndarray:
 
 def mueller_eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`eval_pdf` with the matrices whole: ((N, C, 4, 4), (N,))."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
     value, p = _probe(lambda si, v: tuple(bsdf.eval_pdf(ctx, si, v)), wi, matrices=True,
                       wo=(mi.Vector3f, wo, 3))
@@ -436,7 +447,7 @@ def mueller_eval_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
 def mueller_sample(bsdf, wi, sample1, sample2, ctx=None):
     """:func:`sample` with the weight's matrices whole: (wo (N, 3), weight (N, C, 4, 4),
     pdf (N,), sampled_type (N,) int64)."""
-    bsdf = dispatch.bsdf(bsdf)            # called as Mitsuba calls it
+    bsdf = view(bsdf)  # called as Mitsuba calls it
     ctx = context() if ctx is None else ctx
 
     def call(si, u1, u2):

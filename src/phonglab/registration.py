@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import threading
+from typing import Callable
 
 from . import runtime, transactions
 
@@ -32,9 +33,11 @@ _lock = threading.Lock()
 _registered: set[str] = set()          # variants in which every plugin is registered
 _classes: dict[tuple[str, str], type] = {}   # (module, variant) -> plugin class
 _callback_installed = False
-#: A user's own plugin files (``phonglab render --plugin``), run once in each variant
-#: :func:`register` activates, since a Python plugin class derives from its variant's classes.
+#: A user's own plugin files (``phonglab render --plugin``) and what runs them, run once in each
+#: variant :func:`register` activates, since a Python plugin class derives from its variant's
+#: classes (:func:`plugin_files`).
 _user_files: tuple[str, ...] = ()
+_user_load: Callable | None = None
 _user_variants: set[str] = set()
 
 
@@ -59,12 +62,8 @@ def _register_active() -> None:
     # Registration is cheap, so it is repeated on every switch rather than trusted to persist.
     for module_name, plugin_name, kind in PLUGINS:
         factory = plugin_class(module_name, variant)
-        if kind == "bsdf":
-            mi.register_bsdf(plugin_name, lambda props, cls=factory: cls(props))
-        elif kind == "integrator":
-            mi.register_integrator(plugin_name, lambda props, cls=factory: cls(props))
-        else:  # pragma: no cover - guarded by the PLUGINS table
-            raise AssertionError(kind)
+        register_kind = getattr(mi, f"register_{kind}")     # Mitsuba's mi.register_<kind>
+        register_kind(plugin_name, lambda props, cls=factory: cls(props))
     _registered.add(variant)
 
 
@@ -103,11 +102,9 @@ def register(variant: str | None = None) -> str:
         _register_active()
     active = mi.variant()
     if _user_files and active not in _user_variants:
-        from .validate.core import load_plugins   # lazy: the validator imports this module
-
         _user_variants.add(active)
         try:
-            load_plugins(_user_files)
+            _user_load(_user_files)
         except BaseException:
             _user_variants.discard(active)
             raise
@@ -115,22 +112,23 @@ def register(variant: str | None = None) -> str:
 
 
 @contextlib.contextmanager
-def plugin_files(paths):
-    """For the block, run the plugin files ``paths`` (each calls ``mi.register_*`` with a
-    name of its own: :func:`phonglab.validate.core.load_plugins`, which refuses a name
-    Mitsuba or phonglab has) once in every variant :func:`register` activates, the active
-    one at its next call (``phonglab render --plugin``: the scene is loaded, in whatever
-    variant the render or its plan chose, with the user's plugins registered there)."""
-    global _user_files
-    previous = _user_files, set(_user_variants)
-    _user_files = tuple(str(p) for p in paths)
+def plugin_files(paths, load: Callable):
+    """For the block, run the plugin files ``paths`` with ``load`` (each file calls
+    ``mi.register_*`` with a name of its own:
+    :func:`phonglab.validate.loading.load_plugins`, which refuses a name Mitsuba or
+    phonglab has) once in every variant :func:`register` activates, the active one at its next
+    call (``phonglab render --plugin``: the scene is loaded, in whatever variant the render or
+    its plan chose, with the user's plugins registered there)."""
+    global _user_files, _user_load
+    previous = _user_files, _user_load, set(_user_variants)
+    _user_files, _user_load = tuple(str(p) for p in paths), load
     _user_variants.clear()
     try:
         yield
     finally:
-        _user_files = previous[0]
+        _user_files, _user_load = previous[:2]
         _user_variants.clear()
-        _user_variants.update(previous[1])
+        _user_variants.update(previous[2])
 
 
 def registered_variants() -> frozenset[str]:

@@ -1,5 +1,4 @@
-"""Helpers for the test suites of BSDF, emitter and integrator authors: one line validates a
-plugin inside pytest.
+"""Helpers for the test suites of plugin authors: one line validates a plugin inside pytest.
 
 ::
 
@@ -47,7 +46,7 @@ def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None
     unless ``allow_uncovered`` -- naming the applicable topics that judged nothing (every row
     skipped: :func:`phonglab.validate.core.not_covered`) with their skip reasons.
     ``timeout``: seconds a topic may run before it is stopped and becomes a failing row ("did
-    not finish within N s"; :func:`phonglab.validate.core.topic_timeout`: Python code only, in
+    not finish within N s"; :func:`phonglab.validate.timeout.topic_timeout`: Python code only, in
     the main thread -- a compiled Dr.Jit kernel runs to its end); loading a plugin file or the
     plugin that takes longer is a ValidateError.  A plugin that calls ``sys.exit`` or
     ``os._exit`` (:func:`phonglab.runtime.exits_intercepted`) is a failing row or an
@@ -56,7 +55,7 @@ def assert_valid(spec, kind: str | None = None, sweep: bool = True, timeout=None
     from . import validate as face
     from .dispatch import exit_call
     from .validate import registry, validate
-    from .validate.core import topic_timeout
+    from .validate.timeout import topic_timeout
 
     try:
         with runtime.exits_intercepted(), topic_timeout(timeout):

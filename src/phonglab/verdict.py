@@ -1,9 +1,10 @@
 """The one result record of phonglab: a :class:`Row` per verdict, a :class:`Report` of rows.
 
-Every harness writes its verdicts here: ``phonglab validate`` (one report per BSDF, a row's
-``topic`` one of :data:`phonglab.validate.TOPICS`) and ``phonglab check`` (one report per run,
-``topic`` the check's name).  A harness checks its own topic names (the validator's row,
-:class:`phonglab.validate.bsdf.topics.Row`, refuses any other); this module knows none.
+Every harness writes its verdicts here: ``phonglab validate`` (one report per plugin, a row's
+``topic`` one of its kind's, :attr:`phonglab.validate.kind.Kind.topics`) and ``phonglab
+check`` (one report per run, ``topic`` the check's name).  A harness checks its own topic names
+(a kind's row, :func:`phonglab.validate.kind.topic_row`, refuses any other); this module knows
+none.
 
 A row compares ``measured`` with ``expected`` within ``tolerance`` (``stderr``: the Monte Carlo
 standard error of ``measured``, None or 0 for a deterministic quantity); ``reason`` says what

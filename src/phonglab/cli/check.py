@@ -50,7 +50,7 @@ def add_parser(sub) -> None:
                    help="registered BSDF checked as the Lambertian (default lambert)")
     p.add_argument("--phong", default="phong", metavar="PLUGIN",
                    help="registered BSDF checked as the modified Phong (default phong)")
-    add_plugin(p)
+    add_plugin(p, "mi.register_bsdf")
     p.add_argument("--details", action="store_true",
                    help="print what each row compares, its source and details")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -59,11 +59,11 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..validate.core import topic_timeout
+    from ..validate.timeout import topic_timeout
 
     check_timeout(args.timeout)
     # Config refuses a bad --spp: built first, before the plugins load; the outputs next.
-    check_plugin_files(args.plugin)
+    check_plugin_files(args.plugin, "mi.register_bsdf")
     if args.json is not None:
         check_output_file(args.json, "JSON file (--json)",
                           [(path, "plugin file (--plugin)") for path in args.plugin])

@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
                    help="a parameter of the target (repeatable): a number, true/false, 'r, g, b', "
                         "a string or nested (bsdf.type=...), e.g. --set alpha=0.2 "
                         "--set distribution=ggx (grammar: phonglab.settings)")
-    add_plugin(p)
+    add_plugin(p, "mi.register_bsdf")
     p.add_argument("--model", choices=["phong", "lambert"], default="phong",
                    help="the classic model to fit (default phong)")
     p.add_argument("--maxiter", type=int, default=200, help="L-BFGS-B iterations at most (default 200)")
@@ -47,13 +47,13 @@ def run(args) -> int:
     # Imported here: outputs loads numpy and OpenEXR, which `phonglab --help` does not need.
     from ..engine.outputs import check_output_files, write_json, write_text
 
-    check_plugin_files(args.plugin)
+    check_plugin_files(args.plugin, "mi.register_bsdf")
     check_output_files([(args.json, "JSON file (--json)"), (args.report, "report (--report)")],
                        [(path, "plugin file (--plugin)") for path in args.plugin])
     # Imported here, not at the top: they load Mitsuba and scipy, which `phonglab --help` does not need.
     from .. import dispatch, registration, runtime
     from ..fit.optimize import fit, format_result
-    from ..validate.core import TopicTimeout, topic_timeout, within_topic_limit
+    from ..validate.timeout import TopicTimeout, topic_timeout, within_topic_limit
 
     variant = args.variant or runtime.default_variant()
     runtime.check_variant(variant)

@@ -44,17 +44,18 @@ def add_scene_params(p: argparse.ArgumentParser, *flags: str) -> None:
                         "(repeatable)")
 
 
-def add_plugin(p: argparse.ArgumentParser, register: str = "mi.register_bsdf") -> None:
+def add_plugin(p: argparse.ArgumentParser, register: str) -> None:
     """``--plugin FILE.py`` (repeatable): a Python file run once after the variant is set, as
-    ``phonglab validate --plugin`` runs it (:func:`phonglab.validate.core.load_plugins`)."""
+    ``phonglab validate --plugin`` runs it (:func:`phonglab.validate.loading.load_plugins`);
+    ``register``: the call such a file makes, for the help."""
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
                    help=f"a Python file run once after the variant is set; it calls {register} "
                         f"with a name of its own (repeatable)")
 
 
-def check_plugin_files(paths, register: str = "mi.register_bsdf") -> None:
-    """Each ``--plugin`` path is a file, before any work (one sentence otherwise:
-    :func:`phonglab.validate.inputs.check_plugin_file`)."""
+def check_plugin_files(paths, register: str) -> None:
+    """Each ``--plugin`` path is a file, before any work (one sentence otherwise, naming the
+    call ``register`` such a file makes: :func:`phonglab.validate.inputs.check_plugin_file`)."""
     from ..validate.inputs import check_plugin_file
 
     for path in paths:
@@ -63,10 +64,10 @@ def check_plugin_files(paths, register: str = "mi.register_bsdf") -> None:
 
 def load_plugin_files(paths) -> list[tuple[str, str]]:
     """Run the ``--plugin`` files once in the active variant (names Mitsuba or phonglab already
-    has refused): :func:`phonglab.validate.core.load_plugins`."""
+    has refused): :func:`phonglab.validate.loading.load_plugins`."""
     if not paths:
         return []
-    from ..validate.core import load_plugins
+    from ..validate.loading import load_plugins
 
     return load_plugins(paths)
 
@@ -74,7 +75,7 @@ def load_plugin_files(paths) -> list[tuple[str, str]]:
 def add_timeout(p: argparse.ArgumentParser, what: str) -> None:
     """``--timeout SECONDS``: the limit of each ``what`` (and of loading each ``--plugin``
     file), checked by :func:`check_timeout` before any work
-    (:func:`phonglab.validate.core.topic_timeout`)."""
+    (:func:`phonglab.validate.timeout.topic_timeout`)."""
     p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                    help=f"stop a {what} that runs longer than this (and a --plugin file that "
                         f"takes longer to load): {what} becomes a failing row, a file one "

@@ -140,7 +140,9 @@ def run(args) -> int:
     if args.output is not None:      # "" and a name ending in '/' too
         check_output_file(args.output, "output image (-o)", inputs)
     RenderOutputs.beside(out).check(inputs)      # every file of the set, before any work
-    with registration.plugin_files(args.plugin):  # run in each variant the render sets
+    from ..validate.loading import load_plugins   # lazy: Mitsuba
+
+    with registration.plugin_files(args.plugin, load_plugins):  # in each variant it sets
         try:
             return _render(args, how, path, out)
         except Exception as exc:

@@ -1,6 +1,5 @@
 """``phonglab validate``: physics conformance of one plugin of any kind of
-:data:`phonglab.validate.registry.KINDS` (a BSDF, an emitter, an integrator, ...) or of every
-built-in, as a table.
+:data:`phonglab.validate.registry.KINDS` or of every built-in, as a table.
 
 One path for every kind: the variant is set, the ``--plugin`` files run once (a file that
 registers a name Mitsuba or phonglab already has is refused), the kind is detected from what
@@ -27,13 +26,20 @@ from ..validate.inputs import ValidateError, check_plugin_file, check_topics
 from ..verdict import Report
 from .options import add_seed, check_timeout
 
+
+def _scene_kinds() -> list:
+    """The kinds a plugin of a scene file can be picked from by id (``--<tag> ID``)."""
+    return [k for k in registry.KINDS if k.scene_noun]
+
+
 EPILOG = """examples:
   phonglab validate diffuse
   phonglab validate roughconductor          # Mitsuba's documented findings are KNOWN rows
   phonglab validate roughplastic --set alpha=0.25 --set distribution=ggx --quick
   phonglab validate mybsdf --plugin mybsdf.py --report out/mybsdf.html
   phonglab validate material.xml            # a built-in in a file: its findings as by name
-  phonglab validate scene.xml --bsdf metal  # a scene's material, as the scene loads it
+""" + "".join(f"  phonglab validate scene.xml --{k.tag} ID     # a scene's {k.scene_noun}, as the "
+              f"scene loads it\n" for k in _scene_kinds()) + """\
   phonglab validate twosided --set nested.type=diffuse --set nested.reflectance=0.3,0.4,0.5
   phonglab validate point --quick
   phonglab validate area --set shape.type=sphere --set shape.flip_normals=true
@@ -58,19 +64,22 @@ def add_parser(sub) -> None:
         description="Validate a Mitsuba 3 plugin (a registered plugin type, a Python plugin "
                     "registered by --plugin, or an XML file holding one) on every topic of "
                     "its kind, detected from the plugin, and print one row per check: "
-                    f"{_kinds_text()}. --set shape.type=sphere attaches an area emitter to a "
-                    "shape. Exits 0 when all pass, 1 when a row fails, 2 on bad input, 3 when nothing "
+                    f"{_kinds_text()}. "
+                    + "".join(f"--set {o}.type=... gives {k.article} {k.word} its {o}. "
+                              for k in registry.KINDS for o in k.load_options)
+                    + "Exits 0 when all pass, 1 when a row fails, 2 on bad input, 3 when nothing "
                     "fails but a topic that applies judged nothing (not covered; "
                     "--allow-uncovered accepts it).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("bsdf", nargs="?", metavar="PLUGIN",
-                   help="plugin type name (a BSDF: diffuse, roughplastic, lambert, ...; an "
-                        "emitter: point, area, constant, ...; an integrator: path, direct, ...) "
-                        "or an XML file; with --bsdf ID, a scene file")
-    p.add_argument("--bsdf", dest="scene_bsdf", metavar="ID",
-                   help="validate the BSDF with this id of the scene file given as PLUGIN, as "
-                        "the scene loads it (its built-in's findings apply as by name; "
-                        "--plugin files run first)")
+    p.add_argument("target", nargs="?", metavar="PLUGIN",
+                   help="plugin type name (diffuse, roughplastic, lambert, point, area, path, "
+                        "...: of any kind above) or an XML file"
+                        + "".join(f"; with --{k.tag} ID, a scene file" for k in _scene_kinds()))
+    for k in _scene_kinds():
+        p.add_argument(f"--{k.tag}", dest=f"scene_{k.name}", metavar="ID",
+                       help=f"validate the {k.word} with this id of the scene file given as "
+                            f"PLUGIN, as the scene loads it (its built-in's findings apply as "
+                            f"by name; --plugin files run first)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: float, RGB 'r,g,b', string, or nested (nested.type=diffuse)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
@@ -97,7 +106,7 @@ def add_parser(sub) -> None:
                         "is swept across its range: its ends, middle and edge values, one at "
                         "a time, plus all at minimum and all at maximum; --set pins one)")
     p.add_argument("--no-known", action="store_true",
-                   help="report a Mitsuba built-in's documented findings (docs/conformance.md) "
+                   help="report a Mitsuba built-in's documented findings (docs/conformance*.md) "
                         "as fails; by default a Mitsuba built-in carries them (by its type name, "
                         "as an XML file or a scene's material: identified from what is loaded), "
                         "each only inside its own signature, as KNOWN rows, and a row a "
@@ -105,11 +114,11 @@ def add_parser(sub) -> None:
                         "child named")
     p.add_argument("--allow-uncovered", action="store_true",
                    help="exit 0 even when a topic that applies to the plugin judged nothing "
-                        "(every row of it skipped, e.g. an integrator whose depth could not be "
-                        "measured); by default such a run is 'not covered' and exits 3. Topics "
+                        "(every row of it skipped: a topic that could not measure what it "
+                        "needs); by default such a run is 'not covered' and exits 3. Topics "
                         "that genuinely do not apply (cost; polarized topics in an RGB "
-                        "variant; gradient without AD; a delta-only BSDF's densities) never "
-                        "count")
+                        "variant; gradient without AD; the densities of a plugin that has "
+                        "none) never count")
     p.add_argument("--all-builtins", action="store_true",
                    help="validate every case of the built-in catalogue (phonglab.validate.registry.catalogue: each kind's table); "
                         "with --json each finished case is kept in JSON.partial.jsonl at once, "
@@ -131,22 +140,22 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     from ..engine import outputs  # lazy: outputs loads matplotlib (tonemap), not needed for --help
     topics = args.only and check_topics(args.only, registry.every_topic())
     if args.all_builtins:
-        if args.bsdf or args.set or args.plugin:
-            raise ValidateError("--all-builtins takes no BSDF, --set or --plugin; drop them or "
+        if args.target or args.set or args.plugin:
+            raise ValidateError("--all-builtins takes no plugin, --set or --plugin; drop them or "
                                 "drop --all-builtins")
-    elif not args.bsdf:
+    elif not args.target:
         raise ValidateError("name the plugin to validate (e.g. phonglab validate diffuse) or "
                             "give --all-builtins")
     for path in args.plugin:
         check_plugin_file(path)
-    if args.bsdf and args.bsdf.endswith(".xml") and not Path(args.bsdf).is_file():
-        raise ValidateError(f"XML file {args.bsdf!r} "
-                            f"{'is a folder' if Path(args.bsdf).is_dir() else 'does not exist'}")
+    if args.target and args.target.endswith(".xml") and not Path(args.target).is_file():
+        raise ValidateError(f"XML file {args.target!r} "
+                            f"{'is a folder' if Path(args.target).is_dir() else 'does not exist'}")
     _check_scene(args)
     check_timeout(args.timeout)
     inputs = [(path, "plugin file (--plugin)") for path in args.plugin]
-    if args.bsdf and args.bsdf.endswith(".xml"):
-        inputs.append((args.bsdf, "XML file"))
+    if args.target and args.target.endswith(".xml"):
+        inputs.append((args.target, "XML file"))
     outputs.check_output_files([(args.json, "JSON report (--json)"),
                                 (args.report, "HTML report (--report)")], inputs)
     if args.report is not None and not args.report.endswith((".html", ".htm")):
@@ -156,22 +165,37 @@ def _check_inputs(args) -> tuple[dict, tuple[str, ...]]:
     return parse_sets(args.set), topics
 
 
+def scene_pick(args) -> tuple | None:
+    """(kind, id) of the plugin ``--<tag> ID`` picks from the scene file, None without one."""
+    picked = [(k, getattr(args, f"scene_{k.name}")) for k in _scene_kinds()
+              if getattr(args, f"scene_{k.name}") is not None]
+    if len(picked) > 1:
+        raise ValidateError(f"{' and '.join(f'--{k.tag} {i}' for k, i in picked)} each name a "
+                            f"plugin of the scene; validate one at a time")
+    return picked[0] if picked else None
+
+
 def _check_scene(args) -> None:
-    """A scene file goes with --bsdf ID, and --bsdf ID with a scene file (no --set)."""
+    """A scene file goes with --<tag> ID, and --<tag> ID with a scene file (no --set)."""
     from ..validate.inputs import xml_root_tag
-    scene = bool(args.bsdf) and args.bsdf.endswith(".xml") and xml_root_tag(args.bsdf) == "scene"
-    if args.scene_bsdf is None:
-        if scene:
-            raise ValidateError(f"{args.bsdf} is a scene; name the material to validate with "
-                                f"--bsdf ID (the id of one of its <bsdf> elements)")
+    scene = (bool(args.target) and args.target.endswith(".xml")
+             and xml_root_tag(args.target) == "scene")
+    picked = scene_pick(args)
+    if picked is None:
+        if scene and _scene_kinds():     # else the kind's detection refuses the <scene>
+            raise ValidateError(f"{args.target} is a scene; name the "
+                                + " or ".join(f"{k.scene_noun} to validate with --{k.tag} ID "
+                                              f"(the id of one of its <{k.tag}> elements)"
+                                              for k in _scene_kinds()))
         return
+    kind, ident = picked
     if args.all_builtins or not scene:
-        raise ValidateError(f"--bsdf {args.scene_bsdf} names a material of a scene: give the "
-                            f"scene file as PLUGIN (phonglab validate scene.xml --bsdf "
-                            f"{args.scene_bsdf})")
+        raise ValidateError(f"--{kind.tag} {ident} names a {kind.scene_noun} of a scene: give "
+                            f"the scene file as PLUGIN (phonglab validate scene.xml --{kind.tag} "
+                            f"{ident})")
     if args.set:
-        raise ValidateError("--set cannot change a scene's material; edit the scene file, or "
-                            "validate the material by its type name with --set")
+        raise ValidateError(f"--set cannot change a scene's {kind.scene_noun}; edit the scene "
+                            f"file, or validate the {kind.scene_noun} by its type name with --set")
 
 
 def sweep_text(report: Report) -> str:
@@ -238,30 +262,6 @@ def _all_builtins(args) -> int:
     return 1 if result["meta"]["failed"] else 0
 
 
-def builtin_known(args, kind, params: dict) -> dict | str | None:
-    """The documented causes of a Mitsuba built-in (the kind's ``known_for``: its conformance
-    table's findings of that plugin, a BSDF's of its microfacet distribution, an area
-    emitter's of the same shape); None with ``--no-known``.
-
-    A kind that can tell a built-in from the loaded object (its ``identify`` part: BSDFs) gets
-    :data:`~phonglab.validate.builtin.BUILTIN`: the findings of what is loaded, by type name,
-    XML file or scene alike, and those its built-in children pass on to a wrapper
-    (:mod:`phonglab.validate.builtin`).  Another kind gets them by its type name only: none
-    for an XML file, a run with ``--plugin`` files or phonglab's own plugins."""
-    from ..registration import PLUGINS
-
-    if args.no_known:
-        return None
-    if kind.part("identify") is not None:
-        from ..validate.builtin import BUILTIN
-        return BUILTIN
-    if (args.plugin or args.bsdf.endswith(".xml")
-            or args.bsdf in {name for _, name, _ in PLUGINS}):
-        return None
-    known_for = kind.part("known_for")
-    return (known_for(args.bsdf, params) or None) if known_for is not None else None
-
-
 def known_note(report: Report, label: str, doc: str = "docs/conformance.md") -> str:
     """The lines under a table with KNOWN rows from a built-in's documented findings: its own,
     and those inherited from built-in children (one line each: row, child, findings)."""
@@ -312,17 +312,18 @@ def which_plugin(name: str, kind, registered) -> str:
 
 
 def validate_one(args, params: dict):
-    """(report, label, text) of the plugin ``args.bsdf``: the one pipeline
+    """(report, label, text) of the plugin ``args.target``: the one pipeline
     (:func:`phonglab.validate.pipeline.validate`), then the text of its report."""
     from ..validate import pipeline   # lazy: Mitsuba loads only for a run
     from ..validate.builtin import BUILTIN
 
+    scene_kind, scene_id = scene_pick(args) or (None, None)
     with runner_from_args(args) as runner:
-        report = pipeline.validate(args.bsdf, variant=args.variant, params=params,
-                                   plugins=args.plugin, topics=args.only, seed=args.seed,
-                                   quick=args.quick, known=None if args.no_known else BUILTIN,
-                                   sweep=not args.no_sweep, runner=runner,
-                                   scene_bsdf=args.scene_bsdf)
+        report = pipeline.validate(args.target, kind=scene_kind, variant=args.variant,
+                                   params=params, plugins=args.plugin, topics=args.only,
+                                   seed=args.seed, quick=args.quick,
+                                   known=None if args.no_known else BUILTIN,
+                                   sweep=not args.no_sweep, runner=runner, scene_id=scene_id)
     kind = registry.by_name(report.meta["kind"])
     text = report.table() if args.no_sweep else sweep_text(report)
     label = report.meta["plugin"]
@@ -330,9 +331,9 @@ def validate_one(args, params: dict):
         from ..validate import profile
         text += "\n\n" + profile.table(report.meta.get("profile", {}),
                                         report.meta.get("sweep", {}).get("runs", ()))
-    text += known_note(report, args.bsdf, kind.conformance)
-    if args.scene_bsdf is None:
-        text += which_plugin(args.bsdf if isinstance(args.bsdf, str) else label, kind,
+    text += known_note(report, args.target, kind.conformance)
+    if scene_id is None:
+        text += which_plugin(args.target if isinstance(args.target, str) else label, kind,
                              report.meta.get("registered", ()))
     return report, label, text
 
@@ -342,7 +343,7 @@ def run(args) -> int:
     if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
-    from ..validate.core import topic_timeout   # lazy: Mitsuba loads only for a run
+    from ..validate.timeout import topic_timeout   # lazy: Mitsuba loads only for a run
 
     if args.all_builtins:
         with topic_timeout(args.timeout):

@@ -1,24 +1,11 @@
 """Physics conformance of any Mitsuba 3 plugin: one validator per kind, and its report.
 
 The kinds are listed once, in :data:`~.registry.KINDS` (:mod:`.registry`; what a kind is:
-:mod:`.kind`); this face gives each its ``validate_<kind>`` function (``validate_bsdf``,
-``validate_emitter``, ``validate_integrator``, ...) and :func:`validate`, which detects the
-kind.  The runner is kind-independent (:mod:`.core`: guarded topics, Šidák over the
-statistical rows, KNOWN causes, the report) and so is the parameter sweep (:mod:`.sweep`); a
-kind's folder brings its topics:
-
-* BSDFs (:mod:`.bsdf`): ``finite``, ``eval_pdf``, ``weight``, ``pdf``, ``chi2``,
-  ``normalization``, ``energy``, ``reciprocity``, ``component``, ``eval_null_transmission``,
-  ``eval_diffuse_reflectance``, the polarized ``mueller``, ``intensity``,
-  ``mueller_identities``, ``mueller_reciprocity``, ``gradient``, ``cost``;
-* emitters (:mod:`.emitter`): ``finite``, ``weight``, ``pdf``, ``chi2``, ``power``,
-  ``gradient``, ``cost``;
-* integrators (:mod:`.integrator`): ``finite``, ``bias``, ``convergence``, ``agreement``,
-  ``gradient``, ``cost``;
-* phase functions (:mod:`.phase`): ``finite``, ``weight``, ``pdf``, ``chi2``,
-  ``normalization``, ``reciprocity``, ``gradient``, ``cost``;
-* participating media (:mod:`.medium`): ``finite``, ``majorant``, ``albedo``,
-  ``transmittance``, ``bounds``, ``flags``, ``overrides``, ``phase``, ``cost``.
+:mod:`.kind`); this face gives each its ``validate_<kind>`` function (the kind's
+:attr:`~.kind.Kind.function`) and :func:`validate`, which detects the kind.  The runner is
+kind-independent (:mod:`.core`: guarded topics, Šidák over the statistical rows, KNOWN causes
+(:mod:`.known`), the report) and so is the parameter sweep (:mod:`.sweep`); a kind's folder
+brings its topics (its record's :attr:`~.kind.Kind.topics`, one module per topic family).
 
 Rows and reports: :mod:`phonglab.verdict`; user input: :mod:`.inputs` and
 :mod:`phonglab.settings`; Mitsuba's built-ins and their findings: each kind's ``builtins`` module; many
@@ -27,10 +14,9 @@ starts fast); the validators do.
 """
 
 from ..verdict import Report
-from .bsdf.topics import TOPICS
 from .registry import KINDS, detect
 
-__all__ = ["KINDS", "TOPICS", "validate", *(k.function for k in KINDS)]
+__all__ = ["KINDS", "validate", *(k.function for k in KINDS)]
 
 
 def validate(spec, *, variant=None, params=None, plugins=(), sweep=True, runner=None,

@@ -1,8 +1,9 @@
-"""Many BSDFs as independent jobs: :func:`run_case` (picklable, one case -> one report dict).
+"""Many plugins as independent jobs: :func:`run_case` (picklable, one case -> one report dict).
 
-``phonglab validate --all-builtins`` maps :func:`run_case` over the cases of
-:func:`phonglab.validate.registry.catalogue` (a kind's conformance table).  Each job sets its own variant, loads its own BSDF and
-returns plain JSON-able data, so an execution layer (a process pool, ``dask.distributed``'s
+``phonglab validate --all-builtins`` and ``make conformance`` map :func:`run_case` over the
+cases of a kind's conformance table (:func:`phonglab.validate.registry.catalogue`; the kind is
+``options["kind"]``, :data:`~phonglab.validate.registry.DEFAULT` when it names none).  Each
+job sets its own variant, loads its own plugin and returns plain JSON-able data, so an execution layer (a process pool, ``dask.distributed``'s
 ``client.map(run_case, labels, options=...)``) can run them anywhere; Mitsuba/Dr.Jit state is
 per process, so jobs parallelize over processes, not threads.  A case that cannot be loaded
 becomes a report with one failing ``finite`` row naming the error, not an exception: one bad
@@ -22,57 +23,60 @@ from ..engine.outputs import jsonable
 from ..verdict import Report, Row, point_label
 from . import registry
 from .. import validate as face
-from .registry import catalogue
+from .kind import Kind
 
 
-def find_case(case, kind: str = "bsdf"):
+def kind_of(options: dict | None) -> Kind:
+    """The kind whose table ``options`` run: ``options["kind"]``, else
+    :data:`~phonglab.validate.registry.DEFAULT`."""
+    name = (options or {}).get("kind")
+    return registry.by_name(name) if name else registry.DEFAULT
+
+
+def find_case(case, kind: Kind):
     """A case of ``kind``'s catalogue (:func:`~phonglab.validate.registry.catalogue`)
     from itself or its label."""
     if not isinstance(case, str):
         return case
-    return catalogue(kind).find(case)
+    return registry.catalogue(kind.name).find(case)
 
 
-def _validate(case, kind: str, options: dict) -> Report:
+def _validate(case, kind: Kind, options: dict) -> Report:
     """The kind's validator on one case (with the case's own options, e.g. an area emitter's
     shape; a case with ``skip`` set: one skipped row saying why)."""
     common = dict(variant=case.resolved_variant(), known=case.known,
                   seed=options.get("seed", 0), quick=options.get("quick", False),
                   topics=options.get("topics"))
     if getattr(case, "skip", ""):
-        return Report({kind: case.plugin, "variant": case.resolved_variant()},
+        return Report({kind.name: case.plugin, "variant": case.resolved_variant()},
                       [Row("finite", "the case loads and runs", None, None, None, None,
                            "skipped", case.skip)])
-    if kind != "bsdf":
-        from .. import registration  # phonglab's own plugins (whitted) in it
-        registration.register(common["variant"])
-    return getattr(face, registry.by_name(kind).function)(case.spec, **common,
-                                              sweep=options.get("sweep", False),
-                                              **getattr(case, "options", {}))
+    return getattr(face, kind.function)(case.spec, **common, sweep=options.get("sweep", False),
+                                        **getattr(case, "options", {}))
 
 
 def run_case(case, options: dict | None = None) -> dict:
-    """Validate one case (a Case or its label); ``options``: seed, quick, topics, ``kind``
-    (the catalogue: "bsdf", the default, "emitter" or "integrator") and ``sweep`` (BSDFs;
-    True: across the case's parameter sweep, the keys of its spec pinned, so the case is the
-    sweep's given point; default: the case's point alone).
+    """Validate one case (a case of the table or its label); ``options``: seed, quick, topics,
+    ``kind`` (whose table: :func:`kind_of`) and ``sweep`` (True: across the case's parameter
+    sweep, the keys of its spec pinned, so the case is the sweep's given point; default: the
+    case's point alone).
 
-    Returns ``Report.to_dict()`` with ``meta["case"]`` set to the label.
+    Returns ``Report.to_dict()`` with ``meta["case"]`` set to the label and what the case adds
+    (its ``meta()``: its note, ...).
     """
     options = dict(options or {})
-    kind = options.get("kind", "bsdf")
+    kind = kind_of(options)
     case = find_case(case, kind)
     t0 = time.perf_counter()
     try:
         report = _validate(case, kind, options)
     except Exception as exc:      # one broken case is a result, not the end of the batch
-        report = Report({kind: case.plugin, "variant": case.variant, "error": repr(exc)},
+        report = Report({kind.name: case.plugin, "variant": case.variant, "error": repr(exc)},
                         [Row("finite", "the case loads and runs", None, None, None, None, "fail",
                              f"{type(exc).__name__}: {str(exc).splitlines()[0][:300] if str(exc) else ''}",
                              {"traceback": traceback.format_exc()[-2000:]})])
     d = report.to_dict()
-    extra = {"delta": case.delta} if kind == "bsdf" else {}
-    d["meta"].update(case=case.label, note=case.note, **extra,
+    d["meta"].update(case=case.label, **case.meta(),
                      wall_seconds=round(time.perf_counter() - t0, 3))
     return d
 
@@ -132,8 +136,7 @@ def run_all(cases=None, options: dict | None = None, progress=None,
     added to it as it finishes.
     """
     if cases is None:
-        kind = (options or {}).get("kind", "bsdf")
-        cases = catalogue(kind).cases()
+        cases = registry.catalogue(kind_of(options).name).cases()
     results = dict(log.done) if log is not None else {}
     todo = [case for case in cases if case.label not in results]
 
@@ -157,21 +160,22 @@ def run_all(cases=None, options: dict | None = None, progress=None,
             "reports": reports}
 
 
-def false_failures(cases, seeds: int, quick: bool = False, plugins=(), sweep=False,
-                   kind: str = "bsdf") -> dict:
+def false_failures(cases, seeds: int, quick: bool = False, plugins=(), sweep=False, *,
+                   kind: str) -> dict:
     """Run each case over seeds 0..seeds−1: {label: [(seed, failing topics), ...]}, one pair
     per seed (an empty list: the run passed; in a sweep a topic is named with its point,
     ``chi2 at exponent=1``).
 
     ``cases``: plugin names, or {label: (spec, params)} or {label: (spec, params, known)}
-    (``known``: the documented causes, as for :func:`phonglab.validate.validate`), all of one ``kind``
-    (a :data:`~phonglab.validate.registry.KINDS` word); ``plugins``: files that register
+    (``known``: the documented causes, as for :func:`phonglab.validate.validate`), all of one
+    ``kind`` (the name of the kind whose topics run); ``plugins``: files that register
     them; ``sweep``: each run across the plugin's parameter sweep (``params`` pinned).
-    ``cost`` is left out (informational, it never fails).  For a correct plugin every failing
+    Its informational topics (``cost``) are left out: they never fail.  For a correct plugin every failing
     run is a false failure and each run fails with probability ≤ ALPHA by construction; for a
     planted defect every passing run (no failing topic) is a false pass.
     """
-    topics = [t for t in registry.by_name(kind).topics if t != "cost"]
+    k = registry.by_name(kind)
+    topics = [t for t in k.topics if t not in k.informational]
     if not isinstance(cases, dict):
         cases = {name: (name, None) for name in cases}
     out = {}

@@ -7,7 +7,7 @@ as a dict, in an XML file, as a material of a scene, or as the child of a plugin
 * :func:`identify`: which built-in the loaded object is and its load-time parameters (the
   kind's ``identify`` part, :mod:`phonglab.validate.bsdf.identify`: its C++ class and what
   it was loaded from), so a type name, a dict, an XML file and a scene's object carrying the
-  same built-in get the same findings by the same rule (:func:`phonglab.validate.core.mark_known`:
+  same built-in get the same findings by the same rule (:func:`phonglab.validate.known.mark_known`:
   a lane outside every signature stays a fail; ``at=`` conditions held against its parameters,
   those the XML gives included; ``given=`` settings against what it loaded);
 * :func:`mark_inherited`: a plugin whose result flows through built-in children (a Python
@@ -38,6 +38,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..verdict import Row
+from .known import known_entries
 
 #: ``known`` value asking for the loaded built-in's findings and its children's (module
 #: docstring).
@@ -132,9 +133,7 @@ def mark_inherited(rows: list[Row], kids: list[Child], judge: Callable,
     """Mark the failing ``rows`` inherited from ``kids`` (module docstring), in place; one
     record per inherited row.  ``judge(child, topic)``: the child's own rows on ``topic``;
     ``covered(row, causes)``: (all lanes covered?, the causes used) as
-    :func:`phonglab.validate.core.mark_known` decides it."""
-    from .core import known_entries
-
+    :func:`phonglab.validate.known.mark_known` decides it."""
     records = []
     for r in rows:
         if r.status != "fail":
@@ -186,13 +185,14 @@ def mark_inherited(rows: list[Row], kids: list[Child], judge: Callable,
     return records
 
 
-def scene_material(kind, path, ident: str):
-    """The BSDF with ``id="ident"`` of the scene file ``path`` as the scene loads it (the
-    variant set, the plugin files run): a :class:`~phonglab.settings.Loaded` whose ``origin``
-    names the scene and the id (its XML element gives the load-time parameters its findings'
-    ``at=`` conditions hold against).  Found on the scene's shapes (``shape.bsdf()``) and
-    inside them (the kind's ``children``: a material nested in a two-sided shell); a missing
-    id is a :class:`~phonglab.validate.inputs.ValidateError` listing the ids there are."""
+def scene_object(kind, path, ident: str):
+    """The plugin of ``kind`` with ``id="ident"`` in the scene file ``path`` as the scene loads
+    it (the variant set, the plugin files run): a :class:`~phonglab.settings.Loaded` whose
+    ``origin`` names the scene and the id (its XML element gives the load-time parameters its
+    findings' ``at=`` conditions hold against).  Found among those the kind's ``in_scene`` part
+    lists (a scene's shapes' materials) and inside them (the kind's ``children``: a material
+    nested in a two-sided shell); a missing id is a
+    :class:`~phonglab.validate.inputs.ValidateError` listing the ids there are."""
     from pathlib import Path
 
     from ..engine.scenes import load_scene
@@ -206,16 +206,13 @@ def scene_material(kind, path, ident: str):
         raise ValidateError(str(exc)) from exc
     nested = kind.part("children") or (lambda plugin: [])
     found: dict = {}
-    for shape in scene.shapes():
-        top = shape.bsdf()
-        if top is None:
-            continue
+    for top in kind.part("in_scene")(scene):
         for obj in [top] + [c for _, c in nested(top)]:
             found.setdefault(obj.id(), obj)
     if ident not in found:
         named = sorted(i for i in found if i and not i.startswith("_"))
         raise ValidateError(f"{path} has no {kind.word} with id {ident!r} on its shapes; "
-                            + (f"its {kind.word}s with an id: {', '.join(named)}" if named
+                            + (f"its {kind.plural} with an id: {', '.join(named)}" if named
                                else f"give a <{kind.tag}> of it an id=\"...\""))
     plugin = found[ident]
     name = (identify(kind, plugin) or Identity(type(plugin).__name__, {})).type

@@ -1,16 +1,16 @@
 r"""The records of the conformance tables, one per plugin kind: what ``make conformance``
-(scripts/conformance.py ``--kind bsdf|emitter|integrator``) runs, and what docs/conformance*.md
-are rendered from (:mod:`phonglab.validate.markdown`).
+(scripts/conformance.py ``--all-kinds``, or ``--kind NAME`` for one) runs, and what
+docs/conformance*.md are rendered from (:mod:`phonglab.validate.markdown`).
 
-A :class:`Catalogue` names a kind's cases, the validator function that checks one case, its
-topics, its documented Mitsuba findings (:class:`Finding`, matched by signature),
-its open validator issues and the 3.9.1 plugins it leaves out.  The BSDF catalogue
-is :mod:`phonglab.validate.bsdf.builtins`; the emitter and integrator ones are
-:mod:`phonglab.validate.emitter.builtins` and :mod:`phonglab.validate.integrator.builtins`,
-whose cases are :class:`KindCase` (a BSDF :class:`~phonglab.validate.bsdf.builtins.Case` has a
-delta flag and a sweep; these have keyword options of their validator instead, e.g. an area
-emitter's shape).  Each kind's table is its ``catalogue`` part
-(:func:`phonglab.validate.registry.catalogue`).
+A :class:`Catalogue` names a kind's cases, its documented Mitsuba findings (:class:`Finding`,
+matched by signature), its open validator issues and the 3.9.1 plugins it leaves
+out; what it is the table of -- the kind's name, words, topics, validator and the path of its
+table -- is its :class:`~phonglab.validate.kind.Kind` (:attr:`Catalogue.kind`).  Each kind's
+table is its ``catalogue`` part, in its folder's ``builtins`` module, given its kind by
+:func:`phonglab.validate.registry.catalogue` (a kind's implementation cannot import its own
+record: the record imports it).  Its cases are :class:`KindCase` (keyword options of their
+validator, e.g. an area emitter's shape) or a kind's own case type with the same ``label``,
+``spec``, ``known``, ``note``, ``plugin``, ``resolved_variant()`` and ``meta()``.
 
 A :class:`Finding` pins a row that fails in Mitsuba to its source line (``file:line`` at tag
 v3.9.1, commit :data:`MITSUBA_COMMIT`) and a short excerpt of the code there (which
@@ -28,7 +28,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 from .. import runtime
-from .core import Known
+from .kind import Kind
+from .known import Known
 
 
 #: Mitsuba release the catalogue and the source lines refer to (tag v3.9.1).
@@ -73,7 +74,7 @@ class Finding:
         return f"{self.source}: {self.cause}"
 
     def known(self) -> Known:
-        """The case's :class:`~phonglab.validate.core.Known`: the cause with its signature."""
+        """The case's :class:`~phonglab.validate.known.Known`: the cause with its signature."""
         return Known(self.known_text(), self.rows, self.region, self.key, self.at)
 
 
@@ -113,26 +114,43 @@ class KindCase:
         """The variant the case runs in."""
         return self.variant or runtime.default_variant()
 
+    def meta(self) -> dict:
+        """What the case adds to its report's meta (:func:`phonglab.validate.batch.run_case`)."""
+        return {"note": self.note}
+
+
+#: What regenerates every conformance table (the Makefile's target).
+COMMAND = "make conformance"
+
 
 @dataclass(frozen=True)
 class Catalogue:
     """Everything one kind's conformance table needs."""
 
-    kind: str                        #: "bsdf", "emitter" or "integrator"
-    noun: str                        #: "BSDFs", "emitters", "integrators" (the title's)
-    word: str                        #: one case is one <word> at one setting
     cases: Callable[[], list]        #: every case, in table order
-    topics: tuple[str, ...]
-    validate: str                    #: the phonglab.validate function name
     cases_name: str                  #: where :attr:`cases` lives, for the markdown
     findings: tuple[Finding, ...]
+    findings_name: str               #: where :attr:`findings` lives, for the markdown
     validator_issues: tuple[ValidatorIssue, ...]
     left_out: dict[str, str]
-    json: str                        #: the committed JSON (docs/...)
-    markdown: str                    #: the committed markdown (docs/...)
-    command: str                     #: what regenerates them
-    #: how the markdown's header describes one case ("... at one parameter setting")
-    case_text: str = ""
+    tests: str                       #: the test file whose slow tier runs the reproducers
+    #: how the markdown's header describes one case ("one BSDF at one parameter setting")
+    case_text: str
+    #: whether ``make conformance`` runs each case through its parameter sweep (else at its
+    #: given point only)
+    sweep: bool = True
+    #: the kind it is the table of (:func:`phonglab.validate.registry.catalogue` gives it)
+    kind: Kind | None = None
+
+    @property
+    def markdown(self) -> str:
+        """The committed markdown (docs/...md, the kind's :attr:`~.kind.Kind.conformance`)."""
+        return self.kind.conformance
+
+    @property
+    def json(self) -> str:
+        """The committed JSON the markdown is rendered from, beside it."""
+        return self.markdown.removesuffix(".md") + ".json"
 
     def open_issues(self) -> dict[tuple[str, str], ValidatorIssue]:
         """(label, topic) -> the open validator issue explaining that row's fail."""
@@ -142,7 +160,7 @@ class Catalogue:
         for c in self.cases():
             if c.label == label:
                 return c
-        raise KeyError(f"no built-in {self.kind} case labelled {label!r}")
+        raise KeyError(f"no case labelled {label!r} in the table of {self.cases_name}")
 
 
 def with_known(cases: list, findings: tuple[Finding, ...]) -> list:

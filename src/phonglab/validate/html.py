@@ -128,7 +128,8 @@ def _chi2_cells(d: dict) -> str:
 def render(report: Report) -> str:
     """The HTML text of ``report``."""
     m = report.meta
-    name = m.get("plugin", m.get("bsdf", "?"))       # reports written before "plugin": a BSDF's
+    # a report without "plugin" (a caller's own meta) keys the label by its kind's name
+    name = m.get("plugin") or next((m[k.name] for k in registry.KINDS if k.name in m), "?")
     word = registry.by_name(m["kind"]).word + " " if m.get("kind") in registry.names() else ""
     title = f"phonglab validate: {word}{name} ({m.get('variant', '?')})"
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failing)} rows)"

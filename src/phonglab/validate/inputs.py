@@ -13,7 +13,7 @@ from .kind import ValidateError, check_topics
 __all__ = ["ValidateError", "check_plugin_file", "check_topics", "xml_head", "xml_root_tag"]
 
 #: What a ``--plugin`` file calls when the kind it registers is not known yet.
-ANY_REGISTER = "mi.register_bsdf (or another mi.register_*)"
+ANY_REGISTER = "one of Mitsuba's mi.register_* functions"
 
 
 def check_plugin_file(path, register: str = ANY_REGISTER) -> Path:

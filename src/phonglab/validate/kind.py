@@ -1,10 +1,12 @@
 r"""What a plugin kind is: one :class:`Kind` record, all the validator needs to know of it.
 
-A kind (BSDF, emitter, integrator, phase function) is one folder of :mod:`phonglab.validate`
-and one line of :data:`phonglab.validate.registry.KINDS`.  Its folder's ``__init__`` declares
-its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its input
-from these records); its *implementation module* (``impl``, the folder's ``kind`` module,
-which imports Mitsuba) holds the parts that run, looked up by name with :meth:`Kind.part`:
+A plugin kind is one folder of :mod:`phonglab.validate` and one line of
+:data:`phonglab.validate.registry.KINDS`; no other module names it.  Its folder's ``__init__``
+declares its :class:`Kind` (no Mitsuba import: the command line builds its help and checks its
+input from these records); its *implementation module* (the folder's ``kind`` module, which imports
+Mitsuba: the zero-argument function :attr:`Kind.implementation` the folder gives its record
+imports it when a part is first asked for) holds the parts that run, looked up by name with
+:meth:`Kind.part`:
 
 ==================  ==========================================================================
 ``options``         (quick, seed, topics) -> the sizes of a run
@@ -26,13 +28,18 @@ which imports Mitsuba) holds the parts that run, looked up by name with :meth:`K
                     findings follow what is loaded, not how it was named)
 ``children``        plugin -> [(path, child)]: the plugins of the kind it holds (a wrapper's
                     nested BSDF), whose findings its rows may inherit (:mod:`.builtin`)
-``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`)
+``catalogue``       () -> its conformance table (:class:`~.conformance.Catalogue`; the table
+                    is given its kind by :func:`.registry.catalogue`)
 ``returns``         (plugin, label) -> None: the types its Python methods return, checked on
                     one lane right after the default load (:mod:`.returns`); a mismatch is a
                     :class:`ValidateError`
 ``session``         () -> a context manager around a whole run (every point of a sweep):
                     what its topics keep across points, closed when it ends (a BSDF's
                     unpolarized reference process, :func:`.bsdf.intensity.session`)
+``in_scene``        scene -> the plugins of the kind a loaded scene holds at its top (a
+                    scene's shapes' materials): ``validate scene.xml --<tag> ID`` picks one
+                    by id (:func:`.builtin.scene_object`); for a kind whose record names
+                    :attr:`Kind.scene_noun`
 ==================  ==========================================================================
 
 The kind's public validator, ``validate_<name>`` (``validate_bsdf``), is made by the package
@@ -45,7 +52,6 @@ A field given on the record itself (a test's toy kind) takes the place of the mo
 
 from __future__ import annotations
 
-import importlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -90,7 +96,7 @@ def topic_url(page: str | None) -> str | None:
 
 #: The parts :meth:`Kind.part` resolves (module docstring).
 PARTS = ("options", "statistical_tests", "runners", "load", "parameters", "domain", "values",
-         "known_for", "identify", "children", "catalogue", "returns", "session")
+         "known_for", "identify", "children", "catalogue", "returns", "session", "in_scene")
 
 
 @dataclass(frozen=True)
@@ -99,6 +105,7 @@ class Kind:
 
     name: str                  #: the meta key of the plugin's label and the kind's id ("bsdf")
     word: str                  #: the kind in messages ("BSDF", "phase function")
+    plural: str                #: more than one ("BSDFs", "phase functions", "media")
     class_name: str            #: its Mitsuba class ``mi.<class_name>``
     register: str              #: what a ``--plugin`` file calls ("mi.register_bsdf")
     topics: tuple[str, ...]    #: every topic, in table order
@@ -113,11 +120,17 @@ class Kind:
     bounds: tuple[str, ...] = ()
     object_type: str = ""      #: its ``mi.ObjectType`` member ("BSDF", "PhaseFunction")
     tag: str = ""              #: its XML element ("bsdf", "phase")
-    impl: str = ""             #: the module holding its parts (module docstring)
+    #: () -> the implementation module that holds its parts (module docstring); the kind's
+    #: folder gives one that imports its ``kind`` module when called (None: a toy kind whose
+    #: parts are all fields)
+    implementation: Callable[[], Any] | None = None
     conformance: str = ""      #: its conformance table (docs/...md)
+    #: what one is called as a part of a scene ("material"; "" -- the kind has none to pick
+    #: by id): ``phonglab validate scene.xml --<tag> ID`` validates it (its ``in_scene`` part)
+    scene_noun: str = ""
     #: keywords of its validator that are load-time parameters (an emitter's ``shape``)
     load_options: tuple[str, ...] = ()
-    #: parts given here instead of by ``impl`` (a toy kind in a test)
+    #: parts given here instead of by :attr:`implementation` (a toy kind in a test)
     options: Callable | None = None
     statistical_tests: Callable | None = None
     runners: Callable | None = None
@@ -140,7 +153,7 @@ class Kind:
 
     def module(self):
         """The implementation module (imports Mitsuba)."""
-        return importlib.import_module(self.impl)
+        return self.implementation()
 
     def part(self, name: str) -> Any:
         """The part ``name`` (:data:`PARTS`): the record's own field when set, else the
@@ -148,7 +161,7 @@ class Kind:
         own = getattr(self, name, None) if name in self.__dataclass_fields__ else None
         if own is not None:
             return own
-        return getattr(self.module(), name, None) if self.impl else None
+        return getattr(self.module(), name, None) if self.implementation else None
 
     def with_load_options(self, params, options: dict) -> dict | None:
         """``params`` with the validator keywords that are load-time parameters

@@ -6,14 +6,15 @@ The steps, each bad input a one-sentence :class:`~phonglab.validate.inputs.Valid
 raised before any topic runs:
 
 1. the variant set (phonglab's plugins registered in it), unless the target is an object already
-   loaded in the active one (:func:`phonglab.validate.core.start`);
+   loaded in the active one (:func:`phonglab.validate.loading.start`);
 2. the ``plugins`` files run once, recording what each registers
-   (:func:`~phonglab.validate.core.load_plugins`);
+   (:func:`~phonglab.validate.loading.load_plugins`);
 3. the kind: given, or detected from the target and what the files registered
    (:func:`phonglab.validate.registry.detect`), and every file registered a plugin of it; a
-   material of a scene (``scene_bsdf``: a ``<bsdf id=...>`` of the scene file ``spec``) is a BSDF;
+   plugin of a scene (``scene_id``: the id of an object of ``kind`` in the scene file ``spec``,
+   a material) is of the kind given;
 4. the topics checked against the kind's;
-5. the plugin loaded once (:func:`~phonglab.validate.core.load`: its ``traverse`` and the returns
+5. the plugin loaded once (:func:`~phonglab.validate.loading.load`: its ``traverse`` and the returns
    of its Python methods checked);
 6. the ``--set`` values (``params``) checked against the declared or documented ranges
    (:func:`phonglab.validate.sweep.check_set`);
@@ -31,39 +32,40 @@ import time
 
 from ..registration import PLUGINS
 from ..verdict import Report
-from . import core, registry, sweep as sweep_
-from .builtin import BUILTIN
-from .kind import Kind
+from . import core, loading, registry, sweep as sweep_
+from .builtin import BUILTIN, scene_object
+from .kind import Kind, ValidateError
 
 __all__ = ["validate"]
 
 
 def validate(spec, *, kind: Kind | str | None = None, variant=None, params=None, plugins=(),
              topics=None, seed=0, quick=False, known=None, sweep=True, runner=None,
-             progress=None, family=1, sizes=None, scene_bsdf: str | None = None) -> Report:
+             progress=None, family=1, sizes=None, scene_id: str | None = None) -> Report:
     """Validate ``spec`` (a type name, a dict, an XML file, a loaded object; with
-    ``scene_bsdf``, the scene file holding the material of that id) as its ``kind`` (a Kind, a
-    kind's name, or None: detected); the steps are the module docstring's.  ``known``: topic ->
+    ``scene_id``, the scene file holding the plugin of ``kind`` with that id) as its ``kind``
+    (a Kind, a kind's name, or None: detected); the steps are the module docstring's.  ``known``: topic ->
     documented causes, or :data:`phonglab.validate.builtin.BUILTIN`: the documented findings
     of the Mitsuba built-in that is loaded (and those a wrapper inherits from its built-in
     children; for a kind that cannot identify a loaded built-in, those of its type name)."""
     t0 = time.perf_counter()
     if isinstance(kind, str):
         kind = registry.by_name(kind)
-    core.start(variant, spec, kind)
-    registered = core.load_plugins(plugins)
-    if scene_bsdf is not None:
-        from .builtin import scene_material
-        kind = registry.by_name("bsdf")
+    loading.start(variant, spec, kind)
+    registered = loading.load_plugins(plugins)
+    if scene_id is not None:
+        if kind is None:
+            raise ValidateError(f"give the kind of the scene's plugin with id {scene_id!r} "
+                                f"(kind=...): a scene holds plugins of several kinds")
         topics = kind.check_topics(topics)
-        found = scene_material(kind, spec, scene_bsdf)
-        target = core.load(kind, found.plugin, None, registered)._replace(
+        found = scene_object(kind, spec, scene_id)
+        target = loading.load(kind, found.plugin, None, registered)._replace(
             label=found.label, origin=found.origin)
     else:
         kind = kind or registry.detect(spec, registered)
-        core.check_registered(registered, kind)
+        loading.check_registered(registered, kind)
         topics = kind.check_topics(topics)
-        target = core.load(kind, spec, params, registered)
+        target = loading.load(kind, spec, params, registered)
     sweep_.check_set(kind, target, spec, params)
     known = _findings(kind, known, spec, params, plugins)
     if not sweep:

@@ -15,12 +15,18 @@ imports no Mitsuba; :func:`detect` needs the variant set.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from . import bsdf, emitter, integrator, medium, phase
 from .inputs import xml_root_tag
 from .kind import Kind, ValidateError
 
 #: Every plugin kind, in the order the command line's help lists them.
 KINDS: tuple[Kind, ...] = (bsdf.KIND, emitter.KIND, integrator.KIND, phase.KIND, medium.KIND)
+
+#: The kind whose table ``phonglab validate --all-builtins`` runs, and that of a table's JSON
+#: whose options name no kind (docs/conformance.json, written before the tables named theirs).
+DEFAULT = bsdf.KIND
 
 
 def by_name(name: str) -> Kind:
@@ -35,9 +41,11 @@ def names() -> tuple[str, ...]:
     return tuple(k.name for k in KINDS)
 
 
-def catalogue(name: str = "bsdf"):
-    """The conformance table (:class:`~.conformance.Catalogue`) of the kind called ``name``."""
-    return by_name(name).part("catalogue")()
+def catalogue(name: str):
+    """The conformance table (:class:`~.conformance.Catalogue`) of the kind called ``name``,
+    with its kind (the table's part cannot reach its own record)."""
+    kind = by_name(name)
+    return replace(kind.part("catalogue")(), kind=kind)
 
 
 def every_topic() -> tuple[str, ...]:

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..verdict import Report, Row, point_label
-from . import core, registry
+from . import core, loading, registry
 from . import profile as profile_
 from .inputs import ValidateError, check_topics
 from .kind import Kind
@@ -119,7 +119,7 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
     runnable, refused, loaded = [], [], []
     for pt in pts:
         try:
-            target = base if not pt.params else core.load(kind, spec,
+            target = base if not pt.params else loading.load(kind, spec,
                                                           {**(params or {}), **pt.params})
         except ValidateError as exc:
             reason = str(exc).split("; check the type name")[0].split("; the plugin files")[0]
@@ -290,7 +290,7 @@ def run_point(spec, params, options: dict):
     files run, the plugin loaded with ``params``; every topic at the sweep's family level.
     Returns the report's dict."""
     kind = registry.by_name(options["kind"])
-    target = core.prepare(kind, spec, variant=options["variant"], params=params,
+    target = loading.prepare(kind, spec, variant=options["variant"], params=params,
                           plugins=[Path(p) for p in options["plugins"]])
     return run_loaded(target, options).to_dict()
 

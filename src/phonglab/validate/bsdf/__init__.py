@@ -15,7 +15,16 @@ Importing this package imports no Mitsuba (it declares :data:`KIND`); its module
 from ..kind import Kind
 from .topics import TOPICS
 
+
+def _parts():
+    """The kind's implementation module, :mod:`.kind` (imports Mitsuba: only when a part is
+    first asked for)."""
+    from . import kind
+    return kind
+
+
 #: The BSDF kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="bsdf", word="BSDF", class_name="BSDF", register="mi.register_bsdf",
-            topics=TOPICS, informational=("cost",), bounds=("energy",), object_type="BSDF", tag="bsdf",
-            impl=__name__ + ".kind", conformance="docs/conformance.md")
+KIND = Kind(name="bsdf", word="BSDF", plural="BSDFs", class_name="BSDF",
+            register="mi.register_bsdf", topics=TOPICS, informational=("cost",),
+            bounds=("energy",), object_type="BSDF", tag="bsdf",
+            implementation=_parts, conformance="docs/conformance.md", scene_noun="material")

@@ -21,7 +21,7 @@ import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ... import dispatch, probe
+from ... import probe
 from . import lanes
 from ..gradient import AtFixedInputs, verdict
 from .topics import Row
@@ -52,7 +52,7 @@ def gradient(bsdf, opts) -> list[Row]:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "mi.traverse exposes no parameter", {NOT_APPLICABLE: True})]
     wi, wo, c = _directions(opts)
-    plugin, ctx = dispatch.bsdf(bsdf), probe.context()
+    plugin, ctx = probe.view(bsdf), probe.context()
     si, wo = probe.interaction(wi), probe.to_vectors(wo)
     fn = AtFixedInputs(lambda: plugin.eval(ctx, si, wo), c, "Σ c·eval", "eval", "BSDF")
     rows = []

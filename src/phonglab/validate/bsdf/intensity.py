@@ -45,7 +45,7 @@ def provenance(bsdf, opts):
     :func:`phonglab.validate.core.run` hands the topics the prepared target
     (``opts.source``, a :class:`phonglab.settings.Loaded`: its spec with the ``--set`` values
     merged, and the ``--plugin`` files run before it loaded).  A Python plugin registered by
-    the caller's own code through ``core.load_plugins`` outside a run has no record of its file:
+    the caller's own code through ``loading.load_plugins`` outside a run has no record of its file:
     its class's functions name the file it came from.
     """
     source = getattr(opts, "source", None)
@@ -53,7 +53,7 @@ def provenance(bsdf, opts):
         return None
     files = list(source.files)
     cls = type(bsdf)
-    if not files and cls.__module__ == "__phonglab_plugin__":   # run by core.load_plugins
+    if not files and cls.__module__ == "__phonglab_plugin__":   # run by loading.load_plugins
         for v in vars(cls).values():
             code = getattr(v, "__code__", None)
             if code is not None and Path(code.co_filename).is_file():

@@ -11,10 +11,12 @@ weight); the other topics are identities at float32 round-off, or informational 
 
 from __future__ import annotations
 
+import drjit as dr
 import mitsuba as mi
 
-from . import KIND, lanes, ranges
-from ..returns import check_bsdf as returns   # noqa: F401 (the kind's part "returns")
+from ... import probe
+from . import lanes, ranges
+from ..returns import checked, defines
 from .config import options
 from .contract import eval_diffuse_reflectance, eval_null_transmission, has_null
 from .cost import cost
@@ -67,6 +69,36 @@ def runners(bsdf, opts, topics, m: int) -> dict:
         "gradient": lambda: gradient(bsdf, opts),
         "cost": lambda: cost(bsdf, opts),
     }
+
+
+def returns(plugin, name: str = "BSDF") -> None:
+    """A Python BSDF's ``sample``, ``eval``, ``pdf`` and ``eval_pdf`` (those its class defines)
+    return what Mitsuba casts to (BSDFSample3f, Spectrum), Spectrum, Float, (Spectrum, Float)
+    (:mod:`phonglab.validate.returns`)."""
+    if not isinstance(plugin, mi.BSDF) or mi.is_polarized:
+        return          # Mueller matrices: the polarized topics read them
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.t = mi.Float(1.0)
+    si.n = mi.Normal3f(0, 0, 1)
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    si.wi = dr.normalize(mi.Vector3f(0.3, 0.2, 0.9))
+    si.uv = mi.Point2f(0.5, 0.5)
+    ctx, wo = mi.BSDFContext(), dr.normalize(mi.Vector3f(-0.2, 0.1, 0.9))
+    active = mi.Bool(True)
+    for method, args, expects in (
+            ("sample", (ctx, si, mi.Float(0.5), mi.Point2f(0.3, 0.6), active),
+             "a tuple (bs: mi.BSDFSample3f, weight: mi.Spectrum), e.g. return bs, weight"),
+            ("eval", (ctx, si, wo, active), "one mi.Spectrum or number (the BSDF times cos θ_o)"),
+            ("pdf", (ctx, si, wo, active), "one mi.Float or number"),
+            ("eval_pdf", (ctx, si, wo, active),
+             "a tuple (value: mi.Spectrum, pdf: mi.Float), e.g. return value, pdf")):
+        if defines(plugin, method):
+            checked(probe.view(plugin), "BSDF", name, method, args, expects)
+
+
+def in_scene(scene) -> list:
+    """The BSDFs a loaded scene holds at its top: its shapes' materials (``shape.bsdf()``)."""
+    return [bsdf for bsdf in (shape.bsdf() for shape in scene.shapes()) if bsdf is not None]
 
 
 #: The sweep's parameters and the values a documented cause's ``at`` is held against.

@@ -5,7 +5,7 @@ their inputs (exactly grazing incidence, a sample value on the singular point of
 bins below the horizon of a χ² cell, ...).  A row carries the inputs of its failing lanes
 (``Row.failing_lanes``: ``wi``, ``wo``, ``sample1``, ``sample2``, ``component``, ``type`` per
 lane, or the failing χ² cells' records under ``cell``); a region maps them to one boolean per
-failing lane, True where the lane lies inside it.  :func:`phonglab.validate.core.mark_known`
+failing lane, True where the lane lies inside it.  :func:`phonglab.validate.known.mark_known`
 makes a failing row KNOWN only when every failing lane lies in the region of a cause that
 names the row, so a new failure in the same topic -- a lane elsewhere -- still fails.
 

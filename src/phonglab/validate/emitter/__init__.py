@@ -14,8 +14,17 @@ Importing this package imports no Mitsuba (it declares :data:`KIND`); its module
 from ..kind import Kind
 from .topics import TOPICS
 
+
+def _parts():
+    """The kind's implementation module, :mod:`.kind` (imports Mitsuba: only when a part is
+    first asked for)."""
+    from . import kind
+    return kind
+
+
 #: The emitter kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="emitter", word="emitter", class_name="Emitter", register="mi.register_emitter",
-            topics=TOPICS, informational=("cost",), bounds=("power",), object_type="Emitter", tag="emitter",
-            impl=__name__ + ".kind", conformance="docs/conformance-emitters.md",
+KIND = Kind(name="emitter", word="emitter", plural="emitters", class_name="Emitter",
+            register="mi.register_emitter", topics=TOPICS, informational=("cost",),
+            bounds=("power",), object_type="Emitter", tag="emitter",
+            implementation=_parts, conformance="docs/conformance-emitters.md",
             load_options=("shape",))

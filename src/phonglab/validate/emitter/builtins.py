@@ -37,7 +37,6 @@ from __future__ import annotations
 
 from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
 from .signatures import InvalidSample, NegativeOnly, SphereSurfaceBand, SunConeRim
-from .topics import TOPICS
 
 _SPHERES = ("area (sphere)", "area (sphere, flip_normals)")
 _SPHERE_CAUSE = (
@@ -338,7 +337,6 @@ LEFT_OUT: dict[str, str] = {
 VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
-    "emitter", "emitters", "emitter", catalogue_cases, TOPICS, "validate_emitter",
-    "phonglab.validate.emitter.builtins.catalogue_cases()", FINDINGS, VALIDATOR_ISSUES,
-    LEFT_OUT, "docs/conformance-emitters.json", "docs/conformance-emitters.md",
-    "make conformance", case_text="one emitter at one setting")
+    catalogue_cases, "phonglab.validate.emitter.builtins.catalogue_cases()", FINDINGS,
+    "phonglab.validate.emitter.builtins.FINDINGS", VALIDATOR_ISSUES, LEFT_OUT,
+    tests="tests/test_conformance_kinds.py", case_text="one emitter at one setting")

@@ -15,10 +15,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ... import dispatch
 from ..profile import interleaved_medians
 from .config import rng
-from .setup import Setup, interaction, point2
+from .setup import Setup, interaction, point2, view
 from .topics import Row
 
 #: Shapes whose class name, lower-cased, is their plugin name and that load without a file.
@@ -49,7 +48,7 @@ def cost(setup: Setup, opts) -> list[Row]:
     it, su = interaction(p), point2(u)
 
     def run(e):
-        ds, w = dispatch.emitter(e).sample_direction(it, su)
+        ds, w = view(e).sample_direction(it, su)
         dr.eval(ds.pdf, w)
         dr.sync_thread()
 

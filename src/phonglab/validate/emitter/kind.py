@@ -14,7 +14,7 @@ import mitsuba as mi
 from ...settings import Loaded, load_plugin
 from ..conformance import known_of
 from ..inputs import ValidateError
-from . import KIND, ranges
+from . import ranges
 from . import setup as setup_
 from .config import options
 from .cost import cost

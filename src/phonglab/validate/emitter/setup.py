@@ -51,6 +51,16 @@ FLAT = ("Rectangle", "Disk")
 #: math::RayEpsilon of float variants: 1500 · 2⁻²⁴ (include/mitsuba/core/math.h).
 RAY_EPSILON = 1500 * 2.0 ** -24
 
+#: The query methods ``mi.Emitter``'s trampoline forwards to a Python emitter (``PyEmitter``,
+#: src/render/python/emitter_v.cpp:21-61 at v3.9.1), called through the binding by :func:`view`.
+METHODS = ("sample_ray", "sample_direction", "pdf_direction", "eval_direction",
+           "sample_position", "pdf_position", "eval", "sample_wavelengths")
+
+
+def view(emitter) -> dispatch.Dispatched:
+    """The emitter as Mitsuba's integrators call it (:func:`phonglab.dispatch.view`)."""
+    return dispatch.view(emitter, mi.Emitter, METHODS)
+
 
 @dataclass
 class RefGroup:
@@ -92,7 +102,7 @@ class Setup:
         """The emitter as Mitsuba's integrators call it (:mod:`phonglab.dispatch`: ``active``
         passed, returns cast by the trampoline); a stand-in that is no ``mi.Emitter`` as it is."""
         if isinstance(self.emitter, mi.Emitter):
-            return dispatch.emitter(self.emitter)
+            return view(self.emitter)
         return self.emitter
 
     @property

@@ -1,5 +1,5 @@
 """Signatures of documented emitter findings: the region of reference points a finding
-explains (:class:`phonglab.validate.core.Known` ``region``: ``covers(row)`` -> one boolean per
+explains (:class:`phonglab.validate.known.Known` ``region``: ``covers(row)`` -> one boolean per
 failing lane, or None when the row records no such input).
 """
 

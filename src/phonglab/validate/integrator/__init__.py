@@ -14,8 +14,16 @@ Importing this package imports no Mitsuba (it declares :data:`KIND`); its module
 from ..kind import Kind
 from .topics import TOPICS
 
+
+def _parts():
+    """The kind's implementation module, :mod:`.kind` (imports Mitsuba: only when a part is
+    first asked for)."""
+    from . import kind
+    return kind
+
+
 #: The integrator kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="integrator", word="integrator", class_name="Integrator",
+KIND = Kind(name="integrator", word="integrator", plural="integrators", class_name="Integrator",
             register="mi.register_integrator", topics=TOPICS, informational=("cost",),
-            object_type="Integrator", tag="integrator", impl=__name__ + ".kind",
-            conformance="docs/conformance-integrators.md")
+            object_type="Integrator", tag="integrator",
+            implementation=_parts, conformance="docs/conformance-integrators.md")

@@ -11,7 +11,6 @@ scene's depth where it takes ``max_depth``, :mod:`.setup`).
 from __future__ import annotations
 
 from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
-from .topics import TOPICS
 
 POLARIZED = "llvm_ad_spectral_polarized"
 
@@ -188,7 +187,6 @@ LEFT_OUT: dict[str, str] = {
 VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
-    "integrator", "integrators", "integrator", catalogue_cases, TOPICS, "validate_integrator",
-    "phonglab.validate.integrator.builtins.catalogue_cases()", FINDINGS, VALIDATOR_ISSUES,
-    LEFT_OUT, "docs/conformance-integrators.json", "docs/conformance-integrators.md",
-    "make conformance", case_text="one integrator at one setting")
+    catalogue_cases, "phonglab.validate.integrator.builtins.catalogue_cases()", FINDINGS,
+    "phonglab.validate.integrator.builtins.FINDINGS", VALIDATOR_ISSUES, LEFT_OUT,
+    tests="tests/test_conformance_kinds.py", case_text="one integrator at one setting")

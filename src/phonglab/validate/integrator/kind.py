@@ -1,10 +1,17 @@
 """The parts of the integrator kind (:data:`phonglab.validate.integrator.KIND`): its statistical
 tests, its runners, its loading (the integrator rebuilt per scene at the scene's depth:
-:mod:`.setup`); the package face :mod:`phonglab.validate` gives it ``validate_integrator``.
+:mod:`.setup`; the return of a Python ``sample()`` checked first, :func:`check_returns`) and
+:func:`validate_integrator`.
 
 The statistical tests of an integrator are its bias scenes that apply, the two slopes of
 ``convergence``, the block tests of ``agreement`` and the ``gradient`` comparison; ``finite``
 is exact and ``cost`` informational.
+
+One return is misread rather than refused (:mod:`phonglab.validate.returns`): an integrator
+whose ``sample()`` returns a bare ``mi.Spectrum`` instead of ``(L, valid, aovs)`` has its three
+channels unpacked as the tuple, and the process aborts inside Dr.Jit ("Referenced an unknown
+variable", exit 134) with no report.  Its return is therefore first checked in Python to be a
+sequence of three.
 """
 
 from __future__ import annotations
@@ -13,12 +20,11 @@ import mitsuba as mi
 
 from ...settings import Loaded, load_plugin
 from ..conformance import known_of
-from . import KIND
 from . import agreement as agreement_
 from . import analytic
 from . import gradient as gradient_
 from . import ranges, setup as setup_
-from ..returns import check_integrator
+from ..returns import call, checked, defines, refuse, sequence
 from .config import options
 from .cost import cost
 
@@ -61,11 +67,33 @@ domain = ranges.domain
 values = ranges.values
 
 
+def check_returns(plugin, name: str = "integrator") -> None:
+    """A Python ``SamplingIntegrator.sample()`` returns three things, ``(L, valid, aovs)``,
+    that Mitsuba casts to (Spectrum, Bool, list of Float); L may be any 3-vector or number."""
+    if not isinstance(plugin, mi.SamplingIntegrator) or not defines(plugin, "sample"):
+        return
+    scene = mi.load_dict({"type": "scene", "shape": {"type": "sphere"},
+                          "light": {"type": "constant"}})
+    sampler = mi.load_dict({"type": "independent"})
+    sampler.seed(0, 1)
+    ray = mi.RayDifferential3f(mi.Point3f(0, 0, -4), mi.Vector3f(0, 0, 1))
+    args = (scene, sampler, ray, None, mi.Bool(True))
+    expects = ("a tuple (L: the radiance, a mi.Spectrum, mi.Color3f or mi.Vector3f; valid: "
+               "mi.Bool; aovs: a list of mi.Float, one per aov_names()), e.g. return L, valid, []")
+    ok, out = call(plugin.sample, *args)
+    if not ok:
+        return
+    if not sequence(out, 3):
+        refuse("integrator", name, "sample", out, expects)
+    sampler.seed(0, 1)
+    checked(setup_.view(plugin), "integrator", name, "sample", args, expects)
+
+
 def load(spec, params, hint) -> Loaded:
     """Load the integrator (:func:`phonglab.settings.load_plugin`) and build its
     :class:`~.setup.Target`."""
     loaded = load_plugin(spec, params, kind=mi.Integrator, word="integrator", hint=hint)
-    check_integrator(loaded.plugin, loaded.label)   # before any render: a wrong tuple aborts
+    check_returns(loaded.plugin, loaded.label)   # before any render: a wrong tuple aborts
     target = setup_.build(loaded, spec, params)
     meta = {**(loaded.spec or {}), "depth": target.depth_note}
     return Loaded(target, loaded.label, meta)

@@ -121,19 +121,31 @@ def radiance_channels() -> int:
     return 1 if mi.is_monochromatic else 3
 
 
+#: The query method ``mi.SamplingIntegrator``'s binding calls through the trampoline
+#: (``PySamplingIntegrator::sample``, src/render/python/integrator_v.cpp:98-113 at v3.9.1), as
+#: ``SamplingIntegrator::render`` calls it (:func:`radiance_only`).
+METHODS = ("sample",)
+
+
+def view(integrator) -> dispatch.Dispatched:
+    """The integrator as ``SamplingIntegrator::render`` calls it
+    (:func:`phonglab.dispatch.view`)."""
+    return dispatch.view(integrator, mi.SamplingIntegrator, METHODS)
+
+
 _RADIANCE_ONLY: dict = {}
 
 
 def radiance_only(integrator):
     """``integrator`` as a sampling integrator without AOVs: its ``sample`` called through
-    Mitsuba's dispatch (:func:`phonglab.dispatch.integrator`, as ``SamplingIntegrator::render``
+    Mitsuba's dispatch (:func:`phonglab.dispatch.view`, as ``SamplingIntegrator::render``
     calls it) and its radiance and validity returned, the AOVs dropped."""
     variant = mi.variant()
     if variant not in _RADIANCE_ONLY:
         class RadianceOnly(mi.SamplingIntegrator):
             def __init__(self, inner):
                 mi.SamplingIntegrator.__init__(self, mi.Properties())
-                self.inner = dispatch.integrator(inner)
+                self.inner = view(inner)
 
             def sample(self, scene, sampler, ray, medium, active):
                 spectrum, valid, _ = self.inner.sample(scene, sampler, ray, medium, active)

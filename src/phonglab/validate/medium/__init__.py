@@ -57,8 +57,17 @@ Importing this package imports no Mitsuba (it declares :data:`KIND`); its module
 from ..kind import Kind
 from .topics import TOPICS
 
+
+def _parts():
+    """The kind's implementation module, :mod:`.kind` (imports Mitsuba: only when a part is
+    first asked for)."""
+    from . import kind
+    return kind
+
+
 #: The participating-medium kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="medium", word="medium", class_name="Medium", register="mi.register_medium",
-            topics=TOPICS, informational=("cost",), bounds=("albedo",),
-            given_point_only=("phase",), object_type="Medium",
-            tag="medium", impl=__name__ + ".kind", conformance="docs/conformance-media.md")
+KIND = Kind(name="medium", word="medium", plural="participating media", class_name="Medium",
+            register="mi.register_medium", topics=TOPICS, informational=("cost",),
+            bounds=("albedo",), given_point_only=("phase",), object_type="Medium",
+            tag="medium",
+            implementation=_parts, conformance="docs/conformance-media.md")

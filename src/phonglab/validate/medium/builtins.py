@@ -37,7 +37,6 @@ import numpy as np
 
 from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
 from ..phase.builtins import FINDINGS as PHASE_FINDINGS
-from .topics import TOPICS
 
 HOM_SGGX_VARYING = "homogeneous (sggx, S varying along x)"
 HET_SGGX_LARGE = "heterogeneous (blob grid, sggx S = diag(1, 1, 4))"
@@ -224,7 +223,6 @@ LEFT_OUT: dict[str, str] = {}
 VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
-    "medium", "participating media", "medium", catalogue_cases, TOPICS, "validate_medium",
-    "phonglab.validate.medium.builtins.catalogue_cases()", FINDINGS, VALIDATOR_ISSUES,
-    LEFT_OUT, "docs/conformance-media.json", "docs/conformance-media.md", "make conformance",
-    case_text="one medium at one setting")
+    catalogue_cases, "phonglab.validate.medium.builtins.catalogue_cases()", FINDINGS,
+    "phonglab.validate.medium.builtins.FINDINGS", VALIDATOR_ISSUES, LEFT_OUT,
+    tests="tests/test_conformance_kinds.py", case_text="one medium at one setting")

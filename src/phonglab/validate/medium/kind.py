@@ -15,8 +15,8 @@ import mitsuba as mi
 
 from ..conformance import known_of
 from ..phase.kind import values  # noqa: F401 (the kind's part "values": every scalar traversed)
-from ..returns import _checked, _defines
-from . import KIND, lanes
+from ..returns import checked, defines
+from . import lanes
 from .coefficients import albedo, bounds, finite, flags, majorant
 from .config import options  # noqa: F401 (the kind's part "options")
 from .cost import cost
@@ -66,13 +66,8 @@ def returns(plugin, name: str = "medium") -> None:
             ("get_scattering_coefficients", (mei, active),
              "a tuple (sigma_s, sigma_n, sigma_t) of mi.UnpolarizedSpectrum, sigma_n the "
              "null-collision coefficient majorant − sigma_t")):
-        if _defines(plugin, method):
-            _checked("medium", plugin, name, method, args, expects)
-
-
-#: The medium kind (declared by the package, whose parts this module holds): its plugin is
-#: the ``mi.Medium`` itself; every topic builds its own rays and interactions (:mod:`.lanes`).
-MEDIUM = KIND
+        if defines(plugin, method):
+            checked(lanes.view(plugin), "medium", name, method, args, expects)
 
 
 def known_for(name: str, params: dict | None = None) -> dict:

@@ -38,9 +38,18 @@ __all__ = ["Probe", "channels", "coefficients", "flags", "intersect", "majorant"
            "sample", "view"]
 
 
+#: The methods called through ``mi.Medium``'s binding by :func:`view`: the three rendering
+#: methods the trampoline ``PyMedium`` forwards to Python (src/render/python/medium_v.cpp:23-32
+#: at v3.9.1) and the non-virtual base-class code and getters an integrator calls on the
+#: object (the package docstring).
+METHODS = ("intersect_aabb", "get_majorant", "get_scattering_coefficients",
+           "sample_interaction", "transmittance_eval_pdf", "phase_function",
+           "is_homogeneous", "has_spectral_extinction", "use_emitter_sampling")
+
+
 def view(medium) -> dispatch.Dispatched:
-    """The medium as Mitsuba's integrators call it."""
-    return dispatch.view(medium, mi.Medium)
+    """The medium as Mitsuba's integrators call it (:func:`phonglab.dispatch.view`)."""
+    return dispatch.view(medium, mi.Medium, METHODS)
 
 
 def channels() -> int:

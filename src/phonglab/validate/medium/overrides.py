@@ -31,7 +31,7 @@ import numpy as np
 
 from ...verdict import NOT_APPLICABLE
 from ... import probe as probe_
-from ..returns import _defines
+from ..returns import defines
 from ..roundoff import REL_TOL
 from . import lanes
 from .config import rng
@@ -53,7 +53,7 @@ CALLED_BY = {"use_emitter_sampling": "prbvolpath's prepare_scene (prbvolpath.py:
 
 def overridden(medium) -> list[str]:
     """The non-virtual methods ``medium``'s Python class defines."""
-    return [m for m in NON_VIRTUAL if _defines(medium, m)]
+    return [m for m in NON_VIRTUAL if defines(medium, m)]
 
 
 def _differ(a, b) -> np.ndarray:

@@ -14,8 +14,16 @@ Importing this package imports no Mitsuba (it declares :data:`KIND`); its module
 from ..kind import Kind
 from .topics import TOPICS
 
+
+def _parts():
+    """The kind's implementation module, :mod:`.kind` (imports Mitsuba: only when a part is
+    first asked for)."""
+    from . import kind
+    return kind
+
+
 #: The phase-function kind (:mod:`phonglab.validate.kind`); its parts are in :mod:`.kind`.
-KIND = Kind(name="phase", word="phase function", class_name="PhaseFunction",
-            register="mi.register_phase", topics=TOPICS, informational=("cost",),
-            object_type="PhaseFunction", tag="phase", impl=__name__ + ".kind",
-            conformance="docs/conformance-phase.md")
+KIND = Kind(name="phase", word="phase function", plural="phase functions",
+            class_name="PhaseFunction", register="mi.register_phase", topics=TOPICS,
+            informational=("cost",), object_type="PhaseFunction", tag="phase",
+            implementation=_parts, conformance="docs/conformance-phase.md")

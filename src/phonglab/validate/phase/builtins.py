@@ -27,7 +27,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..conformance import Catalogue, Finding, KindCase, ValidatorIssue, with_known
-from .topics import TOPICS
 
 CHI2_ROW = "sampling matches eval_pdf (min p-value)"
 SAMPLED_EVAL_ROW = "eval_pdf at the sampled wo: value, pdf"
@@ -149,7 +148,6 @@ LEFT_OUT: dict[str, str] = {}
 VALIDATOR_ISSUES: tuple[ValidatorIssue, ...] = ()
 
 CATALOGUE = Catalogue(
-    "phase", "phase functions", "phase function", catalogue_cases, TOPICS, "validate_phase",
-    "phonglab.validate.phase.builtins.catalogue_cases()", FINDINGS, VALIDATOR_ISSUES,
-    LEFT_OUT, "docs/conformance-phase.json", "docs/conformance-phase.md", "make conformance",
-    case_text="one phase function at one setting")
+    catalogue_cases, "phonglab.validate.phase.builtins.catalogue_cases()", FINDINGS,
+    "phonglab.validate.phase.builtins.FINDINGS", VALIDATOR_ISSUES, LEFT_OUT,
+    tests="tests/test_conformance_kinds.py", case_text="one phase function at one setting")

@@ -13,7 +13,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ... import dispatch, probe
+from ... import probe
 from ..profile import interleaved_medians
 from . import lanes
 from .config import rng
@@ -33,12 +33,12 @@ def cost(phase, opts) -> list[Row]:
     ctx = lanes.context()
 
     def run_sample(p):
-        out = dispatch.phase(p).sample(ctx, it, u1, u2)
+        out = lanes.view(p).sample(ctx, it, u1, u2)
         dr.eval(out[0], out[2])
         dr.sync_thread()
 
     def run_eval(p):
-        v, q = dispatch.phase(p).eval_pdf(ctx, it, wo)
+        v, q = lanes.view(p).eval_pdf(ctx, it, wo)
         dr.eval(v, q)
         dr.sync_thread()
 

@@ -19,7 +19,7 @@ import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ... import dispatch, probe
+from ... import probe
 from ..gradient import AtFixedInputs, verdict
 from . import lanes
 from .config import rng
@@ -43,7 +43,7 @@ def gradient(phase, opts) -> list[Row]:
     wo = lanes.sphere(r, n)[::-1].copy()
     d = -wi[: n // 2] + 0.1 * lanes.sphere(r, n // 2)
     wo[: n // 2] = d / np.linalg.norm(d, axis=1)[:, None]
-    plugin, ctx = dispatch.phase(phase), lanes.context()
+    plugin, ctx = lanes.view(phase), lanes.context()
     it, wo, c = lanes.interaction(wi), probe.to_vectors(wo), 0.5 + r.random(n)
     fn = AtFixedInputs(lambda: plugin.eval_pdf(ctx, it, wo)[0], c, "Σ c·(eval_pdf value)",
                        "eval_pdf's value", "phase function")

@@ -11,12 +11,13 @@ wo = −wi) is :mod:`.lanes`'.
 
 from __future__ import annotations
 
+import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ..conformance import known_of
-from . import KIND, lanes, ranges
-from ..returns import check_phase as returns   # noqa: F401 (the kind's part "returns")
+from . import lanes, ranges
+from ..returns import checked, defines
 from .config import options
 from .cost import cost
 from .gradient import gradient
@@ -40,6 +41,29 @@ def runners(phase, opts, topics, m: int) -> dict:
         "gradient": lambda: gradient(phase, opts),
         "cost": lambda: cost(phase, opts),
     }
+
+
+def returns(plugin, name: str = "phase function") -> None:
+    """A Python phase function's ``sample`` and ``eval_pdf`` (those its class defines) return
+    what Mitsuba casts to (Vector3f wo, Spectrum weight, Float pdf) and (Spectrum, Float)
+    (:mod:`phonglab.validate.returns`)."""
+    if not isinstance(plugin, mi.PhaseFunction) or mi.is_polarized:
+        return
+    ctx = mi.PhaseFunctionContext(None)
+    mei = dr.zeros(mi.MediumInteraction3f)
+    mei.wi = dr.normalize(mi.Vector3f(0.3, 0.2, 0.9))
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    mei.t = mi.Float(0.0)
+    active = mi.Bool(True)
+    wo = dr.normalize(mi.Vector3f(-0.2, 0.1, 0.9))
+    for method, args, expects in (
+            ("sample", (ctx, mei, mi.Float(0.5), mi.Point2f(0.3, 0.6), active),
+             "a tuple (wo: mi.Vector3f, weight: mi.Spectrum, pdf: mi.Float), e.g. return wo, "
+             "weight, pdf"),
+            ("eval_pdf", (ctx, mei, wo, active),
+             "a tuple (value: mi.Spectrum, pdf: mi.Float), e.g. return value, pdf")):
+        if defines(plugin, method):
+            checked(lanes.view(plugin), "phase function", name, method, args, expects)
 
 
 def values(phase) -> dict:

@@ -30,6 +30,17 @@ from ..directions import sphere as _uniform
 INCIDENCES = np.array([[0.0, 0.0, 1.0], [0.48, -0.36, 0.8], [-0.6, -0.78, -0.1732]])
 INCIDENCES = INCIDENCES / np.linalg.norm(INCIDENCES, axis=1)[:, None]
 
+#: The query methods ``mi.PhaseFunction``'s trampoline forwards to a Python phase function
+#: (``PyPhaseFunction``, src/render/python/phase_v.cpp:27-35 at v3.9.1), called through the
+#: binding by :func:`view`.
+METHODS = ("eval_pdf", "sample")
+
+
+def view(phase) -> dispatch.Dispatched:
+    """The phase function as Mitsuba's volumetric integrators call it
+    (:func:`phonglab.dispatch.view`)."""
+    return dispatch.view(phase, mi.PhaseFunction, METHODS)
+
 
 def interaction(wi: np.ndarray) -> mi.MediumInteraction3f:
     """A MediumInteraction3f per lane at the origin with incident direction wi (N, 3) and
@@ -54,7 +65,8 @@ def sample(phase, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray):
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     u1 = mi.Float(np.ascontiguousarray(np.minimum(u1, ONE_MINUS), np.float32))
     u2 = np.ascontiguousarray(np.minimum(u2, ONE_MINUS), np.float32)
-    wo, w, pdf = dispatch.phase(phase).sample(context(), interaction(wi), u1, mi.Point2f(u2[:, 0], u2[:, 1]))
+    wo, w, pdf = view(phase).sample(context(), interaction(wi), u1,
+                                    mi.Point2f(u2[:, 0], u2[:, 1]))
     w = probe.to_numpy(w, n)
     return probe.to_numpy(wo, n), (w if w.ndim == 2 else w[:, None]), probe.to_numpy(pdf, n)
 
@@ -64,7 +76,7 @@ def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray):
     n = len(wi)
     if n == 0:                      # no lanes (every sample dropped): Dr.Jit refuses width 0
         return np.zeros((0, 3)), np.zeros(0)
-    v, p = dispatch.phase(phase).eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
+    v, p = view(phase).eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
     v = probe.to_numpy(v, n)
     return (v if v.ndim == 2 else v[:, None]), probe.to_numpy(p, n)
 
