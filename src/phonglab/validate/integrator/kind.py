@@ -1,7 +1,7 @@
 """The parts of the integrator kind (:data:`phonglab.validate.integrator.KIND`): its statistical
 tests, its runners, its loading (the integrator rebuilt per scene at the scene's depth:
-:mod:`.setup`; the return of a Python ``sample()`` checked first, :func:`check_returns`) and
-:func:`validate_integrator`.
+:mod:`.setup`; the return of a Python ``sample()`` checked first, :func:`check_returns`); the
+package face :mod:`phonglab.validate` gives it ``validate_integrator``.
 
 The statistical tests of an integrator are its bias scenes that apply, the two slopes of
 ``convergence``, the block tests of ``agreement`` and the ``gradient`` comparison; ``finite``
