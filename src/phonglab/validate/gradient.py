@@ -21,7 +21,15 @@ weights c_l ∈ [0.5, 1.5]; :func:`verdict` judges it for one parameter x of ``m
   converge (a peaked lobe's curvature: hg at g = 0.8 needs a smaller step near forward
   scattering; a spectral variant's ``radiance.value`` holds the coefficients of Mitsuba's
   RGB-to-spectrum model, the first multiplying λ² ≈ 2.5·10⁵, and a step of 2⁻⁷·0.1 drives its
-  sigmoid into saturation).  The step is chosen from the quotients alone, never from AD;
+  sigmoid into saturation), but never below the step where the round-off bound reaches
+  :data:`ROUND_OFF_SHARE` of the quotients' sum (a conductor's Fresnel term at eta = 0 cancels
+  in float32 below eta ~ 1e-4: its differences there are 0 whatever the slope, and a step
+  halved into that regime would call AD's 0 right).  The step is chosen from the quotients
+  alone, never from AD;
+* a kind may keep the step fixed at 2⁻⁷ (the BSDF kind: ``max_halvings`` 0, its conformance
+  findings measured so; a conductor's Fresnel term at eta = 0 cancels in float32 below
+  eta ~ 1e-4, where a halved step sees its slope as jumps) and judge convergence from D(h) and
+  D(h/2) alone (``kinks`` False);
 * lanes whose quotients do not converge (:func:`unconverged`: a jump or a kink that moves with
   x, e.g. roughdielectric's total-internal-reflection boundary under eta, a parameter flagged
   ``ParamFlags.Discontinuous``: there AD differentiates the continuous part only, by Mitsuba's
@@ -58,6 +66,10 @@ ROUND_OFF = 64 * EPS32
 #: The first finite-difference step (relative, along v), and how often it may be halved.
 H0 = 2.0 ** -7
 MAX_HALVINGS = 16
+#: The step is halved only while the round-off bound of the quotients is below this share of
+#: their sum: past it the differences measure float32 cancellation, not the derivative, and
+#: the bound (∝ 1/h) would grow into a tolerance that passes anything.
+ROUND_OFF_SHARE = 0.01
 
 
 class Functional(Protocol):
@@ -69,8 +81,12 @@ class Functional(Protocol):
     side holds at x (an emitter's samples; may do nothing) and ``undefined()`` the lanes where
     that held factor is undefined (None: none; ``undefined_words`` says why in a row).
     ``ad_words`` and ``fd_words`` say what is compared, ``what`` the differentiated quantity,
-    ``owner`` the plugin's kind ("BSDF")."""
+    ``owner`` the plugin's kind ("BSDF").  ``max_halvings``: how often the step may be halved
+    (0: the fixed step 2⁻⁷); ``kinks``: whether lanes whose one-sided quotients disagree are
+    left out too."""
 
+    max_halvings: int
+    kinks: bool
     ad_words: str
     fd_words: str
     what: str
@@ -218,14 +234,17 @@ def verdict(fn: Functional, params, key: str, discontinuous: bool = False,
         return _independent(fn, params, key, x0, v, one_sided, row)
     try:
         fn.hold()
-        for halvings in range(MAX_HALVINGS + 1):
+        for halvings in range(fn.max_halvings + 1):
             h = H0 * 2.0 ** -halvings
             d1, d2, s0, sides = _quotients(fn, params, key, x0, v, h, one_sided)
             noise = ROUND_OFF * (np.abs(s0) / (h / 2) + np.abs(g))   # per-lane round-off
-            jumps = unconverged(d1, d2, noise, *(sides or ())) & np.isfinite(g)
+            jumps = unconverged(d1, d2, noise, *(sides if fn.kinks and sides else ())) \
+                & np.isfinite(g)
             if (abs(np.nansum(d1) - np.nansum(d2)) <= 0.01 * abs(np.nansum(d2)) + noise.sum()
                     and jumps.sum() <= len(g) // 2):
                 break
+            if noise.sum() >= ROUND_OFF_SHARE * abs(np.nansum(d2)):
+                break            # a smaller step would measure round-off, not the derivative
     except Exception as exc:   # a plugin refusing x ± hv (its validation) is a skip
         _set(params, key, x0)
         return _refused(fn, key, h, exc, row)
@@ -274,9 +293,11 @@ class AtFixedInputs:
     fd_words = "the same sum"
     undefined_words = ""
 
-    def __init__(self, value, c: np.ndarray, ad_words: str, what: str, owner: str):
+    def __init__(self, value, c: np.ndarray, ad_words: str, what: str, owner: str,
+                 max_halvings: int = MAX_HALVINGS, kinks: bool = True):
         self.value, self.c = value, c
         self.ad_words, self.what, self.owner = ad_words, what, owner
+        self.max_halvings, self.kinks = max_halvings, kinks
 
     def _per_lane(self, x, finite_only: bool) -> np.ndarray:
         """c_l Σ_channels x_l (non-finite channels as 0 with ``finite_only``)."""

@@ -5,8 +5,8 @@ others are skipped with the reason), the functional S(x) = Σ_lanes Σ_channels 
 over fixed random directions (ω_o on the whole sphere) and fixed weights c_l ∈ [0.5, 1.5]: the
 derivative a differentiable renderer takes of a BSDF at an interaction.  The verdict -- the
 direction v, forward-mode AD, the central (or, for a non-negative parameter with an element at
-0, the second-order one-sided) differences with their step halved until they converge, the
-lanes left out (a jump or kink that moves with x: roughdielectric's total-internal-reflection
+0, the second-order one-sided) differences at the fixed step 2⁻⁷ (a conductor's Fresnel term
+at eta = 0 cancels in float32 at smaller steps), the lanes left out (a jump or kink that moves with x: roughdielectric's total-internal-reflection
 boundary under eta, flagged ``ParamFlags.Discontinuous``), the tolerance
 4|D(h) − D(h/2)| + 64u(Σ|eval|/h + Σ|∂eval|) -- is every kind's:
 :func:`phonglab.validate.gradient.verdict`.  A delta lobe's eval is 0, so a BSDF whose lobes are
@@ -54,7 +54,8 @@ def gradient(bsdf, opts) -> list[Row]:
     wi, wo, c = _directions(opts)
     plugin, ctx = probe.view(bsdf), probe.context()
     si, wo = probe.interaction(wi), probe.to_vectors(wo)
-    fn = AtFixedInputs(lambda: plugin.eval(ctx, si, wo), c, "Σ c·eval", "eval", "BSDF")
+    fn = AtFixedInputs(lambda: plugin.eval(ctx, si, wo), c, "Σ c·eval", "eval", "BSDF",
+                       max_halvings=0, kinks=False)
     rows = []
     for key in keys:
         flags = params.properties[key][3]

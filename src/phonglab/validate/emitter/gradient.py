@@ -31,7 +31,7 @@ import numpy as np
 
 from ...verdict import NOT_APPLICABLE
 from ... import probe
-from ..gradient import verdict
+from ..gradient import MAX_HALVINGS, verdict
 from .config import rng
 from .lanes import with_edges
 from .setup import Setup, interaction, point2, ref_groups
@@ -47,6 +47,8 @@ class HeldSampling:
     what = "sample_direction's weight"
     owner = "emitter"
     undefined_words = "no radiance arrives along the sample (the emitted quantity is 0)"
+    max_halvings = MAX_HALVINGS
+    kinks = True
 
     def __init__(self, setup: Setup, it, u, c: np.ndarray):
         self.calls, self.it, self.u, self.c = setup.calls, it, u, c
