@@ -1,7 +1,7 @@
 """The ``phonglab`` command line.
 
 Each subcommand lives in its own module ``phonglab.cli.<name>`` exposing
-``add_parser(subparsers)`` (which sets ``func``); :data:`SUBCOMMANDS` lists
+``add_parser(subparsers)`` (which sets ``func``); :data:`COMMANDS` lists
 them.  Errors meant for the user are one sentence and exit code 2; ``--debug``
 shows the traceback instead.
 """
@@ -9,16 +9,18 @@ shows the traceback instead.
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 import traceback
 
 from .. import __version__, runtime
 from ..errors import PhonglabError, user_errors
+from . import (bench, check, compare, compare_models, doctor, fit, plan, render,
+               validate)
 
-#: Modules ``phonglab.cli.<name>``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["render", "check", "compare-models", "plan", "bench", "compare", "doctor",
-               "validate", "fit"]
+#: The subcommands' modules, in the order ``--help`` lists them.
+COMMANDS = (render, check, compare_models, plan, bench, compare, doctor, validate, fit)
+#: Their names on the command line (``compare-models`` for :mod:`.compare_models`).
+SUBCOMMANDS = tuple(m.__name__.rsplit(".", 1)[1].replace("_", "-") for m in COMMANDS)
 
 DEBUG_HELP = "show the full traceback on errors"
 
@@ -43,8 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     parser.add_argument("--version", action="version", version=f"phonglab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
-        importlib.import_module(f"phonglab.cli.{name.replace('-', '_')}").add_parser(sub)
+    for command in COMMANDS:
+        command.add_parser(sub)
     for p in sub.choices.values():
         # `phonglab render x --debug` works too; SUPPRESS keeps a top-level --debug when absent.
         if "--debug" not in p._option_string_actions:
