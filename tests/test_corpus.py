@@ -21,9 +21,6 @@ HERE = Path(__file__).parent
 CORPUS = HERE / "corpus"
 CATALOG = {c["name"]: c for c in json.loads((CORPUS / "catalog.json").read_text())}
 
-#: the runs are shared by the tests that read them: one worker runs the whole file
-pytestmark = pytest.mark.xdist_group("corpus")
-
 #: The topics whose rows must be judged (pass) for a control of each kind.
 PHYSICS = {"bsdf": {"weight", "chi2", "energy", "reciprocity", "component"},
            "phase": {"weight", "chi2", "normalization"},
