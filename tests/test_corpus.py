@@ -28,19 +28,20 @@ PHYSICS = {"bsdf": {"weight", "chi2", "energy", "reciprocity", "component"},
            "integrator": {"bias", "agreement"}}
 
 
-#: (name, extra arguments) -> (exit code, JSON report or None, stderr, HTML report or None):
-#: one run of a command per test process, shared by the tests that read it.
+#: (name, extra arguments, report) -> (exit code, JSON report or None, stderr, HTML report or
+#: None): one run of a command per test process, shared by the tests that read it.
 _RUNS: dict = {}
 
 
 @pytest.fixture
 def validate(capfd, tmp_path_factory, monkeypatch):
-    """validate(name, *extra): (exit code, JSON report or None, stderr) of the author's command
-    on a corpus plugin (with ``--report``: its HTML as :func:`html_of` gives it), run in this
-    process, in a folder of its own; stderr holds what Python and the libraries below it
-    (Dr.Jit, Mitsuba) wrote."""
-    def run(name: str, *extra):
-        key = (name, extra)
+    """validate(name, *extra, report=False): (exit code, JSON report or None, stderr) of the
+    author's command on a corpus plugin, run in this process, in a folder of its own; stderr
+    holds what Python and the libraries below it (Dr.Jit, Mitsuba) wrote.  With ``report``
+    the command also writes its HTML report (``--report``: :func:`html_of` gives it), which
+    only the tests that read it ask for (its figures cost more than most runs)."""
+    def run(name: str, *extra, report: bool = False):
+        key = (name, extra, report)
         if key not in _RUNS:
             where = tmp_path_factory.mktemp(name)
             out, html = where / f"{name}.json", where / f"{name}.html"
@@ -48,7 +49,8 @@ def validate(capfd, tmp_path_factory, monkeypatch):
             capfd.readouterr()
             rc, _, err = run_cli(["validate", name, "--plugin", CORPUS / CATALOG[name]["file"],
                                   "--variant", "llvm_ad_rgb", "--quick", "--json", out,
-                                  "--report", html, *extra], seconds=600)
+                                  *(["--report", html] if report else []), *extra],
+                                 seconds=600)
             _RUNS[key] = (rc, json.loads(out.read_text()) if out.exists() else None,
                           err + capfd.readouterr().err,
                           html.read_text() if html.exists() else None)
@@ -57,7 +59,7 @@ def validate(capfd, tmp_path_factory, monkeypatch):
 
 
 def html_of(name: str, *extra) -> str | None:
-    return _RUNS[(name, extra)][3]
+    return _RUNS[(name, extra, True)][3]
 
 
 def test_the_catalog_lists_every_corpus_file_and_at_least_15():
@@ -156,7 +158,7 @@ def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(valida
 def test_an_integrators_own_error_is_its_message_and_line_not_see_above(validate):
     """Before: Dr.Jit's "error while performing a custom differentiable operation. (see
     above)" in every row, the plugin's message in the JSON's traceback alone."""
-    rc, report, _ = validate("sample_name_error", "--no-sweep")
+    rc, report, _ = validate("sample_name_error", "--no-sweep", report=True)
     assert rc == 1
     for r in report["results"]:
         assert "see above" not in r["reason"]
@@ -167,7 +169,7 @@ def test_an_integrators_own_error_is_its_message_and_line_not_see_above(validate
 
 def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(validate):
     """Before: an integrator's report was titled "phonglab validate: ? (...)"."""
-    rc, _, _ = validate("sample_name_error", "--no-sweep")
+    rc, _, _ = validate("sample_name_error", "--no-sweep", report=True)
     text = html_of("sample_name_error", "--no-sweep")
     assert rc == 1
     assert "<title>phonglab validate: integrator sample_name_error (llvm_ad_rgb)" in text
