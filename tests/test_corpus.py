@@ -11,16 +11,14 @@ renders in Mitsuba; catalog.json the style, bug and topic of each.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from helpers import run_cli
+
 HERE = Path(__file__).parent
 CORPUS = HERE / "corpus"
-SRC = HERE.parent / "src"
 CATALOG = {c["name"]: c for c in json.loads((CORPUS / "catalog.json").read_text())}
 
 #: The topics whose rows must be judged (pass) for a control of each kind.
@@ -30,29 +28,38 @@ PHYSICS = {"bsdf": {"weight", "chi2", "energy", "reciprocity", "component"},
            "integrator": {"bias", "agreement"}}
 
 
-#: (name, extra arguments) -> (exit code, JSON report or None, stderr, HTML report or None):
-#: one run of a command per test process, shared by the tests that read it.
+#: (name, extra arguments, report) -> (exit code, JSON report or None, stderr, HTML report or
+#: None): one run of a command per test process, shared by the tests that read it.
 _RUNS: dict = {}
 
 
-def validate(tmp_path_factory, name: str, *extra):
-    """(exit code, JSON report or None, stderr) of the author's command on a corpus plugin
-    (with ``--report``: its HTML as :func:`html_of` gives it)."""
-    key = (name, extra)
-    if key not in _RUNS:
-        where = tmp_path_factory.mktemp(name)
-        out, html = where / f"{name}.json", where / f"{name}.html"
-        r = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", name, "--plugin",
-                            str(CORPUS / CATALOG[name]["file"]), "--quick", "--json", str(out),
-                            "--report", str(html), *extra], capture_output=True, text=True,
-                           timeout=600, env={**os.environ, "PYTHONPATH": str(SRC)}, cwd=where)
-        _RUNS[key] = (r.returncode, json.loads(out.read_text()) if out.exists() else None,
-                      r.stderr, html.read_text() if html.exists() else None)
-    return _RUNS[key][:3]
+@pytest.fixture
+def validate(capfd, tmp_path_factory, monkeypatch):
+    """validate(name, *extra, report=False): (exit code, JSON report or None, stderr) of the
+    author's command on a corpus plugin, run in this process, in a folder of its own; stderr
+    holds what Python and the libraries below it (Dr.Jit, Mitsuba) wrote.  With ``report``
+    the command also writes its HTML report (``--report``: :func:`html_of` gives it), which
+    only the tests that read it ask for (its figures cost more than most runs)."""
+    def run(name: str, *extra, report: bool = False):
+        key = (name, extra, report)
+        if key not in _RUNS:
+            where = tmp_path_factory.mktemp(name)
+            out, html = where / f"{name}.json", where / f"{name}.html"
+            monkeypatch.chdir(where)
+            capfd.readouterr()
+            rc, _, err = run_cli(["validate", name, "--plugin", CORPUS / CATALOG[name]["file"],
+                                  "--variant", "llvm_ad_rgb", "--quick", "--json", out,
+                                  *(["--report", html] if report else []), *extra],
+                                 seconds=600)
+            _RUNS[key] = (rc, json.loads(out.read_text()) if out.exists() else None,
+                          err + capfd.readouterr().err,
+                          html.read_text() if html.exists() else None)
+        return _RUNS[key][:3]
+    return run
 
 
 def html_of(name: str, *extra) -> str | None:
-    return _RUNS[(name, extra)][3]
+    return _RUNS[(name, extra, True)][3]
 
 
 def test_the_catalog_lists_every_corpus_file_and_at_least_15():
@@ -67,11 +74,11 @@ CONTROLS = [n for n, c in CATALOG.items() if c["bug"] is None]
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "aov_depth"
                                   else n for n in CONTROLS])
-def test_a_control_passes_with_its_physics_judged(tmp_path_factory, name):
+def test_a_control_passes_with_its_physics_judged(validate, name):
     """The tutorial-style BSDFs and phase function (``active`` positional without a default)
     are called as Mitsuba calls them; the Python environment light's power is judged; the AOV
     integrator is judged on more than ``finite``."""
-    rc, report, err = validate(tmp_path_factory, name)
+    rc, report, err = validate(name)
     assert rc == 0, err[-2000:]
     assert report["meta"]["not_covered"] == []
     rows = report["results"]
@@ -84,14 +91,18 @@ def test_a_control_passes_with_its_physics_judged(tmp_path_factory, name):
     assert judged & PHYSICS[CATALOG[name]["kind"]]
 
 
-#: name -> (topic, a word of the failing row's name, extra arguments)
+#: name -> (topic, a word of the failing row's name, extra arguments): each runs the topic its
+#: test reads alone (``--only``)
 DEFECTS = {
-    "tut_delta_importance": ("reciprocity", "Importance mode", ()),
-    "textured_plastic_gain": ("energy", "albedo", ()),
-    "two_lobe_ignores_component": ("component", "restricted context", ("--no-sweep",)),
-    "two_lobe_ignores_type_mask": ("component", "type_mask", ("--no-sweep",)),
-    "cosine_ratio_nonreciprocal": ("reciprocity", "reflection", ("--no-sweep",)),
-    "hg_sign_flip": ("chi2", "sampling", ("--no-sweep",)),
+    "tut_delta_importance": ("reciprocity", "Importance mode", ("--only", "reciprocity")),
+    "textured_plastic_gain": ("energy", "albedo", ("--only", "energy")),
+    "two_lobe_ignores_component": ("component", "restricted context",
+                                   ("--no-sweep", "--only", "component")),
+    "two_lobe_ignores_type_mask": ("component", "type_mask",
+                                   ("--no-sweep", "--only", "component")),
+    "cosine_ratio_nonreciprocal": ("reciprocity", "reflection",
+                                   ("--no-sweep", "--only", "reciprocity")),
+    "hg_sign_flip": ("chi2", "sampling", ("--no-sweep", "--only", "chi2")),
     "while_loop_sampler_missing": ("bias", "enclosure", ("--only", "bias")),
     "env_light_never_added": ("bias", "glass sphere furnace", ("--only", "bias")),
 }
@@ -104,9 +115,9 @@ def test_every_defect_of_the_catalog_has_a_test():
 
 
 @pytest.mark.parametrize("name", sorted(DEFECTS))
-def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path_factory, name):
+def test_a_defect_fails_on_its_topic_with_a_measured_row(validate, name):
     topic, word, extra = DEFECTS[name]
-    rc, report, err = validate(tmp_path_factory, name, *extra)
+    rc, report, err = validate(name, *extra)
     assert rc == 1, err[-2000:]
     failing = [r for r in report["results"] if r["status"] == "fail"]
     mine = [r for r in failing if r["topic"] == topic and word in r["name"]]
@@ -114,10 +125,10 @@ def test_a_defect_fails_on_its_topic_with_a_measured_row(tmp_path_factory, name)
     assert all(r["measured"] is not None for r in mine)      # a finding, not a crash
 
 
-def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path_factory):
+def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(validate):
     """A BSDF whose parameters are mi.Textures is swept (not "no parameter swept"), so its
     energy gain at small roughness (albedo 1.2 at 0.1) fails."""
-    rc, report, _ = validate(tmp_path_factory, "textured_plastic_gain",
+    rc, report, _ = validate("textured_plastic_gain",
                              *DEFECTS["textured_plastic_gain"][2])
     assert rc == 1
     swept = {p["name"]: p for p in report["meta"]["sweep"]["parameters"]}
@@ -127,27 +138,27 @@ def test_a_textured_parameter_is_swept_over_the_domain_of_its_name(tmp_path_fact
     assert gains and all(r["measured"] > 1 for r in gains)
 
 
-def test_a_traverse_that_raises_is_one_sentence_with_the_plugins_file_and_line(tmp_path_factory):
+def test_a_traverse_that_raises_is_one_sentence_with_the_plugins_file_and_line(validate):
     """Not a raw traceback: one sentence, exit 2."""
-    rc, report, err = validate(tmp_path_factory, "traverse_renamed_api")
+    rc, report, err = validate("traverse_renamed_api")
     assert rc == 2 and report is None
     assert "traverse() of the BSDF 'traverse_renamed_api' raised AttributeError" in err
     assert "put_parameter" in err and "traverse_renamed_api.py:" in err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(tmp_path_factory):
-    rc, report, _ = validate(tmp_path_factory, "unimplemented_pdf", "--no-sweep")
+def test_an_unimplemented_method_is_not_implemented_not_a_physics_failure(validate):
+    rc, report, _ = validate("unimplemented_pdf", "--no-sweep")
     assert rc == 1
     failing = [r for r in report["results"] if r["status"] == "fail"]
     assert failing and all(r["reason"].startswith("not implemented: pdf") for r in failing)
     assert all(r["details"]["not_implemented"] == "pdf" for r in failing)
 
 
-def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path_factory):
+def test_an_integrators_own_error_is_its_message_and_line_not_see_above(validate):
     """Each row gives the plugin's message and line, not Dr.Jit's "error while performing a
     custom differentiable operation. (see above)"."""
-    rc, report, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
+    rc, report, _ = validate("sample_name_error", "--no-sweep", report=True)
     assert rc == 1
     for r in report["results"]:
         assert "see above" not in r["reason"]
@@ -156,9 +167,9 @@ def test_an_integrators_own_error_is_its_message_and_line_not_see_above(tmp_path
         assert where["file"].endswith("sample_name_error.py") and where["function"] == "sample"
 
 
-def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(tmp_path_factory):
+def test_the_html_report_is_titled_by_kind_and_shows_the_plugins_error(validate):
     """An integrator's report is titled by its kind and name (not "phonglab validate: ?")."""
-    rc, _, _ = validate(tmp_path_factory, "sample_name_error", "--no-sweep")
+    rc, _, _ = validate("sample_name_error", "--no-sweep", report=True)
     text = html_of("sample_name_error", "--no-sweep")
     assert rc == 1
     assert "<title>phonglab validate: integrator sample_name_error (llvm_ad_rgb)" in text

@@ -18,6 +18,8 @@ import pytest
 
 from phonglab.validate.emitter.topics import TOPICS
 
+from helpers import fails_in_one_sentence, run_cli
+
 DEFECTS = Path(__file__).parent / "defects_emitter"
 REPRO = Path(__file__).parent / "repro"
 SRC = Path(__file__).parents[1] / "src"
@@ -177,11 +179,9 @@ def test_sunsky_without_sky_fails_chi2_by_the_suns_float32_cone_only_there(varia
 
 def test_cli_detects_an_emitter(tmp_path):
     out = tmp_path / "point.json"
-    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point", "--quick",
-                           "--json", str(out), "--report", str(tmp_path / "p.html")],
-                          capture_output=True, text=True,
-                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rc, stdout, stderr = run_cli(["validate", "point", "--quick", "--json", out, "--report",
+                                  tmp_path / "p.html", "--variant", "llvm_ad_rgb"])
+    assert rc == 0, stdout + stderr
     import json
 
     data = json.loads(out.read_text())
@@ -190,22 +190,17 @@ def test_cli_detects_an_emitter(tmp_path):
     assert "phonglab validate: emitter point" in (tmp_path / "p.html").read_text()
 
 
-def test_cli_runs_a_defect_plugin_and_fails_it(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate",
-                           "defect_point_inverse_r", "--plugin",
-                           str(DEFECTS / "point_inverse_r.py"), "--quick", "--only", "power"],
-                          capture_output=True, text=True,
-                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
-    assert proc.returncode == 1, proc.stdout + proc.stderr
-    assert "intensity law" in proc.stdout
+def test_cli_runs_a_defect_plugin_and_fails_it():
+    rc, stdout, stderr = run_cli(["validate", "defect_point_inverse_r", "--plugin",
+                                  DEFECTS / "point_inverse_r.py", "--quick", "--only", "power",
+                                  "--variant", "llvm_ad_rgb"])
+    assert rc == 1, stdout + stderr
+    assert "intensity law" in stdout
 
 
-def test_unknown_emitter_topic_is_bad_input():
-    proc = subprocess.run([sys.executable, "-m", "phonglab.cli", "validate", "point",
-                           "--only", "energy"], capture_output=True, text=True,
-                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
-    assert proc.returncode == 2
-    assert "unknown topic 'energy'" in proc.stderr
+def test_unknown_emitter_topic_is_bad_input(capsys):
+    fails_in_one_sentence(capsys, ["validate", "point", "--only", "energy", "--variant",
+                                   "llvm_ad_rgb"], "unknown topic 'energy'")
 
 
 @pytest.fixture

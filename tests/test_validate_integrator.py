@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from helpers import run_cli
+
 DEFECTS = Path(__file__).parent / "defects_integrator"
 SRC = Path(__file__).parents[1] / "src"
 
@@ -129,15 +131,14 @@ def test_builtins_pass_default(variant_llvm_rgb, name):
 def test_not_covered_exits_3_unless_allowed():
     """A topic that applies and judged nothing (agreement of an integrator whose measured depth
     matches no integer depth) is "not covered": exit 3, 0 with --allow-uncovered."""
-    env = {"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}
-    base = [sys.executable, "-m", "phonglab.cli", "validate",
-            "defect_direct_double_count_undeclared", "--plugin",
-            str(DEFECTS / "direct_double_count_undeclared.py"), "--quick", "--only", "agreement"]
-    proc = subprocess.run(base, capture_output=True, text=True, env=env)
-    assert proc.returncode == 3, proc.stdout + proc.stderr
-    assert "NOT COVERED: agreement" in proc.stdout and "FIXED_DEPTH = 2" in proc.stdout
-    proc = subprocess.run(base + ["--allow-uncovered"], capture_output=True, text=True, env=env)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    base = ["validate", "defect_direct_double_count_undeclared", "--plugin",
+            DEFECTS / "direct_double_count_undeclared.py", "--quick", "--only", "agreement",
+            "--variant", "llvm_ad_rgb"]
+    rc, out, err = run_cli(base)
+    assert rc == 3, out + err
+    assert "NOT COVERED: agreement" in out and "FIXED_DEPTH = 2" in out
+    rc, out, err = run_cli(base + ["--allow-uncovered"])
+    assert rc == 0, out + err
 
 
 def test_not_covered_rule():
