@@ -1,4 +1,4 @@
-"""phonglab's modules import one another without a circle (#57).
+"""phonglab's modules import one another without a circle.
 
 Every ``import`` counts, at the top of a module or inside a function (a lazy import still ties
 the two modules together: engine/scenes -> registration -> validate/core -> validate/builtin

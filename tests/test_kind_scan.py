@@ -1,4 +1,4 @@
-"""A kind is one complete record (#57): no module that validates *any* kind names one.
+"""A kind is one complete record: no module that validates *any* kind names one.
 
 A plugin kind is its folder of ``phonglab.validate`` (whose ``__init__`` declares its
 :class:`~phonglab.validate.kind.Kind`) and one line of ``validate/registry.py``.  Everything
