@@ -14,13 +14,21 @@ import traceback
 
 from .. import __version__, runtime
 from ..errors import PhonglabError, user_errors
-from . import (bench, check, compare, compare_models, doctor, fit, plan, render,
-               validate)
 
-#: The subcommands' modules, in the order ``--help`` lists them.
-COMMANDS = (render, check, compare_models, plan, bench, compare, doctor, validate, fit)
-#: Their names on the command line (``compare-models`` for :mod:`.compare_models`).
-SUBCOMMANDS = tuple(m.__name__.rsplit(".", 1)[1].replace("_", "-") for m in COMMANDS)
+#: The subcommands, in the order ``--help`` lists them (module ``compare_models`` for
+#: ``compare-models``).
+SUBCOMMANDS = ("render", "check", "compare-models", "plan", "bench", "compare", "doctor",
+               "validate", "fit")
+
+
+def commands() -> tuple:
+    """The subcommands' modules, in :data:`SUBCOMMANDS` order.  Imported when the parser is
+    built, inside :func:`main` once SIGINT is routed to phonglab's thread
+    (:func:`phonglab.runtime.interrupts_routed`): a module that starts a thread at import
+    would otherwise take Ctrl-C there, and Mitsuba's render handler with it."""
+    from . import (bench, check, compare, compare_models, doctor, fit, plan, render,
+                   validate)
+    return (render, check, compare_models, plan, bench, compare, doctor, validate, fit)
 
 DEBUG_HELP = "show the full traceback on errors"
 
@@ -45,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     parser.add_argument("--version", action="version", version=f"phonglab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for command in COMMANDS:
+    for command in commands():
         command.add_parser(sub)
     for p in sub.choices.values():
         # `phonglab render x --debug` works too; SUPPRESS keeps a top-level --debug when absent.
