@@ -1,7 +1,7 @@
 """The ``phonglab`` command line.
 
 Each subcommand lives in its own module ``phonglab.cli.<name>`` exposing
-``add_parser(subparsers)`` (which sets ``func``); :data:`COMMANDS` lists
+``add_parser(subparsers)`` (which sets ``func``); :data:`SUBCOMMANDS` lists
 them.  Errors meant for the user are one sentence and exit code 2; ``--debug``
 shows the traceback instead.
 """
