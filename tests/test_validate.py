@@ -222,7 +222,7 @@ def test_cli_all_builtins_with_a_small_catalogue(variant_llvm_rgb, tmp_path, cap
 def test_bench_report_validate_section(tmp_path):
     from types import SimpleNamespace
 
-    from phonglab.bench.report import validate_section
+    from phonglab.bench.validate_report import validate_section
     assert validate_section(SimpleNamespace(out=tmp_path)) == []
     (tmp_path / "validate.json").write_text(json.dumps([
         {"plugin": "diffuse", "variant": "llvm_ad_rgb", "kind": "bsdf", "repeats": 3,
@@ -237,6 +237,12 @@ def test_bench_report_validate_section(tmp_path):
     assert ("| diffuse | bsdf | 4 | 6.0 [5.0, 7.0] | **met** | 5.5 [2.0, 11.0] | **not met** | "
             "normalization 3.0, chi2 2.5, weight 0.2 |") in text
     assert "| hg | phase | 3 | 6.0 [5.0, 7.0] | — | 2.5 [2.0, 3.0] | — | chi2 1.0 |" in text
+    assert "Before and after" not in text
+    (tmp_path / "validate-before.json").write_text(json.dumps({"commit": "abc1234", "rows": [
+        {"plugin": "diffuse", "default_seconds": [10.0, 12.0], "quick_seconds": [4.0, 6.0]}]}))
+    text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
+    assert "at commit abc1234" in text
+    assert "| diffuse | 11.0 → 6.0 | 0.55 | 5.0 → 5.5 | 1.10 |" in text
 
 
 def test_lobe_quadrature_centre_anywhere():

@@ -27,6 +27,7 @@ from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RAT
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
                      WHITTED_TARGET)
 from .cluster_report import cluster_section
+from .validate_report import validate_section
 from .csvlog import number, open_log
 from .report_data import RunData, fmt_g, fmt_met, part_record
 
@@ -462,38 +463,6 @@ def fitting_section(d: RunData) -> list[str]:
             f"| {r['wall_median_s']:.2f} | {r['wall_min_s']:.2f} | {r['wall_max_s']:.2f} "
             f"| {r['cpu_median_s']:.2f} | < {r['limit_s']:g} s | {fmt_met(r['met'])} |",
             "\nThe table of fitted exponents: [docs/fitting.md](docs/fitting.md).\n"]
-
-
-def validate_section(d: RunData) -> list[str]:
-    """``phonglab validate`` wall times per plugin and the topics that take them
-    (``scripts/validate_timing.py --json``)."""
-    rows = part_record(d, "validate.json")
-    if rows is None:
-        return []
-    L = ["\n## `phonglab validate`: wall time per plugin, and where it goes\n",
-         "`scripts/validate_timing.py` (run by `make bench`): a fresh `phonglab validate NAME` "
-         "process per run (start-up, kernels, every topic of the sweep; Dr.Jit's kernel cache "
-         "warm), default and `--quick` alternately, median [min, max] over the repeats; a "
-         "wrapper BSDF that needs a nested one is its conformance case given to `validate` as a "
-         "dict (its parameters pinned: one point). Topics: seconds of the default run's "
-         "profile (`validate --profile`, summed over the sweep's points), the three largest. "
-         "Targets on 2 cores: a BSDF ≤ 20 s default and ≤ 5 s `--quick`, an integrator ≤ 45 s "
-         "and ≤ 10 s.\n",
-         "| plugin | kind | points | default (s) | met | --quick (s) | met | largest topics "
-         "(default, s) |", "|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        cells = []
-        for i, mode in enumerate(("default", "quick")):
-            v = r[f"{mode}_seconds"]
-            med = statistics.median(v)
-            target = (r.get("targets") or (None, None))[i]
-            cells += [f"{med:.1f} [{min(v):.1f}, {max(v):.1f}]",
-                      "—" if target is None else fmt_met(med <= target)]
-        top = sorted(r["profile_default"].items(), key=lambda kv: -kv[1])[:3]
-        name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
-        L.append(f"| {name} | {r['kind']} | {r['points']} | " + " | ".join(cells)
-                 + f" | {', '.join(f'{t} {s:.1f}' for t, s in top)} |")
-    return L + [""]
 
 
 def adaptive_section(d: RunData) -> list[str]:
