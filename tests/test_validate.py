@@ -237,6 +237,7 @@ def test_bench_report_validate_section(tmp_path):
     assert ("| diffuse | bsdf | 4 | 6.0 [5.0, 7.0] | **met** | 5.5 [2.0, 11.0] | **not met** | "
             "normalization 3.0, chi2 2.5, weight 0.2 |") in text
     assert "| hg | phase | 3 | 6.0 [5.0, 7.0] | — | 2.5 [2.0, 3.0] | — | chi2 1.0 |" in text
+    assert "two topics (chi2, normalization among them) take 95%–95%" in text
     assert "Before and after" not in text
     (tmp_path / "validate-before.json").write_text(json.dumps({"commit": "abc1234", "rows": [
         {"plugin": "diffuse", "default_seconds": [10.0, 12.0], "quick_seconds": [4.0, 6.0]}]}))

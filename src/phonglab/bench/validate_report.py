@@ -39,18 +39,38 @@ def validate_section(d: RunData) -> list[str]:
         name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
         L.append(f"| {name} | {r['kind']} | {r['points']} | " + " | ".join(cells)
                  + f" | {', '.join(f'{t} {s:.1f}' for t, s in top)} |")
-    return L + _validate_before_after(d, rows) + [""]
+    return L + _misses(rows) + _validate_before_after(d, rows) + [""]
+
+
+def _misses(rows) -> list[str]:
+    """Where the plugins that miss a target spend their default run: the share of the profile
+    in its two largest topics, and which topics those are."""
+    missed = []
+    for r in rows:
+        targets = r.get("targets") or (None, None)
+        meds = [statistics.median(r[f"{m}_seconds"]) for m in ("default", "quick")]
+        if any(t is not None and m > t for t, m in zip(targets, meds)) and r["profile_default"]:
+            top = sorted(r["profile_default"].items(), key=lambda kv: -kv[1])[:2]
+            total = sum(r["profile_default"].values())
+            missed.append((r["plugin"], [t for t, _ in top], sum(v for _, v in top) / total))
+    if not missed:
+        return []
+    names = sorted({t for _, tops, _ in missed for t in tops})
+    shares = [share for _, _, share in missed]
+    return [f"\n{len(missed)} plugins miss a target; in each, two topics ({', '.join(names)} "
+            f"among them) take {min(shares):.0%}–{max(shares):.0%} of the profiled time, at every "
+            f"point of the sweep (the column `points`).\n"]
 
 
 def _validate_before_after(d: RunData, rows) -> list[str]:
     """Medians before -> after for the plugins ``validate-before.json`` (the same script at an
-    earlier commit, ``{"commit", "rows"}``) also timed."""
+    earlier commit, ``{"commit": what was timed, "rows"}``) also timed."""
     before = part_record(d, "validate-before.json")
     if not before:
         return []
     after = {r["plugin"]: r for r in rows}
-    L = [f"\nBefore and after: the same script at commit {before['commit']} (same machine, "
-         f"run right after), medians; the ratio is after / before.\n",
+    L = [f"\nBefore and after: medians at commit {before['commit']} against this table "
+         f"(the same script and machine); the ratio is after / before.\n",
          "| plugin | default before → after (s) | ratio | --quick before → after (s) | ratio |",
          "|---|---|---|---|---|"]
     for b in before["rows"]:
