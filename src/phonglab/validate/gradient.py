@@ -55,10 +55,11 @@ from __future__ import annotations
 from typing import Protocol
 
 import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from .. import probe
-from ..verdict import Row
+from ..verdict import NOT_APPLICABLE, Row
 from .roundoff import EPS32
 
 #: Round-off multiplier of a float32 lane (see the module docstring).
@@ -100,6 +101,24 @@ class Functional(Protocol):
     def hold(self) -> None: ...
 
     def undefined(self, g: np.ndarray) -> np.ndarray | None: ...
+
+
+def without_ad(row=Row) -> list | None:
+    """The topic's one skipped row (of the kind's ``row`` type) in a variant without automatic
+    differentiation; None in an AD variant."""
+    if dr.is_diff_v(mi.Float):
+        return None
+    return [row("gradient", "AD derivatives", None, None, None, None, "skipped",
+                f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
+                {NOT_APPLICABLE: True})]
+
+
+def differentiable_keys(params) -> list[str]:
+    """The keys of ``params`` (``mi.traverse``) an optimizer would differentiate: neither
+    flagged non-differentiable nor read-only (traversed for reading, refused on update:
+    sunsky's sun_direction when it is computed from a date and place, sunsky.cpp:291)."""
+    skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
+    return [k for k in params.keys() if not params.properties[k][3] & skip]
 
 
 def unconverged(d1, d2, noise, forward=None, backward=None) -> np.ndarray:

@@ -16,14 +16,13 @@ the topic is one skipped row.
 
 from __future__ import annotations
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
 from ... import probe
 from . import lanes
-from ..gradient import AtFixedInputs, verdict
+from ..gradient import AtFixedInputs, verdict, without_ad
 from .topics import Row
 
 
@@ -37,10 +36,9 @@ def _directions(opts):
 
 
 def gradient(bsdf, opts) -> list[Row]:
-    if not dr.is_diff_v(mi.Float):
-        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {NOT_APPLICABLE: True})]
+    skipped = without_ad(Row)
+    if skipped:
+        return skipped
     if lanes.delta_only(bsdf):
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "every lobe is a delta: eval is 0 everywhere, so no parameter has a "

@@ -31,7 +31,7 @@ import numpy as np
 
 from ...verdict import NOT_APPLICABLE
 from ... import probe
-from ..gradient import MAX_HALVINGS, verdict
+from ..gradient import MAX_HALVINGS, differentiable_keys, verdict, without_ad
 from .config import rng
 from .lanes import with_edges
 from .setup import Setup, interaction, point2, ref_groups
@@ -88,15 +88,11 @@ class HeldSampling:
 
 
 def gradient(setup: Setup, opts) -> list[Row]:
-    if not dr.is_diff_v(mi.Float):
-        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {NOT_APPLICABLE: True})]
+    skipped = without_ad(Row)
+    if skipped:
+        return skipped
     params = mi.traverse(setup.emitter)
-    # ReadOnly: traversed for reading, refused on update (sunsky's sun_direction when it is
-    # computed from a date and place, sunsky.cpp:291)
-    skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
-    keys = [k for k in params.keys() if not params.properties[k][3] & skip]
+    keys = differentiable_keys(params)
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "mi.traverse exposes no differentiable parameter", {NOT_APPLICABLE: True})]

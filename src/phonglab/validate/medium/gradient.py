@@ -23,12 +23,11 @@ left out, as Mitsuba's optimizers leave them.
 
 from __future__ import annotations
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
-from ..gradient import AtFixedInputs, verdict
+from ..gradient import AtFixedInputs, differentiable_keys, verdict, without_ad
 from . import lanes
 from .config import rng
 from .topics import Row
@@ -38,14 +37,11 @@ COEFFICIENTS = {"σ_s": 0, "σ_t": 2}
 
 
 def gradient(medium, opts) -> list[Row]:
-    if not dr.is_diff_v(mi.Float):
-        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {NOT_APPLICABLE: True})]
+    skipped = without_ad(Row)
+    if skipped:
+        return skipped
     params = mi.traverse(medium)
-    skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
-    keys = [k for k in params.keys()
-            if not params.properties[k][3] & skip and not k.startswith("phase_function.")]
+    keys = [k for k in differentiable_keys(params) if not k.startswith("phase_function.")]
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "mi.traverse exposes no differentiable parameter of the medium (its phase "

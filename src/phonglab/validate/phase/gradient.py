@@ -14,26 +14,23 @@ out, tolerance 4|D(h) − D(h/2)| + 64u(Σ|S|/h + Σ|∂S|).
 
 from __future__ import annotations
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ...verdict import NOT_APPLICABLE
 from ... import probe
-from ..gradient import AtFixedInputs, verdict
+from ..gradient import AtFixedInputs, differentiable_keys, verdict, without_ad
 from . import lanes
 from .config import rng
 from .topics import Row
 
 
 def gradient(phase, opts) -> list[Row]:
-    if not dr.is_diff_v(mi.Float):
-        return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
-                    f"{mi.variant()} has no automatic differentiation: use an llvm_ad_* variant",
-                    {NOT_APPLICABLE: True})]
+    skipped = without_ad(Row)
+    if skipped:
+        return skipped
     params = mi.traverse(phase)
-    skip = int(mi.ParamFlags.NonDifferentiable) | int(mi.ParamFlags.ReadOnly)
-    keys = [k for k in params.keys() if not params.properties[k][3] & skip]
+    keys = differentiable_keys(params)
     if not keys:
         return [Row("gradient", "AD derivatives", None, None, None, None, "skipped",
                     "mi.traverse exposes no differentiable parameter", {NOT_APPLICABLE: True})]
