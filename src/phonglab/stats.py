@@ -14,6 +14,10 @@ comparisons made together:
   (:func:`holm`), used for per-pixel tests whose pixels a reconstruction filter correlates.
 * **Welch** [B. L. Welch, Biometrika 34 (1947)]: the two-sample t-test with unequal
   variances and the Welch–Satterthwaite degrees of freedom (:func:`welch_pvalues`).
+* The distributions are ``scipy.special``'s (``ndtr``/``ndtri`` for the normal, ``stdtr``/
+  ``stdtrit`` for Student's t, ``chdtrc`` for the χ² tail), the functions ``scipy.stats``
+  evaluates underneath: importing ``scipy.stats`` cost every validate process 0.69 s of its
+  0.81 s of imports, ``scipy.special`` 0.05 s.
 * **Pearson's χ²** [K. Pearson, Phil. Mag. 50 (1900)] of a histogram against expected counts
   (:func:`pearson_chi2`), with Mitsuba's pooling of sparse cells (``mitsuba::math::chi2``,
   include/mitsuba/core/math.h): cells sorted by expected count, those below 5 summed in that
@@ -34,7 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats as _scipy_stats
+from scipy import special
 
 #: Family-wise significance level of every statistical check, benchmark verdict and test.
 ALPHA = 0.01
@@ -47,17 +51,17 @@ def sidak(alpha: float, m: int) -> float:
 
 def z_critical(alpha: float = ALPHA, m: int = 1) -> float:
     """Two-sided standard-normal quantile at the Šidák level of m tests: P(|Z| > z) = sidak(α, m)."""
-    return float(_scipy_stats.norm.isf(sidak(alpha, m) / 2.0))
+    return float(-special.ndtri(sidak(alpha, m) / 2.0))
 
 
 def t_critical(dof: float, alpha: float = ALPHA, m: int = 1) -> float:
     """Two-sided Student-t quantile with ``dof`` degrees of freedom at the Šidák level of m tests."""
-    return float(_scipy_stats.t.isf(sidak(alpha, m) / 2.0, dof))
+    return float(-special.stdtrit(dof, sidak(alpha, m) / 2.0))
 
 
 def two_sided_p(z) -> np.ndarray | float:
     """Two-sided p-value 2(1 − Φ(|z|)) of a standard-normal statistic."""
-    p = 2.0 * _scipy_stats.norm.sf(np.abs(z))
+    p = 2.0 * special.ndtr(-np.abs(z))
     return float(p) if np.ndim(p) == 0 else p
 
 
@@ -90,7 +94,7 @@ def welch_pvalues(m1, se1, m2, se2, passes1: int, passes2: int) -> tuple[np.ndar
     vs = np.where(zero, 1.0, v)
     t = diff / np.sqrt(vs)
     dof = vs * vs / np.maximum(v1 * v1 / (passes1 - 1) + v2 * v2 / (passes2 - 1), 1e-300)
-    p = 2.0 * _scipy_stats.t.sf(np.abs(t), np.maximum(dof, 1.0))
+    p = 2.0 * special.stdtr(np.maximum(dof, 1.0), -np.abs(t))
     p = np.where(zero, np.where(diff == 0, 1.0, 0.0), p)
     return p, np.where(zero, 0.0, t)
 
@@ -147,7 +151,7 @@ def pearson_chi2(observed, expected, pool_below: float = POOL_BELOW,
             dof += 1
     dof -= 1
     impossible = float(np.sum(obs[exp == 0]))
-    p = float(_scipy_stats.chi2.sf(stat, dof)) if dof >= 1 and impossible == 0 else 0.0
+    p = float(special.chdtrc(dof, stat)) if dof >= 1 and impossible == 0 else 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         residual = np.where(exp >= pool_below, (obs - exp) / np.sqrt(exp), np.nan)
     return PearsonChi2(stat, dof, p, pooled_in, pooled_out, int(impossible), residual)
@@ -173,7 +177,7 @@ def _one_pool(obs: np.ndarray, exp: np.ndarray, pool_below: float) -> PearsonChi
         stat, dof, p = float("inf"), len(ce) - 1, 0.0
     else:
         stat, dof = float(np.sum((co[keep] - ce[keep]) ** 2 / ce[keep])), max(1, int(keep.sum()) - 1)
-        p = float(_scipy_stats.chi2.sf(stat, dof))
+        p = float(special.chdtrc(dof, stat))
     with np.errstate(divide="ignore", invalid="ignore"):
         residual = np.where(exp >= pool_below, (obs - exp) / np.sqrt(exp), np.nan)
     return PearsonChi2(stat, dof, p, pooled_in, int(pooled_in > 0), int(impossible), residual)

@@ -29,7 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats as sps
+from scipy import special
 
 from ... import stats
 
@@ -324,7 +324,7 @@ class Chi2Excess(Region):
         cells, level = _cells(row)
         if cells is None:
             return None
-        z = float(sps.norm.isf(level))
+        z = float(-special.ndtri(level))
         out = []
         for c in cells:
             obs, exp = _counts(c)
