@@ -28,12 +28,12 @@ import numpy as np
 import psutil
 import pytest
 
+from phonglab import parallel
 from phonglab.bench import csvlog
 from phonglab.bench.config import LOGS, STABILITY_CELLS
 from phonglab.bench.jobs import put_in_order
 from phonglab.cli import main
 from phonglab.errors import PhonglabError
-from phonglab import parallel
 from phonglab.parallel import Job, Runner, check_address
 
 #: Columns that are measured times or compile statistics (machine state, not results).
@@ -381,3 +381,40 @@ def test_local_worker_counts_are_bounded_before_any_process_starts():
         parallel.check_local_workers(8, cores=4, memory=1 << 30)
     parallel.check_local_workers(2, cores=2, memory=1 << 30)
     Runner(workers=1000, scheduler="tcp://127.0.0.1:1")     # a cluster's size is its own
+
+
+class _Meter:
+    """A measured first job: its seconds and the cores the rest of the machine left free."""
+
+    def __init__(self, seconds, free):
+        self.seconds, self.free = seconds, free
+
+
+@pytest.mark.parametrize("jobs, seconds, free, workers", [
+    (10, 6.0, 2, 2),       # 60 s of work, two free cores: a cluster of two
+    (10, 6.0, 8, 8),       # as many as are free ...
+    (3, 30.0, 8, 3),       # ... but no more than the jobs
+    (10, 1.0, 2, 1),       # 10 s: below what a cluster's start pays for
+    (10, 6.0, 1, 1),       # another process holds a core (a test runner's worker)
+    (1, 100.0, 2, 1),      # one job left: nothing to spread
+])
+def test_automatic_runner_spreads_only_long_work_on_free_cores(jobs, seconds, free, workers):
+    where = parallel.auto_workers(jobs, _Meter(seconds, free), "points")
+    assert where["workers"] == workers
+    assert where["free_cores"] == free and where["first_seconds"] == seconds
+    assert "points" in where["reason"]
+
+
+def test_core_meter_sees_a_core_taken_by_another_process():
+    """A child process spinning on one core for the whole block leaves at most cores − 1 free
+    (whatever else runs: a meter that ignored other processes would find every core free)."""
+    spin = subprocess.Popen([sys.executable, "-c", "import time\nt = time.time()\n"
+                             "while time.time() - t < 2.5: pass"])
+    try:
+        time.sleep(0.5)
+        with parallel.CoreMeter() as busy:
+            time.sleep(1.5)
+    finally:
+        spin.wait()
+    assert busy.free <= len(os.sched_getaffinity(0)) - 1
+    assert 1.4 < busy.seconds < 3.0

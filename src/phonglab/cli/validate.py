@@ -130,7 +130,10 @@ def add_parser(sub) -> None:
                         "Python code (a plugin's eval that loops forever), not a compiled "
                         "Dr.Jit kernel; per topic and parameter point, in this process "
                         "(not in --workers processes)")
-    add_arguments(p)         # --workers / --scheduler: where the --all-builtins cases run
+    # --workers / --scheduler: where a sweep's points and the --all-builtins cases run
+    add_arguments(p, auto="a sweep's points after the given one on min(free cores, points) "
+                          "processes when they would take 20 s or more here and two cores "
+                          "are free, else here; --all-builtins serially")
     p.set_defaults(func=run)
 
 
@@ -207,7 +210,8 @@ def sweep_text(report: Report) -> str:
     lines = [f"swept {sw['points']} parameter points of "
              + (", ".join(f"{p['name']} in [{p['lo']:g}, {p['hi']:g}] ({p['source']})"
                           for p in sw["parameters"]) or "no parameter")
-             + (f"; pinned: {', '.join(sw['pinned'])}" if sw["pinned"] else ""), "",
+             + (f"; pinned: {', '.join(sw['pinned'])}" if sw["pinned"] else "")
+             + (f"; {_where(sw['where'])}" if sw.get("where") else ""), "",
              "at the given point:", report.table([r for r in report.rows if not r.point]), "",
              "every point:"]
     lines.append(table_by_point(report.rows))
@@ -233,6 +237,12 @@ def sweep_text(report: Report) -> str:
         lines += ["", "outside the plugin's range (refused at load time, not run):"]
         lines += [f"  {point_label(r['point'])}: {r['reason']}" for r in refused]
     return "\n".join(lines)
+
+
+def _where(where: dict) -> str:
+    """Where a sweep's points ran, in words ("here: 12 jobs predicted to take 9 s ...")."""
+    n = where["workers"]
+    return (f"on {n} worker processes" if n > 1 else "here") + f" ({where['reason']})"
 
 
 def _all_builtins(args) -> int:
@@ -340,7 +350,8 @@ def validate_one(args, params: dict):
 
 def run(args) -> int:
     params, _ = _check_inputs(args)       # topics again per kind, once it is known
-    if args.no_sweep and not args.all_builtins and (args.workers != 1 or args.scheduler):
+    spread = args.workers not in (None, 1) or args.scheduler
+    if args.no_sweep and not args.all_builtins and spread:
         raise ValidateError("--workers and --scheduler spread the cases of --all-builtins and "
                             "the points of a sweep; drop them or drop --no-sweep")
     from ..validate.timeout import topic_timeout   # lazy: Mitsuba loads only for a run

@@ -20,6 +20,16 @@ set and phonglab's plugins registered.  Results stream back as jobs finish
 once (the bench writes its CSV row there, so an interrupted run resumes) and returns them in
 job order, so what is written from them does not depend on which worker was faster.
 
+**Automatic** (``auto=True``, ``validate``'s default where no ``--workers`` is given): the
+first job runs here while :class:`CoreMeter` measures how many cores the rest of the
+machine left idle meanwhile; the remaining jobs then go to an embedded cluster of
+:func:`auto_workers` processes when they are predicted (as long as the first, each) to take at
+least :data:`AUTO_MIN_SECONDS` serially and at least two cores were free, else they run here
+too.  A validate run is ~90 % Python and numpy on one core (``validate --profile``: the
+kernels' execution is a few %), so a second process nearly halves a long sweep, while a
+cluster's start (~5 s with its workers' imports and plugin loads) would double a short one;
+under another load (a test runner's workers) the cores are not free and nothing starts.
+
 Faults: a job whose worker dies (killed, out of memory) is rescheduled on another worker by
 the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
 a job whose function raises is re-run up to :data:`RETRIES` times, then its exception is
@@ -54,6 +64,9 @@ WORKERS_PER_CORE = 4
 #: Memory of one worker process (Python, Mitsuba, Dr.Jit and kernels; a render process is
 #: ~200 MB, phonglab.engine.render.BASE_BYTES), rounded up.
 WORKER_BYTES = 256 << 20
+#: Serial seconds the remaining jobs of an automatic runner must be predicted to take before a
+#: cluster starts for them (its start costs ~5 s on 2 cores).
+AUTO_MIN_SECONDS = 20.0
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
@@ -135,11 +148,67 @@ def check_address(address: str) -> str:
     return address
 
 
+class CoreMeter:
+    """``with CoreMeter() as m: ...``: ``m.free`` is how many cores the rest of the machine
+    left idle during the block -- the cores less the busy time of every other process (the
+    machine's busy CPU time less this process's, Dr.Jit's threads included) over the wall
+    time -- and ``m.seconds`` the block's wall time."""
+
+    def __enter__(self) -> "CoreMeter":
+        import psutil  # lazy: a dependency of distributed, read only by an automatic runner
+
+        self._psutil = psutil
+        self._process = psutil.Process()
+        self._t0 = time.perf_counter()
+        self._busy0 = self._busy()
+        self._own0 = self._own()
+        return self
+
+    def _busy(self) -> float:
+        t = self._psutil.cpu_times()
+        return sum(t) - t.idle - getattr(t, "iowait", 0.0)
+
+    def _own(self) -> float:
+        t = self._process.cpu_times()
+        return t.user + t.system
+
+    def __exit__(self, *exc) -> None:
+        self.seconds = time.perf_counter() - self._t0
+        others = (self._busy() - self._busy0) - (self._own() - self._own0)
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+            os.cpu_count() or 1)
+        self.free = max(0, cores - round(max(0.0, others) / max(self.seconds, 1e-9)))
+
+
+def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs") -> dict:
+    """How an automatic runner runs ``jobs`` remaining jobs after a first one measured by
+    ``meter`` (each predicted to take as long): ``workers`` = min(free cores, jobs) when the
+    serial remainder is at least :data:`AUTO_MIN_SECONDS` and two cores are free, else 1
+    (here); with the ``reason`` in words, ``free_cores`` and ``first_seconds``."""
+    serial, free = jobs * meter.seconds, meter.free
+    if jobs < 2:
+        n, reason = 1, f"one of the {noun} left"
+    elif serial < AUTO_MIN_SECONDS:
+        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, below the "
+                        f"{AUTO_MIN_SECONDS:g} s a cluster's start pays for")
+    elif free < 2:
+        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but {free} "
+                        f"core{'s' * (free != 1)} free (other processes use the rest)")
+    else:
+        n = min(free, jobs)
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {free} cores free: "
+                  f"{n} worker processes")
+    return {"workers": n, "reason": reason, "free_cores": free,
+            "first_seconds": round(meter.seconds, 3)}
+
+
 @dataclass
 class Runner:
     """Where jobs run: serially, on a LocalCluster of ``workers`` processes, or on ``scheduler``.
 
     Use as a context manager (the cluster starts on entry and is shut down on exit).
+    ``auto``: serial, but a caller that measures its first job asks :func:`auto_workers`
+    where the rest run (the module docstring's automatic runner).
     """
 
     workers: int = 1
@@ -147,11 +216,14 @@ class Runner:
     variant: str = DEFAULT_VARIANT
     progress: bool = True
     retries: int = RETRIES
+    auto: bool = False
     timings: list[JobTiming] = field(default_factory=list)
     _client: Any = field(default=None, repr=False)
     _cluster: Any = field(default=None, repr=False)
 
     def __post_init__(self):
+        if self.auto and (int(self.workers) != 1 or self.scheduler is not None):
+            raise ValueError("an automatic Runner starts serial: no workers or scheduler")
         if int(self.workers) < 1:
             raise PhonglabError(f"--workers must be at least 1, got {self.workers}")
         if self.scheduler is None and int(self.workers) > 1:
@@ -278,12 +350,15 @@ def _wait_for_a_worker(client, scheduler: str) -> None:
                             f"{scheduler} --nthreads 1` (docs/cluster.md)") from None
 
 
-def add_arguments(parser) -> None:
-    """``--workers`` and ``--scheduler`` on a subcommand's parser (bench, plan)."""
+def add_arguments(parser, auto: str | None = None) -> None:
+    """``--workers`` and ``--scheduler`` on a subcommand's parser (bench, plan, validate).
+    ``auto``: the words of an automatic default (``--workers`` absent: ``None``, an automatic
+    :class:`Runner`), else the default is 1, serially here."""
     group = parser.add_mutually_exclusive_group()
-    group.add_argument("--workers", type=int, default=1, metavar="N",
+    group.add_argument("--workers", type=int, default=None if auto else 1, metavar="N",
                        help="run the independent jobs on N local worker processes (a Dask "
-                            "LocalCluster, one thread each; default 1: serially here)")
+                            "LocalCluster, one thread each; "
+                            + (f"default: {auto})" if auto else "default 1: serially here)"))
     group.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                        help="run the jobs on a running Dask cluster (docs/cluster.md); results "
                             "are identical to a serial run")
@@ -291,5 +366,7 @@ def add_arguments(parser) -> None:
 
 def runner_from_args(args, variant: str = DEFAULT_VARIANT) -> Runner:
     """The :class:`Runner` of ``--workers``/``--scheduler`` (checked before anything runs)."""
-    return Runner(workers=args.workers, scheduler=args.scheduler, variant=variant,
+    auto = args.workers is None and args.scheduler is None
+    return Runner(workers=1 if args.workers is None else args.workers,
+                  scheduler=args.scheduler, variant=variant, auto=auto,
                   progress=not getattr(args, "no_progress", False))

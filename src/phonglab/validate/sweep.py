@@ -52,6 +52,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..parallel import CoreMeter, Job, Runner, auto_workers
 from ..verdict import Report, Row, point_label
 from . import core, loading, registry
 from . import profile as profile_
@@ -132,7 +133,8 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                "known": known, "plugins": [str(p) for p in plugins], "family": size,
                "sizes": sizes, "kind": kind.name}
     with core.session(kind):             # one for every point run here
-        reports = _run_points(spec, params or {}, runnable, loaded, options, runner, progress,
+        reports, where = _run_points(spec, params or {}, runnable, loaded, options, runner,
+                                     progress,
                               [t for t in topics if t not in kind.informational
                                and t not in kind.given_point_only])
     rows: list[Row] = []
@@ -156,7 +158,8 @@ def run(kind: Kind, base, spec, *, params=None, topics=None, seed=0, quick=False
                "parameters": [{"name": p.name, "given": p.value, "lo": p.range.lo,
                                "hi": p.range.top, "edges": list(p.range.edges),
                                "source": p.source} for p in swept],
-               "pinned": sorted(pinned), "runs": records + refused, "advice": advice})
+               "pinned": sorted(pinned), "runs": records + refused, "advice": advice,
+               "where": where})
     if not swept:
         meta["sweep"]["note"] = (
             f"no parameter swept: this {kind.word} declares no PARAMETER_RANGES, and no range "
@@ -263,9 +266,11 @@ def base_variant() -> str:
 
 def _run_points(spec, params, pts, loaded, options, runner, progress,
                 other_topics) -> list[Report]:
-    """Each point's report, in point order: here on its ``loaded`` target, or one job per point
-    on ``runner``; the points after the given one run ``other_topics`` (no informational
-    topic)."""
+    """(each point's report in point order, where they ran: ``workers`` and ``reason``): here
+    on its ``loaded`` target, or one job per point on ``runner``; an automatic runner
+    (:func:`phonglab.parallel.auto_workers`) runs the given point here and the others on the
+    worker processes it starts when they would take long and cores are free.  The points
+    after the given one run ``other_topics`` (no informational topic)."""
     results: dict[int, Report] = {}
     per_point = [options] + [{**options, "topics": list(other_topics)}] * (len(pts) - 1)
 
@@ -274,15 +279,34 @@ def _run_points(spec, params, pts, loaded, options, runner, progress,
         if progress:
             progress(pts[i].label, results[i])
 
-    if runner is None or runner.serial:
-        for i, pt in enumerate(pts):
+    def jobs(first: int):
+        return [Job(run_point, (spec, {**params, **pts[i].params}, per_point[i]), key=str(i))
+                for i in range(first, len(pts))]
+
+    def here(first: int):
+        for i in range(first, len(pts)):
             finished(i, run_loaded(loaded[i], per_point[i]))
+
+    if runner is not None and runner.auto and len(pts) > 1:
+        # the given point here, measured: its time predicts the others', and the machine's
+        # other load says whether cores are free for them (phonglab.parallel: automatic)
+        with CoreMeter() as meter:
+            finished(0, run_loaded(loaded[0], per_point[0]))
+        where = auto_workers(len(pts) - 1, meter, "more points")
+        if where["workers"] > 1:
+            with Runner(workers=where["workers"], variant=runner.variant,
+                        progress=runner.progress) as pool:
+                pool.run(jobs(1), lambda job, d: finished(int(job.key), d), desc="sweep")
+        else:
+            here(1)
+    elif runner is None or runner.serial:
+        here(0)
+        where = {"workers": 1, "reason": "serial: --workers 1 or a library call"
+                 if len(pts) > 1 else "one point"}
     else:
-        from ..parallel import Job
-        jobs = [Job(run_point, (spec, {**params, **pt.params}, per_point[i]), key=str(i))
-                for i, pt in enumerate(pts)]
-        runner.run(jobs, lambda job, d: finished(int(job.key), d), desc="sweep")
-    return [results[i] for i in range(len(pts))]
+        runner.run(jobs(0), lambda job, d: finished(int(job.key), d), desc="sweep")
+        where = {"workers": runner.workers, "reason": runner.where}
+    return [results[i] for i in range(len(pts))], where
 
 
 def run_point(spec, params, options: dict):
