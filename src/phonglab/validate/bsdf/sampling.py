@@ -161,7 +161,7 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
             "dof": test.dof, "hist_sum": hist_sum, "pdf_sum": pdf_sum, "scale": scale,
             "status": "pass" if ok else "fail", "messages": "\n".join(messages),
             "problems": problems,
-            "nonfinite_wo_dropped": int((~np.all(np.isfinite(s.wo), axis=1)).sum()),
+            "nonfinite_wo_dropped": int((~lanes.every(np.isfinite(s.wo))).sum()),
             "integration": integration}
     if black:
         cell["black"] = True
