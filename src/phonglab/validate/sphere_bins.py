@@ -69,9 +69,11 @@ class Grid:
         row = np.clip(np.floor((1.0 - wo[:, 2]) / 2.0 * self.rows), 0, self.rows - 1)
         return (row * self.cols + col).astype(np.int64)
 
-    def histogram(self, wo: np.ndarray) -> np.ndarray:
-        """Counts (rows, cols) of the directions (N, 3)."""
-        counts = np.bincount(self.index(wo), minlength=self.rows * self.cols)
+    def histogram(self, wo: np.ndarray, index: np.ndarray | None = None) -> np.ndarray:
+        """Counts (rows, cols) of the directions (N, 3) (``index``: their :meth:`index`,
+        when already computed)."""
+        index = self.index(wo) if index is None else index
+        counts = np.bincount(index, minlength=self.rows * self.cols)
         return counts.reshape(self.shape).astype(np.float64)
 
     def ranges(self, flat: int) -> dict:
@@ -262,7 +264,7 @@ def _peaks(grid: Grid, pdf_fn, n: int, e: np.ndarray, o: np.ndarray, wo: np.ndar
 
 
 def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_max: int,
-            info: dict) -> np.ndarray:
+            info: dict, index: np.ndarray | None = None) -> np.ndarray:
     """``expected`` with the bins whose count of the directions ``wo`` contradicts it
     integrated again at k_max/2 and k_max nodes per panel: the :data:`RECHECK_BINS` worst with
     |O − E| > RECHECK_Z·√max(E, 1), and every bin holding samples where E = 0.
@@ -277,10 +279,11 @@ def recheck(grid: Grid, pdf_fn, n: int, expected: np.ndarray, wo: np.ndarray, k_
     A bin that still contradicts its count after that is integrated with its neighbours by
     panels graded toward its sample of largest pdf (:func:`_peaks`: a lobe far narrower than
     any node).  ``info`` (the cell's ``integration`` record) gains ``rechecked``, their error
-    estimate, ``peaks`` and ``slivers``.
+    estimate, ``peaks`` and ``slivers``.  ``index``: ``grid.index(wo)`` when already computed
+    (the histogram's).
     """
     e = expected.ravel().copy()
-    index = grid.index(wo)
+    index = grid.index(wo) if index is None else index
     o = np.bincount(index, minlength=e.size).astype(np.float64)
     z = np.abs(o - e) / np.sqrt(np.maximum(e, 1.0))
     worst = np.flatnonzero(z > RECHECK_Z)

@@ -131,9 +131,11 @@ def chi2_cell(bsdf, wi: np.ndarray, opts, level: float, r: np.random.Generator) 
         # topic's failure; plastic with both reflectances 0, plastic.cpp:206)
         return {"wi": wi.tolist(), "status": "nonfinite", "hist_sum": float(kept.mean()),
                 "pdf_sum": pdf_sum, "integration": integration}
-    hist = grid.histogram(s.wo[kept])
-    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, s.wo[kept], opts.chi2_ires_max,
-                                   integration)
+    wo = s.wo[kept]
+    index = grid.index(wo)
+    hist = grid.histogram(wo, index)
+    expected = sphere_bins.recheck(grid, pdf_fn, n, expected, wo, opts.chi2_ires_max,
+                                   integration, index)
     pdf_sum = float(expected.sum()) / n
     # the shape: N·∫pdf scaled to the counted samples (the scale is normalization's)
     scale = float(kept.sum()) / (pdf_sum * n) if pdf_sum > 0 else 1.0

@@ -71,9 +71,10 @@ def chi2_cell(phase, wi: np.ndarray, opts, level: float, r: np.random.Generator)
         return {**rec, "status": "nonfinite" if not finite.any() else "empty"}
     expected, integration = sphere_bins.expected_counts(grid, pdf_fn, n, opts.chi2_ires,
                                                         opts.chi2_ires_max)
-    hist = grid.histogram(local)
+    index = grid.index(local)
+    hist = grid.histogram(local, index)
     expected = sphere_bins.recheck(grid, pdf_fn, n, expected, local, opts.chi2_ires_max,
-                                   integration)
+                                   integration, index)
     pdf_sum = float(expected.sum()) / n
     scale = float(kept.sum()) / (pdf_sum * n) if pdf_sum > 0 else 1.0
     test = stats.pearson_chi2(hist, expected * scale)
