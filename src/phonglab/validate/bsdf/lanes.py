@@ -90,7 +90,8 @@ def some(mask: np.ndarray) -> np.ndarray:
     return out
 
 
-def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarray:
+def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None,
+            finite: np.ndarray | None = None) -> np.ndarray:
     """The samples that carry a density (χ²'s histogram, the normalization count): not a delta
     lobe, finite (:func:`finite_sample`), and weight ≠ 0 in some channel (Mitsuba marks a
     rejected sample with weight 0).
@@ -100,11 +101,12 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None) -> np.ndarra
     count too, their weight 0 being the right value eval/pdf, not a rejection.  For a black
     cell that is χ²'s drawn-direction rule; it also covers a cell black in part (pplastic
     in a polarized variant at cos θ_i = 1e-4: 89 % of its diffuse samples have eval 0 there).
+    ``finite``: :func:`finite_sample` of ``s``, when already computed.
     """
     drawn = some(s.weight != 0)
     if black_at_wo is not None:
         drawn |= black_at_wo
-    return drawn & ~delta_mask(s.sampled_type) & finite_sample(s)
+    return drawn & ~delta_mask(s.sampled_type) & (finite_sample(s) if finite is None else finite)
 
 
 def black_at_wo(bsdf, wi: np.ndarray, s: probe.Sample) -> np.ndarray:

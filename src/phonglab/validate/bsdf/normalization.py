@@ -89,9 +89,10 @@ def _counts(bsdf, cells: np.ndarray, n: int, opts) -> tuple:
         wi = lanes.exact(probe.direction(theta, phi))
         s = probe.sample(bsdf, wi, r.random(n), r.random((n, 2)))
         black = lanes.black_at_wo(bsdf, wi, s)
-        k = lanes.counted(s, black)
+        finite = lanes.finite_sample(s)
+        k = lanes.counted(s, black, finite)
         ks.append(int(k.sum()))
-        totals.append(int(lanes.finite_sample(s).sum()))
+        totals.append(int(finite.sum()))
         blacks.append(int((k & black).sum()))
         live = k & np.isfinite(s.pdf)
         keys = (s.sampled_component[live] << 32) | s.sampled_type[live]
