@@ -10,7 +10,8 @@ The rule.  Coordinates (α, φ) in the frame centred on the mirror direction R(�
 R = (−sin θ_i, 0, cos θ_i), T₁ = (−cos θ_i, 0, −sin θ_i), T₂ = (0, 1, 0).  The upper
 hemisphere is exactly α < α_h(φ) = atan2(cos θ_i, sin θ_i cos φ) (where
 ω_z = cos α cos θ_i − sin α cos φ sin θ_i = 0), so the horizon is a panel edge and the
-integrand is smooth inside each panel.  Composite Gauss–Legendre with n nodes per panel:
+integrand is smooth inside each panel (as is any given height ω_z = h where it may jump:
+``heights``).  Composite Gauss–Legendre with n nodes per panel:
 α panels doubling from width/4 (a lobe cos^p α has width ≈ 1/√p; :func:`lobe_width` gives
 1/√(p + 2)) plus an edge at α = π/2 (where max(0, cos α)^p has its kink), φ panels doubling
 away from π/2 (where α_h turns quickly at grazing incidence).  Only φ ∈ [0, π] is used and
@@ -99,8 +100,28 @@ def _refinement_edges(points, frame, alpha_edges: np.ndarray, phi_edges: np.ndar
     return out_alpha, out_phi
 
 
+def _height_edges(c: float, s: float, phi: np.ndarray, heights) -> np.ndarray:
+    """Per φ node, the α (in (0, α_h(φ))) where ω_z = cos α cos θ_i − sin α cos φ sin θ_i
+    equals each of ``heights``; π where there is none (clipped away by the horizon).  With
+    A = hypot(cos θ_i, sin θ_i cos φ) and δ = atan2(sin θ_i cos φ, cos θ_i), ω_z = A cos(α + δ)
+    and α_h = π/2 − δ: ω_z = h at α = ±acos(h/A) − δ (two crossings where the circle of α
+    rises towards the pole before it falls to the horizon, cos φ < 0)."""
+    cos_phi = s * np.cos(phi)
+    amp, delta = np.hypot(c, cos_phi), np.arctan2(cos_phi, c)
+    horizon = 0.5 * math.pi - delta
+    out = []
+    for h in heights:
+        with np.errstate(invalid="ignore"):
+            a = np.arccos(h / amp)
+        for alpha in (a - delta, -a - delta):
+            ok = np.isfinite(alpha) & (alpha > 0.0) & (alpha < horizon)
+            out.append(np.where(ok, alpha, math.pi))
+    return np.stack(out, axis=1)
+
+
 def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = math.pi,
-                    symmetric: bool = True, refine=()) -> tuple[np.ndarray, np.ndarray]:
+                    symmetric: bool = True, refine=(),
+                    heights=()) -> tuple[np.ndarray, np.ndarray]:
     r"""Nodes and weights for ∫_{H+} g(ω) dω, refined around the mirror direction R(ω_i).
 
     ``theta_i`` is the incidence angle (radians, ω_i in the xz-plane at φ = 0), ``width`` the
@@ -122,6 +143,16 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     centred one is (a cos^3000 lobe 1.3 rad off the centre: 1 to 1e-9 by 8, 12 and 16 nodes,
     against 0.88 to 1.10 unrefined).  The edges apply to every φ (α edges) and every α
     (φ edges): a product rule, refined towards a point in both coordinates.
+
+    ``heights``: values h ∈ (0, 1) of ω_z at which the integrand may jump (a support that
+    ends short of the horizon, parallel to it): each is an α edge of every φ node, where that
+    node's circle of α crosses ω_z = h (:func:`_height_edges`), as the horizon is: a jump
+    there is integrated exactly where the centre lies above it (cos θ_i > h; a cap of
+    ω_z > h away from the centre also ends in φ, which no φ panel follows).  A rough
+    dielectric's transmitted pdf at grazing incidence ends at |ω_z| = cos θ_i / η (the
+    refraction through microfacets perpendicular to the surface) with a jump there, which a
+    panel running on to the horizon integrates with an error no coarser rule reveals
+    (``phonglab.validate.bsdf.lobes`` measures it).
 
     Returns:
         (wo (M, 3), weights (M,)) in float64.
@@ -150,8 +181,13 @@ def lobe_quadrature(theta_i: float, width: float, n: int = 20, azimuth: float = 
     wphi = (h[:, None] * w).ravel()
     alpha_h = np.arctan2(c, s * np.cos(phi))                          # horizon, per φ node
     # α panels: fixed edges clipped to [0, α_h(φ)]; panels past the horizon get zero width.
-    lo = np.minimum(edges[None, :-1], alpha_h[:, None])               # (φ, panel)
-    hi = np.minimum(edges[None, 1:], alpha_h[:, None])
+    if len(heights):                                                  # per-φ edges as well
+        grid = np.sort(np.concatenate([np.broadcast_to(edges, (len(phi), len(edges))),
+                                       _height_edges(c, s, phi, heights)], axis=1), axis=1)
+    else:
+        grid = edges[None, :]
+    lo = np.minimum(grid[:, :-1], alpha_h[:, None])                   # (φ, panel)
+    hi = np.minimum(grid[:, 1:], alpha_h[:, None])
     ha = 0.5 * (hi - lo)
     alpha = lo[..., None] + ha[..., None] * (x + 1.0)                  # (φ, panel, node)
     walpha = ha[..., None] * w

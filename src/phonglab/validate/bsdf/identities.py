@@ -32,7 +32,13 @@ over the whole sphere (the incidence cells and their mirror images below the sur
 (``twosided``, or any with BackSide) legitimately has lobes there and is not held to it.
 
 Non-finite values are the ``finite`` topic's alone: the other topics drop those lanes (and
-count them in ``details``), so that one defect fails one topic.
+count them in ``details``), so that one defect fails one topic.  In ``component`` a sample is
+one with a weight ≠ 0 and finite (:func:`.lanes.drawn`): ``blendbsdf`` of ``roughconductor``
+and ``roughdielectric`` at cos θ_i = 0 returns weight NaN (its finding blendbsdf-nan-weight,
+blendbsdf.cpp:151, 0 × a NaN pdf) for a sample that roughdielectric rejected (its
+``active &= cos_theta_i != 0.f``, roughdielectric.cpp:258, and weight ``& active``, :357)
+and labelled GlossyTransmission, the type of any inactive lane (the select at :311-313), so
+with type_mask = GlossyReflection 2460 of those NaN samples reported a lobe outside the mask.
 """
 
 from __future__ import annotations
@@ -312,7 +318,7 @@ def component(bsdf, opts) -> list[Row]:
     k_count = bsdf.component_count()
     flags = [int(bsdf.flags(k)) for k in range(k_count)]
     s = probe.sample_random(bsdf, wi, len(wi), seed=lanes.STREAMS.int_seed(opts.seed, "component"))
-    live = np.any(s.weight != 0, axis=1)
+    live = lanes.drawn(s)
     comp, stype = s.sampled_component[live], s.sampled_type[live]
     in_range = (comp >= 0) & (comp < k_count)
     comp_flags = np.array(flags + [0])[np.where(in_range, comp, k_count)]
@@ -324,6 +330,7 @@ def component(bsdf, opts) -> list[Row]:
                  f"flags(sampled_component) over {int(live.sum())} samples; "
                  f"components: {k_count}",
                  {"flags": flags, "bad": int(bad.sum()),
+                  "nonfinite": int((~lanes.finite_sample(s)).sum()),
                   "examples": [{"component": int(c), "type": int(t)}
                                for c, t in zip(comp[bad][:5], stype[bad][:5])]},
                  lanes=(bad.astype(float), {"wi": wi[live], "component": comp, "type": stype}))]
@@ -337,13 +344,14 @@ def component(bsdf, opts) -> list[Row]:
     wo = lanes.sphere(r, len(wi))
     full = probe.eval(bsdf, wi, wo)
     total = np.zeros_like(full)
-    wrong, inputs = [], {"wi": [], "requested": [], "component": [], "type": []}
+    wrong, nonfinite = [], 0
+    inputs = {"wi": [], "requested": [], "component": [], "type": []}
     for k in range(k_count):
         ctx = probe.context(component=k)
         total += probe.eval(bsdf, wi, wo, ctx)
         sk = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 7 * k + 1, ctx=ctx)
-        lk = np.any(sk.weight != 0, axis=1)
-        wrong.append(lk & (sk.sampled_component != k))
+        wrong.append(lanes.drawn(sk) & (sk.sampled_component != k))
+        nonfinite += int((~lanes.finite_sample(sk)).sum())
         for name, v in (("wi", wi), ("requested", np.full(len(wi), k)),
                         ("component", sk.sampled_component), ("type", sk.sampled_type)):
             inputs[name].append(v)
@@ -352,7 +360,7 @@ def component(bsdf, opts) -> list[Row]:
                      float(wrong.sum()), 0.0,
                      f"count of samples from a context restricted to component k that "
                      f"report another component, over k = 0..{k_count - 1}",
-                     {"bad": int(wrong.sum()), "flags": flags},
+                     {"bad": int(wrong.sum()), "flags": flags, "nonfinite": nonfinite},
                      lanes=(wrong.astype(float), {n: np.concatenate(v) for n, v in inputs.items()})))
     rel = np.max(rel_diff(total, full), axis=1)
     rows.append(bounded_row("component", "Σ_k eval(component k) = eval", max_finite(rel), REL_TOL,
@@ -371,7 +379,7 @@ def type_mask_rows(bsdf, opts, wi, wo, full, flags) -> list[Row]:
     masks = sorted({f & lobe_bits for f in flags if f & lobe_bits})
     if len(masks) < 2:
         return []
-    wrong, inputs = [], {"wi": [], "mask": [], "type": []}
+    wrong, inputs, nonfinite = [], {"wi": [], "mask": [], "type": []}, 0
     total = np.zeros_like(full)
     disjoint = all(a & b == 0 for i, a in enumerate(masks) for b in masks[i + 1:])
     for j, mask in enumerate(masks):
@@ -379,8 +387,8 @@ def type_mask_rows(bsdf, opts, wi, wo, full, flags) -> list[Row]:
         if disjoint:
             total += probe.eval(bsdf, wi, wo, ctx)
         sj = probe.sample_random(bsdf, wi, len(wi), seed=opts.seed + 11 * j + 5, ctx=ctx)
-        live = np.any(sj.weight != 0, axis=1)
-        wrong.append(live & ((sj.sampled_type & lobe_bits & ~mask) != 0))
+        wrong.append(lanes.drawn(sj) & ((sj.sampled_type & lobe_bits & ~mask) != 0))
+        nonfinite += int((~lanes.finite_sample(sj)).sum())
         for name, v in (("wi", wi), ("mask", np.full(len(wi), mask)), ("type", sj.sampled_type)):
             inputs[name].append(v)
     wrong = np.concatenate(wrong)
@@ -389,7 +397,7 @@ def type_mask_rows(bsdf, opts, wi, wo, full, flags) -> list[Row]:
                         float(wrong.sum()), 0.0,
                         f"count of samples from a context whose type_mask is one component's "
                         f"lobe bits ({names}) that report a lobe outside it",
-                        {"bad": int(wrong.sum()), "masks": masks},
+                        {"bad": int(wrong.sum()), "masks": masks, "nonfinite": nonfinite},
                         lanes=(wrong.astype(float), {n: np.concatenate(v)
                                                      for n, v in inputs.items()}))]
     if disjoint:

@@ -90,6 +90,14 @@ def some(mask: np.ndarray) -> np.ndarray:
     return out
 
 
+def drawn(s: probe.Sample) -> np.ndarray:
+    """The samples ``sample`` returned: weight ≠ 0 in some channel (Mitsuba marks a rejected
+    sample with weight 0) and finite (:func:`finite_sample`; a NaN weight is not 0, but it is
+    the ``finite`` topic's): the samples whose sampled_type and sampled_component the
+    ``component`` topic judges."""
+    return some(s.weight != 0) & finite_sample(s)
+
+
 def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None,
             finite: np.ndarray | None = None) -> np.ndarray:
     """The samples that carry a density (χ²'s histogram, the normalization count): not a delta
