@@ -43,8 +43,10 @@ class RunData:
     @classmethod
     def read(cls, out: Path, md_path: Path, quick_run: Path | None = None) -> "RunData":
         run = json.loads((out / "run.json").read_text()) if (out / "run.json").is_file() else {}
+        # the quick run's record: the file given, else the one the full run kept (run.py), so
+        # that BENCHMARKS.md can be re-rendered from docs/bench alone
         quick = json.loads(Path(quick_run).read_text()) if quick_run and Path(quick_run).is_file() else (
-            run if run.get("mode") == "quick" else None)
+            run if run.get("mode") == "quick" else run.get("quick_run"))
         data = cls(out=out, rel=os.path.relpath(out, md_path.parent), run=run,
                    results=open_log(out, "results").rows, stab=open_log(out, "stability").rows,
                    ratios=open_log(out, "ratios").rows, jit=open_log(out, "jit").rows, quick=quick)

@@ -159,6 +159,10 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, fresh: bool = False,
               "load_after": round(os.getloadavg()[0], 2), "notes": notes, "charts": charts,
               "execution": {"where": runner.where, "jobs": jobs},
               "command": "phonglab bench" + (" --quick" if quick else "") + f" --out {out}"}
+    if quick_run and Path(quick_run).is_file():   # kept: the report re-renders without it
+        q = json.loads(Path(quick_run).read_text())
+        record["quick_run"] = {k: q.get(k) for k in ("seconds", "process_seconds", "machine",
+                                                     "load_before", "command")}
     previous = out / "run.json"
     if previous.is_file() and not fresh and set(parts) != set(PARTS):
         _continue_record(record, json.loads(previous.read_text()))
