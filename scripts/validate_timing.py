@@ -3,7 +3,9 @@ it goes.
 
 Each run is a fresh ``phonglab validate`` process timed by :mod:`phonglab.bench.timing`
 (start-up, Mitsuba import, kernel compilation -- Dr.Jit's on-disk kernel cache is warm after
-a first untimed run of each plugin -- and every topic of the sweep); the two modes of one plugin
+a first untimed run of each plugin, and the worker processes' caches after an untimed
+``--workers 2`` run -- and every topic of the sweep, its points where the automatic runner
+puts them: docs/validate.md); the two modes of one plugin
 are timed alternately, ``--repeats`` runs each, the median and the range kept.  Every run writes
 its report (``--json``), whose ``meta.profile`` splits the time per topic into kernel
 compilation, kernel execution and the rest (:mod:`phonglab.validate.profile`): the table says
@@ -70,16 +72,17 @@ def sendable(plugin) -> bool:
     return True
 
 
-def one_run(plugin, variant: str, quick: bool, folder: str) -> tuple[float, int, dict]:
+def one_run(plugin, variant: str, quick: bool, folder: str,
+            extra: tuple = ()) -> tuple[float, int, dict]:
     """(wall seconds, exit code, the report's meta) of one fresh validate process: the command
-    line for a name, the package face for a dict."""
+    line for a name (``extra`` its further options), the package face for a dict."""
     out = os.path.join(folder, "report.json")
     if isinstance(plugin, dict):
         argv = [sys.executable, "-c", FACE, json.dumps(plugin), variant, "1" if quick else "0",
                 out]
     else:
         argv = PHONGLAB + ["validate", plugin, "--variant", variant, "--json", out] \
-            + (["--quick"] if quick else [])
+            + (["--quick"] if quick else []) + list(extra)
     run = run_child(argv, quiet=True, accept=None)
     meta = {}
     if os.path.exists(out):
@@ -110,6 +113,10 @@ def main() -> int:
                       f"mi.Bitmap), which no fresh process can be given |", flush=True)
                 continue
             one_run(plugin, variant, True, folder)         # warm the kernel cache, untimed
+            if not isinstance(plugin, dict):
+                # and the worker processes' own caches (phonglab.parallel.worker), which a
+                # default run's sweep uses when it spreads its points (docs/validate.md)
+                one_run(plugin, variant, True, folder, ("--workers", "2"))
             times = {"default": [], "quick": []}
             codes, metas = set(), {}
             for _ in range(args.repeats):
@@ -128,6 +135,7 @@ def main() -> int:
             print(f"| {entry} | {kind} | {cells[0]} | {cells[1]} | {points} | "
                   f"{', '.join(f'{t} {s:.1f}' for t, s in top)} |", flush=True)
             rows.append({"plugin": name, "variant": variant, "kind": kind,
+                         "where": metas["default"].get("sweep", {}).get("where"),
                          "given": plugin if isinstance(plugin, dict) else None,
                          "repeats": args.repeats, "exit_codes": sorted(codes),
                          "points": points, "profile_default": profile,

@@ -23,6 +23,10 @@ def validate_section(d: RunData) -> list[str]:
          "wrapper BSDF that needs a nested one is its conformance case given to `validate` as a "
          "dict (its parameters pinned: one point). Topics: seconds of the default run's "
          "profile (`validate --profile`, summed over the sweep's points), the three largest. "
+         "Points: the sweep's, and where the automatic runner spread them over worker "
+         "processes (the given point here, the rest on the free cores when they would take "
+         "≥ 20 s: docs/validate.md) the processes; the profile then sums every process's "
+         "time. "
          "Targets on 2 cores: a BSDF ≤ 20 s default and ≤ 5 s `--quick`, an integrator ≤ 45 s "
          "and ≤ 10 s.\n",
          "| plugin | kind | points | default (s) | met | --quick (s) | met | largest topics "
@@ -37,7 +41,9 @@ def validate_section(d: RunData) -> list[str]:
                       "—" if target is None else fmt_met(med <= target)]
         top = sorted(r["profile_default"].items(), key=lambda kv: -kv[1])[:3]
         name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
-        L.append(f"| {name} | {r['kind']} | {r['points']} | " + " | ".join(cells)
+        workers = (r.get("where") or {}).get("workers", 1)
+        points = f"{r['points']}" + (f" ({workers} processes)" if workers > 1 else "")
+        L.append(f"| {name} | {r['kind']} | {points} | " + " | ".join(cells)
                  + f" | {', '.join(f'{t} {s:.1f}' for t, s in top)} |")
     return L + _misses(rows) + _validate_before_after(d, rows) + [""]
 
