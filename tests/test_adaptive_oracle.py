@@ -53,13 +53,19 @@ def _row(scene, scale, **kw):
 
 
 def test_account_names_the_fewest_terms_that_reach_the_target():
-    # terms: placement quality 0.8, paths 4/(2·1.25) = 1.6, wavefront 1, passes 0.5, host 0.8
+    # terms: allocation 0.8, path cost 4/(2·1.25) = 1.6, wavefront 1, passes 0.5, host 0.8
     text = ao.account(_row("gray_direct", 1))
     assert text.startswith("0.51 of the time oracle (the terms multiply to 0.51): held back "
                            "by passes ×0.50; without it 1.02.")
     # a share the passes alone cannot lift names the next term too
-    text = ao.account(_row("gray_direct", 1, share_time=0.35, achieved={"median": 0.7}))
-    assert "passes ×0.50, " in text and "without them" in text and "spread" in text
+    text = ao.account(_row("gray_direct", 1, share_time=0.36, achieved={"median": 0.72}))
+    assert "by passes ×0.50, allocation ×0.80; without them 0.90." in text and "spread" in text
+    # passes below 1: the one-pass trace is no floor, path cost and passes are one term
+    row = _row("nb_sphere_row", 1, factors={"wavefront": 1.0, "placement": 2.5, "passes": 0.8,
+                                            "host": 1.0}, share_time=0.4)
+    assert set(ao.share_terms(row)) == {"allocation", "path cost and passes (split unresolved)",
+                                        "wavefront", "host"}
+    assert ao.share_terms(row)["path cost and passes (split unresolved)"] == pytest.approx(1.0)
     assert ao.account(_row("gray_direct", 1, met=True)) is None
     assert ao.account(_row("gray_direct", 1, met=None)) is None
 
@@ -75,6 +81,7 @@ def test_account_of_the_furnace_overhead():
 def test_report_section_renders_a_small_record(tmp_path):
     assert ao.report_section(SimpleNamespace(out=tmp_path)) == []
     rows = [_row("gray_direct", 1), _row("gray_direct", 2, met=True, share_time=0.85),
+            _row("glass_slab", 1, share_time=0.7996), _row("glass_slab", 2, share_time=0.7946),
             _row("check_furnace_enclosure", 1, oracle=1.0, oracle_time=1.0, met=True,
                  achieved={"median": 1.0, "min": 0.97, "max": 1.02, "n": 3}),
             _row("check_furnace_enclosure", 2, oracle=1.0, oracle_time=1.0,
@@ -86,6 +93,10 @@ def test_report_section_renders_a_small_record(tmp_path):
     text = "\n".join(ao.report_section(SimpleNamespace(out=tmp_path)))
     assert "(32², 64²; the furnace 32², 64²)" in text and "10.0 min" in text
     assert "load average 0.4 at its start, 1.2 at its end" in text and "Note" not in text
+    meta["load_start"] = [2.5, 1, 1]
+    (tmp_path / ao.JSON_NAME).write_text(json.dumps({"meta": meta, "rows": rows}))
+    noted = "\n".join(ao.report_section(SimpleNamespace(out=tmp_path)))
+    assert "**Note:** other processes" in noted
     assert ("| gray_direct | 0.02 | 2.00x | 1.02x [0.90–1.10] | 0.51 | **not met** | 2.00x | "
             "1.02x [0.90–1.10] | 0.85 | **met** |") in text
     assert ("| check_furnace_enclosure | 0.02 | 1.00x | 1.00x [0.97–1.02] | cost 1.00x | **met** "
@@ -94,7 +105,10 @@ def test_report_section_renders_a_small_record(tmp_path):
             "| 3.12 |") in text
     assert "Median over the scenes, 32² → 64²: wavefront 1.00 → 1.00; placement" in text
     assert "| gray_direct | 4096 spp, 0.26 E | 4096 spp, 0.26 E |" in text
-    assert "Targets met: 32² 1 of 2, 64² 1 of 2." in text
+    assert "Targets met: 32² 1 of 3, 64² 1 of 3." in text
+    # a share that 2 decimals would round onto the target shows 3
+    assert "| glass_slab | 0.02 | 2.00x | 1.02x [0.90–1.10] | 0.800 | **not met** | 2.00x | 1.02x " \
+        "[0.90–1.10] | 0.79 | **not met** |" in text
     assert "* gray_direct 32²: 0.51 of the time oracle" in text
     assert "* check_furnace_enclosure 64²: cost 1.20x uniform" in text
     assert "gray_direct 64²:" not in text

@@ -33,29 +33,32 @@ up to the spread of the seeds (a median of ratios against a product of medians),
     achieved / O_t = (G / O_s) · (O_s / (O_t · P)) · 1/wavefront · 1/passes · 1/host,
 
 since achieved ≈ G / (cost of one of adaptive's samples over one of uniform's) and that cost
-is wavefront · P · passes · host.  The first term is how well the samples were placed
-against the best placement (the guards, the estimates' noise); the second what their paths
-cost against what the time oracle trades for (> 1 where adaptive's samples sit in pixels
-cheaper than the oracle allows for); the last three are the pass structure's overheads,
-which the oracle does not have.  The account names the fewest terms below 1, smallest
-first, whose removal lifts the measured share to 0.8.  For the furnace (O_t ≈ 1) the
-cost is 1/achieved, and the account names the fewest factors above 1 whose removal brings
-it to 1.05.
+is wavefront · P · passes · host.  The first term, **allocation**, is how well the samples
+were placed against the best placement (the guards, the estimates' noise); the second,
+**path cost**, what their paths cost against what the time oracle trades for (> 1 where
+adaptive's samples sit in pixels cheaper than the oracle allows for; below 1 where the cost
+map underprices them); the last three are the pass structure's overheads, which the oracle
+does not have.  Where passes < 1 (one pass of the final counts ran slower than the passes
+that traced the same samples) the one-pass trace is no floor, the split between placement
+and passes is not resolved, and path cost and passes are one term.  The account
+(:func:`share_terms`) names the fewest terms below 1, smallest first, whose removal lifts
+the measured share to 0.8.  For the furnace (O_t ≈ 1) the cost is 1/achieved, and the
+account names the fewest factors above 1 whose removal brings it to 1.05.
 
 **References** (:func:`reference_spp`).  At the bench's size a row uses the bench's own
 reference (:data:`phonglab.bench.adaptive_sweeps.ORACLE_REFERENCE_SPP` = 4096 spp, the same
-cache entry).  At 4096 spp the seven 128²-scale references take ~2.5 min on 2 cores, so the
-same at 256² and 512² would take ~50 min (×4, ×16).  A larger size's reference therefore
-has the fewest spp, in steps of :data:`REFERENCE_STEP`, whose relative noise
-(:func:`phonglab.engine.metrics.relative_noise` of its image and stderr image), predicted
-from the next smaller size's reference as ∝ 1/√spp (the noise a sample adds to a pixel
-hardly changes with the pixel's size), is at most E/4 (:data:`REFERENCE_NOISE_SHARE`),
+cache entry).  At 4096 spp the eight references of a size take ~2.5 min on 2 quiet cores at
+the bench's size, so ×4 and ×16 that at 256² and 512² (~50 min in all).  A larger size's
+reference therefore has the fewest spp, in steps of :data:`REFERENCE_STEP`, whose relative
+noise (:func:`phonglab.engine.metrics.relative_noise` of its image and stderr image),
+predicted from the next smaller size's reference as ∝ 1/√spp (the noise one sample adds to a
+pixel hardly changes with the pixel's size), is at most E/4 (:data:`REFERENCE_NOISE_SHARE`),
 and at most 4096.  The errors subtract the reference's noise
-(:func:`phonglab.engine.metrics.relative_rmse` with its stderr), so what the rule bounds is
-the noise of that subtraction, which over 10⁴–10⁶ pixels is far smaller again.  Where 4096
-spp does not reach E/4 (nb_sphere_row and outdoor_envmap already at 128²: their uniform
-renders need thousands of spp for E) the cap holds, as in the bench; every reference's
-measured noise / E is recorded and shown.
+(:func:`phonglab.engine.metrics.relative_rmse` with its stderr: e² − mean(s_r²/(r² + ε))),
+so the reference's noise does not bias them, and the rule keeps what is subtracted small
+beside what is measured.  Where 4096 spp does not reach E/4 (scenes whose uniform renders
+need thousands of spp for E, as in the bench's own references) the cap holds; every
+reference's measured noise / E is recorded and shown.
 
 Results: ``scripts/adaptive_oracle.py`` (``make adaptive-oracle``) writes
 ``docs/bench/adaptive_oracle.json``; :func:`report_section` renders it into BENCHMARKS.md.
@@ -171,14 +174,19 @@ def timed_row(prepared: dict[str, Any], seeds: int) -> dict[str, Any]:
 
 def share_terms(row: dict[str, Any]) -> dict[str, float]:
     """The terms whose product is a row's share of the time oracle (module docstring), each
-    ≤ 1 where it costs share."""
+    below 1 where it costs share: allocation G/O_s, path cost O_s/(O_t·P), 1/wavefront,
+    1/passes, 1/host.  Where passes < 1 (one pass of the final counts ran slower than the
+    passes that traced them, so the one-pass trace is no floor and the split between
+    placement and passes is not resolved) the two are one term, O_s/(O_t·P·passes)."""
     f = row["factors"]
-    return {"placement quality (equal samples / sample oracle)":
-                row["equal_samples"] / row["oracle"],
-            "the samples' paths against the time oracle's price":
-                row["oracle"] / (row["oracle_time"] * f["placement"]),
-            "wavefront": 1.0 / f["wavefront"], "passes": 1.0 / f["passes"],
-            "host": 1.0 / f["host"]}
+    terms = {"allocation": row["equal_samples"] / row["oracle"]}
+    if f["passes"] < 1.0:
+        terms["path cost and passes (split unresolved)"] = (
+            row["oracle"] / (row["oracle_time"] * f["placement"] * f["passes"]))
+    else:
+        terms["path cost"] = row["oracle"] / (row["oracle_time"] * f["placement"])
+        terms["passes"] = 1.0 / f["passes"]
+    return {**terms, "wavefront": 1.0 / f["wavefront"], "host": 1.0 / f["host"]}
 
 
 def account(row: dict[str, Any]) -> str | None:
@@ -202,7 +210,8 @@ def account(row: dict[str, Any]) -> str | None:
                 f"×{spread:.2f}")
         tail = ("" if lifted >= goal else
                 f"; even without every such term it would reach only {lifted:.2f}")
-        return (f"{have:.2f} of the time oracle (the terms multiply to {product:.2f}{rest}): "
+        return (f"{_figure(have, goal)} of the time oracle (the terms multiply to "
+                f"{product:.2f}{rest}): "
                 f"held back by {', '.join(names) or 'nothing below 1'}; without "
                 f"{'it' if len(names) == 1 else 'them'} {lifted:.2f}{tail}.")
     cost = 1.0 / row["achieved"]["median"]
@@ -227,10 +236,15 @@ def _achieved(a: dict) -> str:
     return f"{a['median']:.2f}x [{a['min']:.2f}–{a['max']:.2f}]" if a else "—"
 
 
+def _figure(x: float, bound: float) -> str:
+    """``x`` to 2 decimals, or 3 where 2 would round it onto the other side of ``bound``."""
+    return f"{x:.3f}" if (round(x, 2) >= bound) != (x >= bound) else f"{x:.2f}"
+
+
 def _share_cell(r: dict) -> str:
     if r["oracle_time"] >= 1.05:
-        return f"{r['share_time']:.2f}"
-    return f"cost {1.0 / r['achieved']['median']:.2f}x"
+        return _figure(r["share_time"], ORACLE_SHARE)
+    return f"cost {_figure(1.0 / r['achieved']['median'], OVERHEAD_TARGET + 1e-12)}x"
 
 
 def report_rows(data: dict[str, Any]) -> list[str]:
@@ -255,16 +269,19 @@ def report_rows(data: dict[str, Any]) -> list[str]:
          + (f"; the furnace {', '.join(furnace)}" if furnace else "")
          + f"), measured {meta['date']} on {meta.get('cores', '?')} cores "
          f"in one timed run of {meta['timed_seconds'] / 60:.1f} min (1-minute load average "
-         f"{lo[0]} at its start, {hi[0]} at its end; references, rendered where not cached, "
+         f"{lo[0]} at its start, {hi[0]} at its end, the run's own threads included; "
+         f"references, rendered where not cached, "
          f"and oracle maps computed before, {meta['prepare_seconds_all'] / 60:.1f} min). "
          f"Per row a warm-up seed, dropped, then {meta['seeds']} seeds, each an adaptive render followed right after by "
          f"`mi.render` at its mean spp, so the ratio of a pair is robust to slow drift of the "
          f"machine's speed; achieved = median [min–max] over the seeds. Target: ≥ "
          f"{ORACLE_SHARE} of the time oracle where it is ≥ {ORACLE_MATTERS}x, cost ≤ "
          f"{OVERHEAD_TARGET}x uniform on the furnace (shown as 'cost').\n"]
-    if max(lo[0], hi[0]) > QUIET_LOAD:
-        L.append(f"> **Note:** the load average exceeded {QUIET_LOAD} during the run: "
-                 f"other processes shared the cores.\n")
+    cores = meta.get("cores") or 1
+    if lo[0] > QUIET_LOAD or hi[0] - cores > QUIET_LOAD:
+        L.append(f"> **Note:** other processes shared the cores (load average {lo[0]} before "
+                 f"the run, {hi[0]} at its end with its own ~{cores} threads): the rows are "
+                 f"noisier than a quiet run's.\n")
     head = "| scene | E | " + " | ".join(
         f"{lab}: time oracle | achieved | / time oracle | met" for lab in labels) + " |"
     L += [head, "|---|---|" + "---|---|---|---|" * len(scales)]
@@ -319,9 +336,15 @@ def report_rows(data: dict[str, Any]) -> list[str]:
     missed = [(sc, s) for sc in scenes_ for s in scales
               if (sc, s) in at and at[(sc, s)]["met"] is False]
     if missed:
-        L.append("What holds each missed row back, from its figures (the terms of "
-                 "`phonglab.bench.adaptive_oracle.account`, smallest first, until the share "
-                 "would reach the target):\n")
+        L.append("What holds each missed row back, from its figures "
+                 "(`phonglab.bench.adaptive_oracle.account`). The share of the time oracle is, "
+                 "up to the seeds' spread, the product of allocation (equal samples / sample "
+                 "oracle: the guards, the estimates), path cost (sample oracle / time oracle / "
+                 "placement: what the samples' paths cost against what the time oracle trades "
+                 "for), 1/wavefront, 1/passes and 1/host; where passes < 1 the one-pass trace "
+                 "is no floor and path cost and passes are one term. Named: the terms below 1, "
+                 "smallest first, until the share without them reaches the target; on the "
+                 "furnace the factors above 1 until the cost reaches 1.05x.\n")
         L += [f"* {sc} {size_label(at[(sc, s)]['params'])}: {account(at[(sc, s)])}"
               for sc, s in missed]
     return L + [""]
