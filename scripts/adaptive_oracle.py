@@ -1,4 +1,4 @@
-"""The bench's adaptive-sampling oracle rows at 128², 256² and 512², and where adaptive's time goes.
+"""The bench's adaptive oracle rows at 128², 256² and 512², and where adaptive's time goes.
 
 ``phonglab.bench.adaptive_oracle`` has the method (its docstring).  Two phases, in order:
 
@@ -7,8 +7,8 @@
    ``adaptive_oracle.reference_spp``) and its sample and time oracles; kept in
    ``--prepared`` so an interrupted run resumes;
 2. **timed**: waits until the 1-minute load average is below 1.5 (a minute at a time, at most
-   ``--max-wait``, 20 min), then every row in one go (a warm-up seed, then ``--seeds`` paired seeds), and
-   writes ``--json`` with the load averages at its start and end.
+   ``--max-wait``, 20 min), then every row in one go (a warm-up seed, then ``--seeds`` paired
+   seeds), and writes ``--json`` with the load averages at its start and end.
 
     python scripts/adaptive_oracle.py [--scales 1 2 4] [--seeds 3] [--prepare-only]
         [--json docs/bench/adaptive_oracle.json]

@@ -48,7 +48,7 @@ account names the fewest factors above 1 whose removal brings it to 1.05.
 **References** (:func:`reference_spp`).  At the bench's size a row uses the bench's own
 reference (:data:`phonglab.bench.adaptive_sweeps.ORACLE_REFERENCE_SPP` = 4096 spp, the same
 cache entry).  At 4096 spp the eight references of a size take ~2.5 min on 2 quiet cores at
-the bench's size, so ×4 and ×16 that at 256² and 512² (~50 min in all).  A larger size's
+the bench's size, so ×4 and ×16 that at 256² and 512² (~53 min in all).  A larger size's
 reference therefore has the fewest spp, in steps of :data:`REFERENCE_STEP`, whose relative
 noise (:func:`phonglab.engine.metrics.relative_noise` of its image and stderr image),
 predicted from the next smaller size's reference as ∝ 1/√spp (the noise one sample adds to a
@@ -72,16 +72,16 @@ import statistics
 import time
 from typing import Any, Callable
 
+from ..engine import metrics, references, scenes
+from ..runtime import quiet_mitsuba
 from .adaptive_sweeps import (COST_FACTORS, ORACLE_MATTERS, ORACLE_REFERENCE_SPP, ORACLE_SHARE,
-                              OVERHEAD_TARGET, UNIFORM_SCENE, cost_factors, oracle_limits, oracle_seed,
-                              oracle_summary)
+                              OVERHEAD_TARGET, UNIFORM_SCENE, cost_factors, oracle_limits,
+                              oracle_seed, oracle_summary)
 from .config import VARIANT
 from .report_data import RunData, fmt_met, part_record
 
 #: Image sizes as scales of the bench's (each direction): 128², 256², 512².
 SCALES = (1, 2, 4)
-#: The bench's oracle rows' size, the label of scale 1 (the furnace is 32² there).
-BASE_RES = 128
 #: A larger size's reference noise is at most this share of E (module docstring).
 REFERENCE_NOISE_SHARE = 0.25
 #: Reference spp are multiples of this (16 passes of 16).
@@ -121,20 +121,20 @@ def wait_for_quiet(limit: float = QUIET_LOAD, step: float = 60.0, most: float = 
     """Wait (``step`` s at a time, at most ``most`` s) until the 1-minute load average is
     below ``limit``; what was seen: the load averages at the end and the seconds waited."""
     waited = 0.0
-    while load()[0] > limit and waited < most:
-        log(f"load average {load()[0]:.2f} > {limit}: waiting {step:g} s")
+    while True:
+        now = load()
+        if now[0] <= limit or waited >= most:
+            return {"load": [round(x, 2) for x in now], "waited_s": waited,
+                    "quiet": now[0] <= limit}
+        log(f"load average {now[0]:.2f} > {limit}: waiting {step:g} s")
         sleep(step)
         waited += step
-    return {"load": [round(x, 2) for x in load()], "waited_s": waited,
-            "quiet": load()[0] <= limit}
 
 
 # --- the measurement ---
 
 def _open(name: str, params: dict[str, Any]):
     """The scene loaded in the bench's variant, and its full-depth ``path`` integrator."""
-    from ..engine import scenes
-    from ..runtime import quiet_mitsuba
     info = scenes.inspect_scene(name, **params)
     with quiet_mitsuba():
         loaded = scenes.load_scene(info.path, VARIANT, **params)
@@ -144,7 +144,6 @@ def _open(name: str, params: dict[str, Any]):
 def prepare_row(name: str, target: float, params: dict[str, Any], spp: int) -> dict[str, Any]:
     """The untimed part of a row: its reference (rendered if not cached) with its relative
     noise, and the two oracles (:func:`~phonglab.bench.adaptive_sweeps.oracle_limits`)."""
-    from ..engine import metrics, references
     t0 = time.perf_counter()
     ref = references.reference(name, spp, params=params)
     noise = metrics.relative_noise(ref.image, ref.stderr)
@@ -161,7 +160,6 @@ def timed_row(prepared: dict[str, Any], seeds: int) -> dict[str, Any]:
     :func:`~phonglab.bench.adaptive_sweeps.oracle_seed` with the decomposition; the row's
     figures (:func:`~phonglab.bench.adaptive_sweeps.oracle_summary`,
     :func:`~phonglab.bench.adaptive_sweeps.cost_factors`)."""
-    from ..engine import references
     name, params, target = prepared["scene"], prepared["params"], prepared["target"]
     ref = references.reference(name, prepared["reference_spp"], params=params)
     loaded, integ = _open(name, params)
@@ -272,7 +270,8 @@ def report_rows(data: dict[str, Any]) -> list[str]:
          f"{lo[0]} at its start, {hi[0]} at its end, the run's own threads included; "
          f"references, rendered where not cached, "
          f"and oracle maps computed before, {meta['prepare_seconds_all'] / 60:.1f} min). "
-         f"Per row a warm-up seed, dropped, then {meta['seeds']} seeds, each an adaptive render followed right after by "
+         f"Per row a warm-up seed, dropped, then {meta['seeds']} seeds, each an adaptive "
+         f"render followed right after by "
          f"`mi.render` at its mean spp, so the ratio of a pair is robust to slow drift of the "
          f"machine's speed; achieved = median [min–max] over the seeds. Target: ≥ "
          f"{ORACLE_SHARE} of the time oracle where it is ≥ {ORACLE_MATTERS}x, cost ≤ "
