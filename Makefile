@@ -84,6 +84,15 @@ bench-planner-512: setup
 adaptive-cost: setup
 	$(BIN)/python scripts/adaptive_cost.py --seeds 3 --json docs/bench/adaptive_cost.json
 
+# The oracle rows at 128², 256² and 512² with that decomposition, 3 seeds each (issue 53,
+# docs/adaptive.md): docs/bench/adaptive_oracle.json, rendered into BENCHMARKS.md by make bench.
+# References and oracle maps first (42 min on 2 busy cores with an empty reference cache; resumed
+# from out/adaptive_oracle/prepared.json), then it waits for a load average below 1.5 and times
+# every row in one go (27 min on 2 quiet cores, measured 2026-12-07).
+.PHONY: adaptive-oracle
+adaptive-oracle: setup
+	$(BIN)/python scripts/adaptive_oracle.py --seeds 3 --json docs/bench/adaptive_oracle.json
+
 # bench --quick and validate --all-builtins --quick serially vs on a 2-process LocalCluster
 # (alternating, ~6 min), phonglab.parallel's per-job overhead and the expected time on N
 # machines: docs/bench/cluster.json, rendered into BENCHMARKS.md (docs/cluster.md).

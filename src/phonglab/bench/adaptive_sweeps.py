@@ -77,7 +77,8 @@ ORACLE_MATTERS = 1.3
 #: Probe paths per pixel of the oracle rows' cost map (:meth:`phonglab.engine.wavefront.Wavefront.cost_map`).
 ORACLE_COST_SPP = 16
 #: Reference spp of the oracle rows (the planner bench's at 128², cached: its noise is
-#: subtracted from every error, and is below E/3 there).
+#: subtracted from every error; measured, 0.14–0.28 E on four of the seven scenes, 0.37 E on
+#: glass_slab, 0.57 E on outdoor_envmap, 0.87 E on nb_sphere_row: docs/adaptive.md, issue 53).
 ORACLE_REFERENCE_SPP = 4096
 
 
@@ -169,30 +170,77 @@ def speedups(rows: list[dict]) -> dict[str, dict[str, float]]:
     return out
 
 
-def oracle_row(name: str, target: float, params: dict, cfg: Config) -> dict[str, Any]:
-    """The oracle's speed-up and adaptive sampling's at ``target``, both at full depth."""
-    ref = references.reference(name, ORACLE_REFERENCE_SPP, params=params)
-    info = scenes.inspect_scene(name, **params)
-    with quiet_mitsuba():
-        loaded = scenes.load_scene(info.path, VARIANT, **params)
-    integ = scenes.path_integrator(-1, info)
+def oracle_limits(loaded, integrator, target: float) -> dict[str, float]:
+    """The sample and time oracles of a loaded scene (untimed): a :data:`ORACLE_MAP_SPP`
+    variance map of u (every pixel the same count, with the exact sums) and a
+    :data:`ORACLE_COST_SPP` cost map."""
     vmap = adaptive.render_adaptive(loaded, target, seed=70, min_spp=ORACLE_MAP_SPP,
-                                    max_spp=ORACLE_MAP_SPP, integrator=integ)
-    oracle = adaptive.neyman_gain(vmap.source_variance)
-    costs = wavefront.Wavefront(loaded, integ).cost_map(seed=71, spp=ORACLE_COST_SPP)
-    oracle_time = adaptive.neyman_gain(vmap.source_variance, costs)
-    render.render_scene(loaded, 4, seed=999, integrator=integ)                 # compile
-    adaptive.render_adaptive(loaded, target, seed=998, integrator=integ)  # every pass's kernel
-    rows = []
-    for seed in range(cfg.adaptive_seeds):
-        res, t = _timed(lambda: adaptive.render_adaptive(loaded, target, seed=80 + seed,
-                                                         integrator=integ))
-        row = {"method": "adaptive", "target": target, "seed": seed, "seconds": t,
-               "spp": res.total_spp, "error": _error(res.image, ref)}
-        u, tu = _timed(lambda: render.render_scene(loaded, max(1, round(res.total_spp)),
-                                                   seed=90 + seed, integrator=integ))
-        rows.append(dict(row, pair_spp=max(1, round(res.total_spp)), pair_seconds=tu,
-                         pair_error=_error(u.image, ref)))
+                                    max_spp=ORACLE_MAP_SPP, integrator=integrator)
+    costs = wavefront.Wavefront(loaded, integrator).cost_map(seed=71, spp=ORACLE_COST_SPP)
+    return {"oracle": adaptive.neyman_gain(vmap.source_variance),
+            "oracle_time": adaptive.neyman_gain(vmap.source_variance, costs),
+            "map_spp": ORACLE_MAP_SPP}
+
+
+def oracle_seed(loaded, integrator, target: float, ref, seed: int,
+                decompose: bool = False) -> dict[str, Any]:
+    """One timed seed of an oracle row: the adaptive render, then right after it ``mi.render``
+    at its mean spp (the pair: load drift cancels within it); errors against ``ref`` (None:
+    not computed).  ``decompose`` adds, after the pair, the two one-pass wavefront traces of
+    :func:`cost_factors`: adaptive's final counts, and the same total spread evenly (neither
+    with the exact sums Q)."""
+    res, t = _timed(lambda: adaptive.render_adaptive(loaded, target, seed=80 + seed,
+                                                     integrator=integrator))
+    spp = max(1, round(res.total_spp))
+    u, tu = _timed(lambda: render.render_scene(loaded, spp, seed=90 + seed,
+                                               integrator=integrator))
+    row = {"method": "adaptive", "target": target, "seed": seed, "seconds": t,
+           "spp": res.total_spp, "passes": len(res.passes),
+           "trace_seconds": sum(p["trace_seconds"] for p in res.passes),
+           "pair_spp": spp, "pair_seconds": tu}
+    if decompose:
+        counts = res.spp.ravel().astype(np.int64)
+        flat = np.full(counts.size, counts.sum() // counts.size, dtype=np.int64)
+        flat[:counts.sum() - flat.sum()] += 1                 # the same total, spread evenly
+        row["one_pass_seconds"] = _timed(
+            lambda: wavefront.Wavefront(loaded, integrator).trace(counts, 2080 + seed))[1]
+        row["one_pass_uniform_seconds"] = _timed(
+            lambda: wavefront.Wavefront(loaded, integrator).trace(flat, 3080 + seed))[1]
+    if ref is not None:
+        row["error"], row["pair_error"] = _error(res.image, ref), _error(u.image, ref)
+    return row
+
+
+#: The factors of :func:`cost_factors`, in the order they multiply.
+COST_FACTORS = ("wavefront", "placement", "passes", "host")
+
+
+def cost_factors(rows: list[dict]) -> dict[str, Any]:
+    """Adaptive's time over ``mi.render``'s at its mean spp as a product of four factors, of
+    the medians over seeds of :func:`oracle_seed` rows made with ``decompose``:
+
+    * wavefront = one pass of uniform counts / ``mi.render`` (its splats and moments);
+    * placement = one pass of adaptive's final counts / one pass of uniform counts (what the
+      pixels that get the samples cost: their paths);
+    * passes = the render's own tracing / that one pass (several launches; Q over the pilot
+      and over the edge pixels of later passes);
+    * host = the whole render / its tracing (developing the image, estimates, allocation).
+    """
+    keys = ("seconds", "trace_seconds", "pair_seconds", "one_pass_seconds",
+            "one_pass_uniform_seconds", "spp", "passes")
+    m = {k: statistics.median(r[k] for r in rows) for k in keys}
+    factors = {"wavefront": m["one_pass_uniform_seconds"] / m["pair_seconds"],
+               "placement": m["one_pass_seconds"] / m["one_pass_uniform_seconds"],
+               "passes": m["trace_seconds"] / m["one_pass_seconds"],
+               "host": m["seconds"] / m["trace_seconds"]}
+    return {"medians": m, "factors": factors, "total": m["seconds"] / m["pair_seconds"]}
+
+
+def oracle_summary(limits: dict, rows: list[dict]) -> dict[str, Any]:
+    """An oracle row's figures from its :func:`oracle_limits` and timed :func:`oracle_seed`
+    rows: the speed-up achieved at equal time (:func:`speedups`), its share of each oracle,
+    the two factors of the share (equal samples, cost per sample) and the row's target."""
+    oracle, oracle_time = limits["oracle"], limits["oracle_time"]
     achieved = speedups(rows).get("adaptive", {})
     share = achieved.get("median", float("nan")) / oracle
     share_time = achieved.get("median", float("nan")) / oracle_time
@@ -210,11 +258,24 @@ def oracle_row(name: str, target: float, params: dict, cfg: Config) -> dict[str,
         goal, met = f"cost <= {OVERHEAD_TARGET}x uniform", bool(overhead <= OVERHEAD_TARGET)
     else:
         goal, met = "none (oracle below 1.3x)", None
-    return {"scene": name, "params": params, "target": target, "reference_spp": ref.spp,
-            "map_spp": ORACLE_MAP_SPP, "oracle": oracle, "oracle_time": oracle_time,
+    return {"oracle": oracle, "oracle_time": oracle_time, "map_spp": limits["map_spp"],
             "achieved": achieved, "share": share, "share_time": share_time,
-            "equal_samples": by_samples, "sample_cost": cost,
-            "goal": goal, "met": met, "rows": rows}
+            "equal_samples": by_samples, "sample_cost": cost, "goal": goal, "met": met}
+
+
+def oracle_row(name: str, target: float, params: dict, cfg: Config) -> dict[str, Any]:
+    """The oracle's speed-up and adaptive sampling's at ``target``, both at full depth."""
+    ref = references.reference(name, ORACLE_REFERENCE_SPP, params=params)
+    info = scenes.inspect_scene(name, **params)
+    with quiet_mitsuba():
+        loaded = scenes.load_scene(info.path, VARIANT, **params)
+    integ = scenes.path_integrator(-1, info)
+    limits = oracle_limits(loaded, integ, target)
+    render.render_scene(loaded, 4, seed=999, integrator=integ)                 # compile
+    adaptive.render_adaptive(loaded, target, seed=998, integrator=integ)  # every pass's kernel
+    rows = [oracle_seed(loaded, integ, target, ref, seed) for seed in range(cfg.adaptive_seeds)]
+    return {"scene": name, "params": params, "target": target, "reference_spp": ref.spp,
+            **oracle_summary(limits, rows), "rows": rows}
 
 
 def guard_rows(name: str, cfg: Config, target: float) -> list[dict[str, Any]]:

@@ -5,7 +5,9 @@ per measurement: machine, targets (render-time ratios, BSDF importance sampling 
 uniform, MIS against the better single strategy, the quick run's wall time), render-time
 ratios, estimators, JIT compile times, full renders, variants, the stability map with
 :func:`stability_explanations` (each failure's predicted relative RMSE next to the
-measured one), the planner's table when ``planner.json`` is there, and how to reproduce.
+measured one), the planner's table when ``planner.json`` is there, the adaptive oracle rows at
+three sizes when ``adaptive_oracle.json`` is (:mod:`phonglab.bench.adaptive_oracle`), and how
+to reproduce.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from ..physics.estimators import METHODS
 from ..physics.roughness import beckmann_alpha
 from ..planner import benchmark_table
 from ..planner.benchmark import NEVER_LOSES, equal_error_speedup
+from .adaptive_oracle import report_section as adaptive_oracle_section
 from .adaptive_sweeps import report_section as adaptive_report_section
 from .analysis import loglog_slope, mis_cell_table, stability_z_crit
 from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RATIO_COMPARISONS,
@@ -478,8 +481,8 @@ def reproduce_section(d: RunData) -> list[str]:
 #: The report's sections, in order.
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
             jit_section, renders_section, variants_section, stability_section, mis_section,
-            planner_section, adaptive_section, validate_section, fitting_section, cluster_section,
-            reproduce_section)
+            planner_section, adaptive_section, adaptive_oracle_section, validate_section,
+            fitting_section, cluster_section, reproduce_section)
 
 
 def write_markdown(out: Path, md_path: Path, quick_run: Path | None = None) -> Path:
