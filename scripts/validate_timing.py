@@ -63,13 +63,30 @@ def bsdf_plugins() -> dict[str, object]:
 
 
 def sendable(plugin) -> bool:
-    """Whether ``plugin`` can be given to a fresh process (a name, or a dict of plain values:
-    a table case holding a loaded mi.Bitmap, bumpmap's and normalmap's, cannot)."""
+    """Whether ``plugin`` can be given to a fresh process (a name, or a dict of plain values)."""
     try:
         json.dumps(plugin)
     except TypeError:
         return False
     return True
+
+
+def portable(plugin, folder: str):
+    """``plugin`` with every loaded ``mi.Bitmap`` (bumpmap's and normalmap's table cases hold
+    one) written to an EXR file in ``folder`` and named by its ``filename``, as a user's
+    scene names a texture: a dict of plain values a fresh process can be given."""
+    if not isinstance(plugin, dict):
+        return plugin
+    out = {}
+    for key, value in plugin.items():
+        if isinstance(value, dict):
+            value = portable(value, folder)
+        elif type(value).__name__ == "Bitmap":
+            path = os.path.join(folder, f"texture-{len(os.listdir(folder))}.exr")
+            value.write(path)
+            key, value = "filename", path
+        out[key] = value
+    return out
 
 
 def one_run(plugin, variant: str, quick: bool, folder: str,
@@ -107,7 +124,7 @@ def main() -> int:
         for entry in names:
             name, _, variant = entry.partition("@")
             variant = variant or "llvm_ad_rgb"
-            plugin = plugins.get(name, name)
+            plugin = portable(plugins.get(name, name), folder)
             if not sendable(plugin):
                 print(f"| {entry} | not timed: its table case holds a loaded object (a "
                       f"mi.Bitmap), which no fresh process can be given |", flush=True)

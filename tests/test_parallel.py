@@ -384,24 +384,29 @@ def test_local_worker_counts_are_bounded_before_any_process_starts():
 
 
 class _Meter:
-    """A measured first job: its seconds and the cores the rest of the machine left free."""
+    """A measured first job: its seconds, the cores the rest of the machine left free and
+    the cores it kept busy itself."""
 
-    def __init__(self, seconds, free):
-        self.seconds, self.free = seconds, free
+    def __init__(self, seconds, free, used):
+        self.seconds, self.free, self.used = seconds, free, used
 
 
-@pytest.mark.parametrize("jobs, seconds, free, workers", [
-    (10, 6.0, 2, 2),       # 60 s of work, two free cores: a cluster of two
-    (10, 6.0, 8, 8),       # as many as are free ...
-    (3, 30.0, 8, 3),       # ... but no more than the jobs
-    (10, 1.0, 2, 1),       # 10 s: below what a cluster's start pays for
-    (10, 6.0, 1, 1),       # another process holds a core (a test runner's worker)
-    (1, 100.0, 2, 1),      # one job left: nothing to spread
+@pytest.mark.parametrize("jobs, seconds, free, used, workers", [
+    (10, 6.0, 2, 1.0, 2),    # 60 s of work, two free cores, one used: a cluster of two
+    (10, 6.0, 8, 1.0, 8),    # as many as are free ...
+    (3, 30.0, 8, 1.0, 3),    # ... but no more than the jobs
+    (10, 6.0, 8, 1.4, 5),    # ... and as many copies of this process as the cores hold
+    (10, 6.0, 2, 1.4, 1),    # 2 cores, 1.4 busy (a validate run): no room for a second
+    (10, 1.0, 2, 1.0, 1),    # 10 s: below what a cluster's start pays for
+    (10, 6.0, 1, 1.0, 1),    # another process holds a core (a test runner's worker)
+    (1, 100.0, 2, 1.0, 1),   # one job left: nothing to spread
 ])
-def test_automatic_runner_spreads_only_long_work_on_free_cores(jobs, seconds, free, workers):
-    where = parallel.auto_workers(jobs, _Meter(seconds, free), "points")
+def test_automatic_runner_spreads_only_long_work_on_free_cores(jobs, seconds, free, used,
+                                                                workers):
+    where = parallel.auto_workers(jobs, _Meter(seconds, free, used), "points")
     assert where["workers"] == workers
     assert where["free_cores"] == free and where["first_seconds"] == seconds
+    assert where["used_cores"] == used
     assert "points" in where["reason"]
 
 

@@ -37,11 +37,12 @@ def _cli(tmp_path, *extra) -> list[tuple]:
 
 
 class _TwoFree(parallel.CoreMeter):
-    """A meter that finds two cores free, whatever else runs (a test runner's workers)."""
+    """A meter that finds two cores free and one used, whatever else runs (a test runner's
+    workers)."""
 
     def __exit__(self, *exc):
         super().__exit__(*exc)
-        self.free = 2
+        self.free, self.used = 2, 1.0
 
 
 def test_cli_face_helper_and_workers_agree(variant_llvm_rgb, tmp_path, monkeypatch):

@@ -22,13 +22,14 @@ job order, so what is written from them does not depend on which worker was fast
 
 **Automatic** (``auto=True``, ``validate``'s default where no ``--workers`` is given): the
 first job runs here while :class:`CoreMeter` measures how many cores the rest of the
-machine left idle meanwhile; the remaining jobs then go to an embedded cluster of
-:func:`auto_workers` processes when they are predicted (as long as the first, each) to take at
-least :data:`AUTO_MIN_SECONDS` serially and at least two cores were free, else they run here
-too.  A validate run is ~90 % Python and numpy on one core (``validate --profile``: the
-kernels' execution is a few %), so a second process nearly halves a long sweep, while a
-cluster's start (~5 s with its workers' imports and plugin loads) would double a short one;
-under another load (a test runner's workers) the cores are not free and nothing starts.
+machine left idle meanwhile and how many this process kept busy; the remaining jobs then go
+to an embedded cluster of :func:`auto_workers` processes when they are predicted (as long as
+the first, each) to take at least :data:`AUTO_MIN_SECONDS` serially and the free cores hold
+at least two such processes, else they run here too.  A cluster's start (~5 s with its
+workers' imports and plugin loads) would double a short sweep, and a process already using
+1.4 of 2 cores (Dr.Jit's kernel threads beside Python: a validate run on 2 cores, measured)
+gains nothing from a second one beside it; under another load (a test runner's workers)
+the cores are not free and nothing starts.
 
 Faults: a job whose worker dies (killed, out of memory) is rescheduled on another worker by
 the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
@@ -152,7 +153,9 @@ class CoreMeter:
     """``with CoreMeter() as m: ...``: ``m.free`` is how many cores the rest of the machine
     left idle during the block -- the cores less the busy time of every other process (the
     machine's busy CPU time less this process's, Dr.Jit's threads included) over the wall
-    time -- and ``m.seconds`` the block's wall time."""
+    time --, ``m.used`` how many this process kept busy on average (its CPU time over the
+    wall time: Dr.Jit's kernel threads run beside the Python thread), and ``m.seconds`` the
+    block's wall time."""
 
     def __enter__(self) -> "CoreMeter":
         import psutil  # lazy: a dependency of distributed, read only by an automatic runner
@@ -178,28 +181,36 @@ class CoreMeter:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
             os.cpu_count() or 1)
         self.free = max(0, cores - round(max(0.0, others) / max(self.seconds, 1e-9)))
+        self.used = (self._own() - self._own0) / max(self.seconds, 1e-9)
 
 
 def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs") -> dict:
     """How an automatic runner runs ``jobs`` remaining jobs after a first one measured by
-    ``meter`` (each predicted to take as long): ``workers`` = min(free cores, jobs) when the
-    serial remainder is at least :data:`AUTO_MIN_SECONDS` and two cores are free, else 1
-    (here); with the ``reason`` in words, ``free_cores`` and ``first_seconds``."""
+    ``meter`` (each predicted to take as long): on n = min(jobs, ⌊free / max(1, used)⌋)
+    worker processes -- as many copies of this process as the free cores hold, each using
+    the ``used`` cores this one did -- when n ≥ 2 and the serial remainder is at least
+    :data:`AUTO_MIN_SECONDS`, else 1 (here); with the ``reason`` in words, ``free_cores``,
+    ``used_cores`` and ``first_seconds``.  (On 2 cores a validate process keeps ~1.4 busy:
+    a second process only halves each one's speed -- measured, BENCHMARKS.md -- so nothing
+    is spread there.)"""
     serial, free = jobs * meter.seconds, meter.free
+    used = getattr(meter, "used", 1.0)
+    fits = int(free // max(1.0, used))
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
     elif serial < AUTO_MIN_SECONDS:
         n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, below the "
                         f"{AUTO_MIN_SECONDS:g} s a cluster's start pays for")
-    elif free < 2:
-        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but {free} "
-                        f"core{'s' * (free != 1)} free (other processes use the rest)")
+    elif fits < 2:
+        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but this process "
+                        f"keeps {used:.1f} cores busy and {free} "
+                        f"{'is' if free == 1 else 'are'} free: no room for a second")
     else:
-        n = min(free, jobs)
-        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {free} cores free: "
-                  f"{n} worker processes")
+        n = min(fits, jobs)
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {free} cores free, "
+                  f"{used:.1f} used by this process: {n} worker processes")
     return {"workers": n, "reason": reason, "free_cores": free,
-            "first_seconds": round(meter.seconds, 3)}
+            "used_cores": round(used, 2), "first_seconds": round(meter.seconds, 3)}
 
 
 @dataclass
