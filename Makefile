@@ -78,6 +78,12 @@ PLANNER_SCENES ?=
 bench-planner-512: setup
 	$(BIN)/python scripts/planner_bench.py --res 512 --repeats 3 --merge --out docs/bench/planner-512.json $(PLANNER_SCENES)
 
+# The fast tier as a new user meets it: `make test` in a fresh clone of HEAD, cold (empty HOME:
+# no Dr.Jit kernel cache) and twice warm (docs/bench/fast_tier.json; ~10 min, quiet machine).
+.PHONY: fast-tier-timing
+fast-tier-timing: setup
+	$(BIN)/python scripts/fast_tier_timing.py --warm 2 --json docs/bench/fast_tier.json
+
 # Where an adaptive render's time goes against mi.render at its samples, per oracle scene of
 # the bench (docs/adaptive.md, issue 39): docs/bench/adaptive_cost.json (~2 min, quiet machine).
 .PHONY: adaptive-cost

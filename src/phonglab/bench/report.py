@@ -30,6 +30,7 @@ from .config import (BREAKDOWN_REL_RMSE, ESTIMATOR_SCENES, NEAR_ZERO_REL_SD, RAT
                      RATIO_RES, RATIO_TARGETS, STABILITY_LIGHTS, STABILITY_N, VARIANT_RES,
                      WHITTED_TARGET)
 from .cluster_report import cluster_section
+from .fast_tier import report_section as fast_tier_section
 from .validate_report import validate_section
 from .csvlog import number, open_log
 from .report_data import RunData, fmt_g, fmt_met, part_record
@@ -482,6 +483,7 @@ def reproduce_section(d: RunData) -> list[str]:
 SECTIONS = (header_section, machine_section, targets_section, ratios_section, estimators_section,
             jit_section, renders_section, variants_section, stability_section, mis_section,
             planner_section, adaptive_section, adaptive_oracle_section, validate_section,
+            fast_tier_section,
             fitting_section, cluster_section, reproduce_section)
 
 

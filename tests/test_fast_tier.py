@@ -1,0 +1,41 @@
+"""The fast tier's record (phonglab.bench.fast_tier): pytest's summary read from its output,
+and the BENCHMARKS.md section rendered from a made-up record (nothing timed here)."""
+
+from __future__ import annotations
+
+import json
+
+from phonglab.bench import fast_tier
+from phonglab.bench.report_data import RunData
+
+
+def test_summary_reads_the_last_pytest_line():
+    out = "....\n1 passed in 2.00s\n...\n1502 passed, 3 warnings in 151.34s (0:02:31)\n"
+    assert fast_tier.summary(out) == {"passed": 1502, "failed": 0, "pytest_seconds": 151.34}
+    assert fast_tier.summary("2 failed, 1499 passed in 160.0s")["failed"] == 2
+    assert fast_tier.summary("error: no tests ran")["passed"] is None
+
+
+def test_section_states_each_run_against_its_aim(tmp_path):
+    runs = [{"mode": "cold", "seconds": 210.0, "pytest_seconds": 205.1, "passed": 1500,
+             "failed": 0, "load_before": 0.1, "load_after": 1.9},
+            {"mode": "warm", "seconds": 140.0, "pytest_seconds": 136.0, "passed": 1500,
+             "failed": 0, "load_before": 0.5, "load_after": 1.9},
+            {"mode": "warm", "seconds": 151.0, "pytest_seconds": 147.0, "passed": 1499,
+             "failed": 1, "load_before": 0.4, "load_after": 1.9}]
+    (tmp_path / fast_tier.JSON_NAME).write_text(json.dumps(
+        {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
+    text = "\n".join(fast_tier.report_section(RunData(out=tmp_path, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
+                                                quick=None)))
+    rows = [line for line in text.splitlines() if line.startswith("| cold") or
+            line.startswith("| warm")]
+    assert len(rows) == 3
+    assert rows[0].endswith("**not met** |")       # 210 s cold against 200
+    assert rows[1].endswith("**met** |")           # 140 s warm against 150
+    assert rows[2].endswith("**not met** |")       # a failed test is never met
+    assert "median 145.5 s over 2 runs" in text
+
+
+def test_no_record_no_section(tmp_path):
+    assert fast_tier.report_section(RunData(out=tmp_path, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
+                                                quick=None)) == []
