@@ -9,6 +9,11 @@ from phonglab.bench import fast_tier
 from phonglab.bench.report_data import RunData
 
 
+def _data(folder) -> RunData:
+    return RunData(out=folder, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
+                   quick=None)
+
+
 def test_summary_reads_the_last_pytest_line():
     out = "....\n1 passed in 2.00s\n...\n1502 passed, 3 warnings in 151.34s (0:02:31)\n"
     assert fast_tier.summary(out) == {"passed": 1502, "failed": 0, "pytest_seconds": 151.34}
@@ -25,8 +30,7 @@ def test_section_states_each_run_against_its_aim(tmp_path):
              "failed": 1, "load_before": 0.4, "load_after": 1.9}]
     (tmp_path / fast_tier.JSON_NAME).write_text(json.dumps(
         {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
-    text = "\n".join(fast_tier.report_section(RunData(out=tmp_path, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
-                                                quick=None)))
+    text = "\n".join(fast_tier.report_section(_data(tmp_path)))
     rows = [line for line in text.splitlines() if line.startswith("| cold") or
             line.startswith("| warm")]
     assert len(rows) == 3
@@ -37,5 +41,4 @@ def test_section_states_each_run_against_its_aim(tmp_path):
 
 
 def test_no_record_no_section(tmp_path):
-    assert fast_tier.report_section(RunData(out=tmp_path, rel=".", run={}, results=[], stab=[], ratios=[], jit=[],
-                                                quick=None)) == []
+    assert fast_tier.report_section(_data(tmp_path)) == []
