@@ -53,7 +53,9 @@ def main() -> int:
             seconds, out, code = run(["make", "test"], clone, env)
             record = {"mode": mode, "seconds": round(seconds, 1), "exit_code": code,
                       "load_before": before, "load_after": round(os.getloadavg()[0], 2),
-                      **summary(out)}
+                      **summary(out),
+                      "failures": [line for line in out.splitlines()
+                                   if line.startswith(("FAILED", "ERROR"))]}
             runs.append(record)
             print(record, flush=True)
     data = {"commit": commit, "cores": len(os.sched_getaffinity(0)),
