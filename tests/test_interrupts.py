@@ -77,7 +77,15 @@ def render(*args, **kwargs):            # Ctrl-C while Mitsuba's own C handler i
     try:
         return real(*args, **kwargs)
     finally:                            # Mitsuba's handler cancels the integrator it guards
-        print("cancelled by Mitsuba's handler:", integrator.should_stop(), flush=True)
+        stopped, interrupted = integrator.should_stop(), None
+        while True:     # phonglab's routed Ctrl-C reaches Python when the render returns: it
+            try:        # may land inside this print (seen in fresh clones), so print it whole
+                print("cancelled by Mitsuba's handler:", stopped, flush=True)
+                break
+            except KeyboardInterrupt as exc:
+                interrupted = exc
+        if interrupted is not None:
+            raise interrupted
 mi.render = render
 sys.exit(cli.main(["render", "cornell_phong", "--spp", "256", "-o", sys.argv[1]]))
 """
