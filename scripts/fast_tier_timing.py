@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -24,7 +25,10 @@ ROOT = Path(__file__).resolve().parents[1]
 def run(cmd: list[str], cwd: Path, env: dict) -> tuple[float, str, int]:
     """(wall seconds, stdout and stderr, exit code) of ``cmd``."""
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
+    # Ctrl-C as at a terminal: a background job inherits SIGINT ignored, which Python then
+    # keeps (no KeyboardInterrupt), and the tests of phonglab's Ctrl-C routing would fail
+    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     return time.perf_counter() - t0, proc.stdout + proc.stderr, proc.returncode
 
 
