@@ -177,11 +177,13 @@ class CoreMeter:
 
     def __exit__(self, *exc) -> None:
         self.seconds = time.perf_counter() - self._t0
-        others = (self._busy() - self._busy0) - (self._own() - self._own0)
+        own = self._own() - self._own0
+        others = (self._busy() - self._busy0) - own
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
             os.cpu_count() or 1)
-        self.free = max(0, cores - round(max(0.0, others) / max(self.seconds, 1e-9)))
-        self.used = (self._own() - self._own0) / max(self.seconds, 1e-9)
+        wall = max(self.seconds, 1e-9)
+        self.free = max(0, cores - round(max(0.0, others) / wall))
+        self.used = own / wall
 
 
 def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs") -> dict:
@@ -193,8 +195,7 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs") -> dict:
     ``used_cores`` and ``first_seconds``.  (On 2 cores a validate process keeps ~1.4 busy:
     a second process only halves each one's speed -- measured, BENCHMARKS.md -- so nothing
     is spread there.)"""
-    serial, free = jobs * meter.seconds, meter.free
-    used = getattr(meter, "used", 1.0)
+    serial, free, used = jobs * meter.seconds, meter.free, meter.used
     fits = int(free // max(1.0, used))
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"

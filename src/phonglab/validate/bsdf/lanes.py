@@ -111,10 +111,10 @@ def counted(s: probe.Sample, black_at_wo: np.ndarray | None = None,
     in a polarized variant at cos θ_i = 1e-4: 89 % of its diffuse samples have eval 0 there).
     ``finite``: :func:`finite_sample` of ``s``, when already computed.
     """
-    drawn = some(s.weight != 0)
+    carries = some(s.weight != 0)
     if black_at_wo is not None:
-        drawn |= black_at_wo
-    return drawn & ~delta_mask(s.sampled_type) & (finite_sample(s) if finite is None else finite)
+        carries |= black_at_wo
+    return carries & ~delta_mask(s.sampled_type) & (finite_sample(s) if finite is None else finite)
 
 
 def black_at_wo(bsdf, wi: np.ndarray, s: probe.Sample) -> np.ndarray:
