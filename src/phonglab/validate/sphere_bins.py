@@ -160,9 +160,15 @@ SLIVER = 1e-9
 
 
 #: Graded panels toward a peak: edges at distance h·2^-j (j = 0 .. PEAK_LEVELS) on each side,
-#: h the bin's side, so a core 2^-PEAK_LEVELS of a bin wide is resolved.
+#: h the bin's side, so a core 2^-PEAK_LEVELS of a bin wide is resolved -- but no finer than
+#: a direction can be told apart in float32, where the pdf is evaluated (:data:`PEAK_FINEST`).
 PEAK_LEVELS = 30
 PEAK_NODES = 8
+#: The narrowest panel toward a peak, in radians on the sphere: a quarter of float32's
+#: 2^-24 spacing of a unit direction's components (the pdf is a staircase on that grid, so
+#: narrower panels only integrate the same steps again).  In the bins' coordinates an angle
+#: δ at polar angle θ is δ / sin θ in φ and sin θ·δ + δ²/2 in −cos θ (:func:`_finest`).
+PEAK_FINEST = 2.0 ** -26
 
 
 def angle(d: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -171,9 +177,20 @@ def angle(d: np.ndarray, c: np.ndarray) -> np.ndarray:
     return 2.0 * np.arcsin(np.clip(np.linalg.norm(d - c, axis=1) / 2.0, 0.0, 1.0))
 
 
-def _graded(lo: float, hi: float, x0: float) -> np.ndarray:
-    """Panel edges of [lo, hi]: its ends and x0 ± (hi − lo)·2^-j, j = 0..PEAK_LEVELS, inside."""
-    d = (hi - lo) * 2.0 ** -np.arange(PEAK_LEVELS + 1, dtype=np.float64)
+def _finest(y0: float) -> tuple[float, float]:
+    """(Δφ, Δ(−cos θ)) of :data:`PEAK_FINEST` radians at −cos θ = y0."""
+    sin = math.sqrt(max(0.0, 1.0 - y0 * y0))
+    return (PEAK_FINEST / max(sin, PEAK_FINEST),
+            sin * PEAK_FINEST + 0.5 * PEAK_FINEST * PEAK_FINEST)
+
+
+def _graded(lo: float, hi: float, x0: float, finest: float = 0.0) -> np.ndarray:
+    """Panel edges of [lo, hi]: its ends and x0 ± (hi − lo)·2^-j, j = 0..PEAK_LEVELS, inside,
+    the last level the first whose distance is ≤ ``finest``."""
+    levels = PEAK_LEVELS
+    if finest > 0.0:
+        levels = min(levels, max(0, math.ceil(math.log2((hi - lo) / finest))))
+    d = (hi - lo) * 2.0 ** -np.arange(levels + 1, dtype=np.float64)
     e = np.concatenate([[lo, hi, x0], x0 - d, x0 + d])
     return np.unique(e[(e >= lo) & (e <= hi)])
 
@@ -192,8 +209,9 @@ def _peak_rule(grid: Grid, b: int, x0: float, y0: float, k: int) -> tuple:
     # the peak's φ nearest the bin (the seam at φ = ±π)
     x0 = min((x0 + m * 2.0 * math.pi for m in (-1, 0, 1)),
              key=lambda v: abs(min(max(v, xlo), xlo + hx) - v))
-    x, wx = _panel_rule(_graded(xlo, xlo + hx, min(max(x0, xlo), xlo + hx)), k)
-    y, wy = _panel_rule(_graded(ylo, ylo + hy, min(max(y0, ylo), ylo + hy)), k)
+    fx, fy = _finest(y0)
+    x, wx = _panel_rule(_graded(xlo, xlo + hx, min(max(x0, xlo), xlo + hx), fx), k)
+    y, wy = _panel_rule(_graded(ylo, ylo + hy, min(max(y0, ylo), ylo + hy), fy), k)
     cos = -y
     sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
     wo = np.stack([np.multiply.outer(np.cos(x), sin), np.multiply.outer(np.sin(x), sin),

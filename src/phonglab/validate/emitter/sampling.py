@@ -42,6 +42,7 @@ per component (float32 normalisation is good to ~1e-6) and relatively for dist.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import mitsuba as mi
@@ -165,10 +166,18 @@ def fibonacci_lattice(m: int, shift) -> np.ndarray:
     shifted by ``shift`` modulo 1 (Cranley-Patterson): a rank-1 lattice whose discrepancy is
     O(log n / n), so the nodes a bin receives are its area to far better than a jittered grid's
     n^(−3/4), and it aligns with no axis of a shape's parametrization."""
+    u = _fibonacci_unshifted(m) + np.asarray(shift)
+    return np.fmod(u, 1.0, out=u)
+
+
+@functools.lru_cache(maxsize=len(FIBONACCI))
+def _fibonacci_unshifted(m: int) -> np.ndarray:
+    """The lattice of :func:`fibonacci_lattice` before its shift (built once per m)."""
     n, g = FIBONACCI[m]
     i = np.arange(n, dtype=np.int64)
     u = np.stack([(i + 0.5) / n, ((i * g) % n + 0.5) / n], axis=1)
-    return (u + np.asarray(shift)) % 1.0
+    u.flags.writeable = False
+    return u
 
 
 def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
@@ -188,24 +197,25 @@ def area_integrals(setup, p, basis_, c0, nc, nphi, k, seed) -> np.ndarray:
     u = fibonacci_lattice(k, np.random.default_rng(seed).random(2))
     n = len(u)
     ps = setup.shape.sample_position(float_(np.zeros(n)), point2(u))
-    x, nrm, p_area = (probe.to_numpy(ps.p, n), probe.to_numpy(ps.n, n),
-                      probe.to_numpy(ps.pdf, n))
+    x, p_area = probe.to_numpy(ps.p, n), probe.to_numpy(ps.pdf, n)
     v = x - p
-    dist = np.linalg.norm(v, axis=1)
+    dist = np.sqrt(np.einsum("ij,ij->i", v, v))
     d = v / np.where(dist > 0, dist, 1.0)[:, None]
-    hit = lanes_.trace(setup, np.tile(p, (n, 1)), d)
+    at_p = np.broadcast_to(p, (n, 3))
+    hit = lanes_.trace(setup, at_p, d)
     t_hit = probe.to_numpy(hit.t, n)
     visible = np.abs(t_hit - dist) <= 1e-4 * np.maximum(dist, setup.radius)
     # dω = |cos θ'| dA / dist² with the GEOMETRIC normal of the surface (si.n of the ray's own
     # hit, which is x where visible): ps.n is a mesh's interpolated vertex normal
-    # (mesh.cpp:907), a shading normal, not the surface's orientation
+    # (mesh.cpp:907), a shading normal, not the surface's orientation; only visible nodes
+    # count, so the hit's normal is the only one needed
     geo_n = probe.to_numpy(hit.n, n)
     ds = mi.DirectionSample3f(ps)
     ds.d, ds.dist = probe.to_vectors(d), mi.Float(np.ascontiguousarray(dist, np.float32))
     ds.emitter = mi.EmitterPtr(setup.emitter)
-    it = interaction(np.tile(p, (n, 1)))
+    it = interaction(at_p)
     pdf = probe.to_numpy(setup.calls.pdf_direction(it, ds), n)
-    cos = np.abs(np.sum(d * np.where(visible[:, None], geo_n, nrm), axis=1))
+    cos = np.abs(np.einsum("ij,ij->i", d, geo_n))
     f = np.where(visible & np.isfinite(pdf) & (p_area > 0) & (dist > 0),
                  pdf * cos / np.maximum(dist, 1e-30) ** 2 / np.where(p_area > 0, p_area, 1.0),
                  0.0)

@@ -82,7 +82,13 @@ def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray):
 
 
 def pdf(phase, wi, wo) -> np.ndarray:
-    return eval_pdf(phase, wi, wo)[1]
+    """pdf (N,) of ``phase.eval_pdf`` at (wi, wo): its value is never read back, so Dr.Jit
+    never computes it (half the work of a pdf-only query such as the χ² bins' integrals)."""
+    n = len(wi)
+    if n == 0:
+        return np.zeros(0)
+    return probe.to_numpy(view(phase).eval_pdf(context(), interaction(wi),
+                                               probe.to_vectors(wo))[1], n)
 
 
 def value(phase, wi, wo) -> np.ndarray:

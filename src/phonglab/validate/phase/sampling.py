@@ -64,7 +64,7 @@ def chi2_cell(phase, wi: np.ndarray, opts, level: float, r: np.random.Generator)
     local = wo[kept] @ frame.T
 
     def pdf_fn(d):
-        return lanes.pdf(phase, np.tile(wi, (len(d), 1)), d @ frame)
+        return lanes.pdf(phase, np.broadcast_to(wi, (len(d), 3)), d @ frame)
 
     rec = {"wi": np.asarray(wi).tolist(), "nonfinite_samples": int((~finite).sum())}
     if not kept.any():
