@@ -5,6 +5,11 @@ STAMP := $(VENV)/.phonglab-installed
 PYTEST_ARGS ?=
 # The default tier runs on every core (pytest-xdist); PYTEST_WORKERS=0 runs it in one process.
 PYTEST_WORKERS ?= auto
+# The tests keep Python's bytecode (__pycache__, git-ignored) even where the environment says
+# not to (PYTHONDONTWRITEBYTECODE=1, as container images set it): otherwise both workers'
+# collection and every test's `python -m phonglab` child compile phonglab and the tests from
+# source again, each time (a fresh clone's warm `make test`: 173 s with it set, BENCHMARKS.md).
+PYTEST := PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest
 
 .PHONY: setup demo test test-slow test-all bench check clean classic-figure docs docs-setup
 
@@ -18,13 +23,13 @@ demo: setup
 	$(BIN)/phonglab render cornell_phong --spp 256 -o out/demo.exr
 
 test: setup
-	$(BIN)/python -m pytest -m "not slow" -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
+	$(PYTEST) -m "not slow" -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
 test-slow: setup
-	$(BIN)/python -m pytest -m slow $(PYTEST_ARGS)
+	$(PYTEST) -m slow $(PYTEST_ARGS)
 
 test-all: setup
-	$(BIN)/python -m pytest $(PYTEST_ARGS)
+	$(PYTEST) $(PYTEST_ARGS)
 
 # Regenerates BENCHMARKS.md and docs/bench/ (CSV + PNG) from a fresh full run, after a timed
 # --quick run whose wall time the report quotes. About 28 minutes on 2 quiet cores with the
