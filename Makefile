@@ -87,7 +87,7 @@ bench-planner-512: setup
 # no Dr.Jit kernel cache) and twice warm (docs/bench/fast_tier.json; ~10 min, quiet machine).
 .PHONY: fast-tier-timing
 fast-tier-timing: setup
-	$(BIN)/python scripts/fast_tier_timing.py --warm 2 --json docs/bench/fast_tier.json
+	$(BIN)/python scripts/fast_tier_timing.py --warm 2 --own-home 1 --json docs/bench/fast_tier.json
 
 # Where an adaptive render's time goes against mi.render at its samples, per oracle scene of
 # the bench (docs/adaptive.md, issue 39): docs/bench/adaptive_cost.json (~2 min, quiet machine).

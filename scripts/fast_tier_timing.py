@@ -1,6 +1,6 @@
 """``make test`` from a fresh clone, cold and warm (:mod:`phonglab.bench.fast_tier` says how).
 
-    python scripts/fast_tier_timing.py [--warm 2] [--json docs/bench/fast_tier.json]
+    python scripts/fast_tier_timing.py [--warm 2] [--own-home 1] [--json docs/bench/fast_tier.json]
 
 Nothing else should run meanwhile: the record keeps the load averages of every run.
 """
@@ -35,6 +35,8 @@ def run(cmd: list[str], cwd: Path, env: dict) -> tuple[float, str, int]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--warm", type=int, default=2, help="warm runs after the cold one")
+    ap.add_argument("--own-home", type=int, default=0, metavar="N",
+                    help="then N runs with this machine's own HOME (its long-used kernel cache)")
     ap.add_argument("--json", metavar="PATH", help="write the record (docs/bench/fast_tier.json)")
     args = ap.parse_args()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
@@ -50,11 +52,12 @@ def main() -> int:
             print(f"make setup failed in the clone (exit {code})", file=sys.stderr)
             return 2
         print(f"make setup: {setup_s:.1f} s", flush=True)
+        own = dict(env)
         env["HOME"] = str(home)
         runs = []
-        for mode in ["cold"] + ["warm"] * args.warm:
+        for mode in ["cold"] + ["warm"] * args.warm + ["own HOME"] * args.own_home:
             before = round(os.getloadavg()[0], 2)
-            seconds, out, code = run(["make", "test"], clone, env)
+            seconds, out, code = run(["make", "test"], clone, own if mode == "own HOME" else env)
             record = {"mode": mode, "seconds": round(seconds, 1), "exit_code": code,
                       "load_before": before, "load_after": round(os.getloadavg()[0], 2),
                       **summary(out),

@@ -42,3 +42,19 @@ def test_section_states_each_run_against_its_aim(tmp_path):
 
 def test_no_record_no_section(tmp_path):
     assert fast_tier.report_section(_data(tmp_path)) == []
+
+
+def test_a_run_with_the_machines_own_home_is_its_own_row_and_says_why(tmp_path):
+    runs = [{"mode": "cold", "seconds": 215.0, "pytest_seconds": 214.0, "passed": 1500,
+             "failed": 0, "load_before": 0.1, "load_after": 1.9},
+            {"mode": "warm", "seconds": 165.0, "pytest_seconds": 164.0, "passed": 1500,
+             "failed": 0, "load_before": 0.5, "load_after": 1.9},
+            {"mode": "own HOME", "seconds": 142.0, "pytest_seconds": 141.0, "passed": 1500,
+             "failed": 0, "load_before": 0.4, "load_after": 1.9}]
+    (tmp_path / fast_tier.JSON_NAME).write_text(json.dumps(
+        {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
+    text = "\n".join(fast_tier.report_section(_data(tmp_path)))
+    (own,) = [line for line in text.splitlines() if line.startswith("| warm, own `HOME`")]
+    assert own.endswith("**met** |")               # 142 s against the warm aim, 150
+    assert "median 165.0 s over 1 runs" in text    # the own-HOME run is not a warm one
+    assert "kernel's IR depends on what ran before it" in text
