@@ -244,6 +244,19 @@ def test_bench_report_validate_section(tmp_path):
     text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
     assert "at commit abc1234" in text
     assert "| diffuse | 11.0 → 6.0 | 0.55 | 5.0 → 5.5 | 1.10 |" in text
+    # one plugin timed in two variants: each row against its own variant's
+    rows = json.loads((tmp_path / "validate.json").read_text())
+    rows.append({**rows[0], "variant": "llvm_ad_mono_polarized",
+                 "default_seconds": [30.0], "quick_seconds": [3.0]})
+    (tmp_path / "validate.json").write_text(json.dumps(rows))
+    (tmp_path / "validate-before.json").write_text(json.dumps({"commit": "abc1234", "rows": [
+        {"plugin": "diffuse", "variant": "llvm_ad_rgb", "default_seconds": [12.0],
+         "quick_seconds": [5.0]},
+        {"plugin": "diffuse", "variant": "llvm_ad_mono_polarized", "default_seconds": [40.0],
+         "quick_seconds": [4.0]}]}))
+    text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
+    assert "| diffuse | 12.0 → 6.0 | 0.50 | 5.0 → 5.5 | 1.10 |" in text
+    assert "| diffuse (llvm_ad_mono_polarized) | 40.0 → 30.0 | 0.75 | 4.0 → 3.0 | 0.75 |" in text
 
 
 def test_lobe_quadrature_centre_anywhere():

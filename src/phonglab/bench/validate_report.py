@@ -74,13 +74,16 @@ def _validate_before_after(d: RunData, rows) -> list[str]:
     before = part_record(d, "validate-before.json")
     if not before:
         return []
-    after = {r["plugin"]: r for r in rows}
+    def key(r):                     # one plugin may be timed in several variants
+        return r["plugin"], r.get("variant", "llvm_ad_rgb")
+
+    after = {key(r): r for r in rows}
     L = [f"\nBefore and after: medians at commit {before['commit']} against this table "
          f"(the same script and machine); the ratio is after / before.\n",
          "| plugin | default before → after (s) | ratio | --quick before → after (s) | ratio |",
          "|---|---|---|---|---|"]
     for b in before["rows"]:
-        a = after.get(b["plugin"])
+        a = after.get(key(b))
         if a is None:
             continue
         cells = []
@@ -88,5 +91,7 @@ def _validate_before_after(d: RunData, rows) -> list[str]:
             mb = statistics.median(b[f"{mode}_seconds"])
             ma = statistics.median(a[f"{mode}_seconds"])
             cells += [f"{mb:.1f} → {ma:.1f}", f"{ma / mb:.2f}"]
-        L.append(f"| {b['plugin']} | " + " | ".join(cells) + " |")
+        variant = key(b)[1]
+        name = b["plugin"] + (f" ({variant})" if variant != "llvm_ad_rgb" else "")
+        L.append(f"| {name} | " + " | ".join(cells) + " |")
     return L
