@@ -228,16 +228,20 @@ def test_bench_report_validate_section(tmp_path):
         {"plugin": "diffuse", "variant": "llvm_ad_rgb", "kind": "bsdf", "repeats": 3,
          "exit_codes": [0], "points": 4, "targets": [20.0, 5.0],
          "profile_default": {"chi2": 2.5, "finite": 0.1, "normalization": 3.0, "weight": 0.2},
+         "profile_quick": {"chi2": 2.5, "finite": 0.1, "normalization": 3.0, "weight": 0.2},
          "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 5.5, 11.0]},
         {"plugin": "hg", "variant": "llvm_ad_rgb", "kind": "phase", "repeats": 3,
          "exit_codes": [0], "points": 3, "targets": None, "profile_default": {"chi2": 1.0},
+         "profile_quick": {"gradient": 0.7},
          "default_seconds": [5.0, 6.0, 7.0], "quick_seconds": [2.0, 2.5, 3.0]}]))
     text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
     # the median against each target (5.5 s --quick misses 5 s), the largest topics in order
     assert ("| diffuse | bsdf | 4 | 6.0 [5.0, 7.0] | **met** | 5.5 [2.0, 11.0] | **not met** | "
-            "normalization 3.0, chi2 2.5, weight 0.2 |") in text
-    assert "| hg | phase | 3 | 6.0 [5.0, 7.0] | — | 2.5 [2.0, 3.0] | — | chi2 1.0 |" in text
-    assert "two topics (chi2, normalization among them) take 95%–95%" in text
+            "normalization 3.0, chi2 2.5, weight 0.2 | normalization 3.0, chi2 2.5, weight 0.2 |") in text
+    assert "| hg | phase | 3 | 6.0 [5.0, 7.0] | — | 2.5 [2.0, 3.0] | — | chi2 1.0 | gradient 0.7 |" in text
+    assert "1 plugins miss a target; in each missed run two topics take 95%–95%" in text
+    assert ("- diffuse, 4 points: --quick 5.5 s > 5 s: normalization 3.0 s + chi2 2.5 s"
+            " (95% of the profile)") in text
     assert "Before and after" not in text
     (tmp_path / "validate-before.json").write_text(json.dumps({"commit": "abc1234", "rows": [
         {"plugin": "diffuse", "default_seconds": [10.0, 12.0], "quick_seconds": [4.0, 6.0]}]}))

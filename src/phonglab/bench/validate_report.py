@@ -21,7 +21,7 @@ def validate_section(d: RunData) -> list[str]:
          "process per run (start-up, kernels, every topic of the sweep; Dr.Jit's kernel cache "
          "warm), default and `--quick` alternately, median [min, max] over the repeats; a "
          "wrapper BSDF that needs a nested one is its conformance case given to `validate` as a "
-         "dict (its parameters pinned: one point). Topics: seconds of the default run's "
+         "dict (its parameters pinned: one point). Topics: seconds of each mode's first run's "
          "profile (`validate --profile`, summed over the sweep's points), the three largest. "
          "Points: the sweep's, and where the automatic runner spread them over worker "
          "processes (the given point here, the rest on the free cores when they would take "
@@ -30,7 +30,7 @@ def validate_section(d: RunData) -> list[str]:
          "Targets on 2 cores: a BSDF ≤ 20 s default and ≤ 5 s `--quick`, an integrator ≤ 45 s "
          "and ≤ 10 s.\n",
          "| plugin | kind | points | default (s) | met | --quick (s) | met | largest topics "
-         "(default, s) |", "|---|---|---|---|---|---|---|---|"]
+         "(default, s) | largest topics (--quick, s) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         cells = []
         for i, mode in enumerate(("default", "quick")):
@@ -39,33 +39,42 @@ def validate_section(d: RunData) -> list[str]:
             target = (r.get("targets") or (None, None))[i]
             cells += [f"{med:.1f} [{min(v):.1f}, {max(v):.1f}]",
                       "—" if target is None else fmt_met(med <= target)]
-        top = sorted(r["profile_default"].items(), key=lambda kv: -kv[1])[:3]
+        tops = [", ".join(f"{t} {v:.1f}" for t, v in
+                          sorted((r.get(f"profile_{m}") or {}).items(), key=lambda kv: -kv[1])[:3])
+                or "—" for m in ("default", "quick")]
         name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
         workers = (r.get("where") or {}).get("workers", 1)
         points = f"{r['points']}" + (f" ({workers} processes)" if workers > 1 else "")
-        L.append(f"| {name} | {r['kind']} | {points} | " + " | ".join(cells)
-                 + f" | {', '.join(f'{t} {s:.1f}' for t, s in top)} |")
+        L.append(f"| {name} | {r['kind']} | {points} | " + " | ".join(cells + tops) + " |")
     return L + _misses(rows) + _validate_before_after(d, rows) + [""]
 
 
 def _misses(rows) -> list[str]:
-    """Where the plugins that miss a target spend their default run: the share of the profile
-    in its two largest topics, and which topics those are."""
-    missed = []
+    """Where each plugin that misses a target spends the run that misses it: per missed mode,
+    the two largest topics of its profile and their share, and the points they repeat at."""
+    lines, shares = [], []
     for r in rows:
         targets = r.get("targets") or (None, None)
-        meds = [statistics.median(r[f"{m}_seconds"]) for m in ("default", "quick")]
-        if any(t is not None and m > t for t, m in zip(targets, meds)) and r["profile_default"]:
-            top = sorted(r["profile_default"].items(), key=lambda kv: -kv[1])[:2]
-            total = sum(r["profile_default"].values())
-            missed.append((r["plugin"], [t for t, _ in top], sum(v for _, v in top) / total))
-    if not missed:
+        said = []
+        for mode, target in zip(("default", "quick"), targets):
+            med = statistics.median(r[f"{mode}_seconds"])
+            profile = r.get(f"profile_{mode}") or {}
+            if target is None or med <= target or not profile:
+                continue
+            top = sorted(profile.items(), key=lambda kv: -kv[1])[:2]
+            share = sum(v for _, v in top) / sum(profile.values())
+            shares.append(share)
+            said.append(f"{'--quick' if mode == 'quick' else 'default'} {med:.1f} s > "
+                        f"{target:g} s: " + " + ".join(f"{t} {v:.1f} s" for t, v in top)
+                        + f" ({share:.0%} of the profile)")
+        if said:
+            name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
+            lines.append(f"- {name}, {r['points']} points: " + "; ".join(said))
+    if not lines:
         return []
-    names = sorted({t for _, tops, _ in missed for t in tops})
-    shares = [share for _, _, share in missed]
-    return [f"\n{len(missed)} plugins miss a target; in each, two topics ({', '.join(names)} "
-            f"among them) take {min(shares):.0%}–{max(shares):.0%} of the profiled time, at every "
-            f"point of the sweep (the column `points`).\n"]
+    return [f"\n{len(lines)} plugins miss a target; in each missed run two topics take "
+            f"{min(shares):.0%}–{max(shares):.0%} of the profiled time, at every point of the "
+            f"sweep:\n", *lines, ""]
 
 
 def _validate_before_after(d: RunData, rows) -> list[str]:
