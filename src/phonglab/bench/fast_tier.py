@@ -16,9 +16,10 @@ process:
   from run to run: a run meets kernels no earlier run compiled.  Measured with an empty
   ``HOME``: ``tests/test_validate_emitter.py`` and ``tests/test_validate_integrator.py``
   each run alone and then again compile nothing new, both in one process then compile 338
-  kernels more; ``validate_integrator("direct", topics=["bias"])`` after
-  ``validate_emitter("area")`` launches 72 kernels of which 3 have the IR of the same call in
-  a fresh process.
+  kernels more.  On a smaller scale, ``validate_integrator("direct", topics=["bias"])`` after
+  ``validate_emitter("area")`` launches the three distinct kernels it launches in a fresh
+  process and two more (a gather from a mesh's index and vertex buffers, split out of the
+  render kernel).
 
 Each run records its wall time, pytest's own summary (passed, failed, its seconds) and the
 1-minute load average before and after (nothing else should run).  The aims (issue 53): warm
