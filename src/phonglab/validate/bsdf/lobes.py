@@ -320,8 +320,9 @@ def parts_of(entry) -> tuple:
 #: Bytes of hemisphere rules :func:`hemisphere_rule` keeps, least recently used dropped first.
 #: A validation asks for the same rule from several topics, levels, cells and sweep points
 #: (1766 asked for, 501 distinct, 0.8 MB median and 12 MB at most, over the BSDF defect,
-#: contract and mixture tests); 128 MB keeps 84 % of the repeats.
-RULES_BYTES = 128 << 20
+#: contract and mixture tests); 64 MB keeps 73 % of the repeats (128 MB: 84 %, and a
+#: roughplastic run's peak memory 573 -> 700 MB).
+RULES_BYTES = 64 << 20
 _rules: collections.OrderedDict = collections.OrderedDict()
 
 
