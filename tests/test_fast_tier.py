@@ -14,6 +14,19 @@ def _data(folder) -> RunData:
                    quick=None)
 
 
+def _run(mode: str, seconds: float, failed: int = 0, load_before: float = 0.5) -> dict:
+    return {"mode": mode, "seconds": seconds, "pytest_seconds": seconds - 1.0,
+            "passed": 1500 - failed, "failed": failed, "load_before": load_before,
+            "load_after": 1.9}
+
+
+def _section(folder, runs) -> str:
+    """BENCHMARKS.md's section of a record holding ``runs``."""
+    (folder / fast_tier.JSON_NAME).write_text(json.dumps(
+        {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
+    return "\n".join(fast_tier.report_section(_data(folder)))
+
+
 def test_summary_reads_the_last_pytest_line():
     out = "....\n1 passed in 2.00s\n...\n1502 passed, 3 warnings in 151.34s (0:02:31)\n"
     assert fast_tier.summary(out) == {"passed": 1502, "failed": 0, "pytest_seconds": 151.34}
@@ -22,15 +35,8 @@ def test_summary_reads_the_last_pytest_line():
 
 
 def test_section_states_each_run_against_its_aim(tmp_path):
-    runs = [{"mode": "cold", "seconds": 210.0, "pytest_seconds": 205.1, "passed": 1500,
-             "failed": 0, "load_before": 0.1, "load_after": 1.9},
-            {"mode": "warm", "seconds": 140.0, "pytest_seconds": 136.0, "passed": 1500,
-             "failed": 0, "load_before": 0.5, "load_after": 1.9},
-            {"mode": "warm", "seconds": 151.0, "pytest_seconds": 147.0, "passed": 1499,
-             "failed": 1, "load_before": 0.4, "load_after": 1.9}]
-    (tmp_path / fast_tier.JSON_NAME).write_text(json.dumps(
-        {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
-    text = "\n".join(fast_tier.report_section(_data(tmp_path)))
+    text = _section(tmp_path, [_run("cold", 210.0, load_before=0.1), _run("warm", 140.0),
+                               _run("warm", 151.0, failed=1, load_before=0.4)])
     rows = [line for line in text.splitlines() if line.startswith("| cold") or
             line.startswith("| warm")]
     assert len(rows) == 3
@@ -45,15 +51,8 @@ def test_no_record_no_section(tmp_path):
 
 
 def test_a_run_with_the_machines_own_home_is_its_own_row_and_says_why(tmp_path):
-    runs = [{"mode": "cold", "seconds": 215.0, "pytest_seconds": 214.0, "passed": 1500,
-             "failed": 0, "load_before": 0.1, "load_after": 1.9},
-            {"mode": "warm", "seconds": 165.0, "pytest_seconds": 164.0, "passed": 1500,
-             "failed": 0, "load_before": 0.5, "load_after": 1.9},
-            {"mode": "own HOME", "seconds": 142.0, "pytest_seconds": 141.0, "passed": 1500,
-             "failed": 0, "load_before": 0.4, "load_after": 1.9}]
-    (tmp_path / fast_tier.JSON_NAME).write_text(json.dumps(
-        {"commit": "abc1234", "cores": 2, "setup_seconds": 25.0, "runs": runs}))
-    text = "\n".join(fast_tier.report_section(_data(tmp_path)))
+    text = _section(tmp_path, [_run("cold", 215.0, load_before=0.1), _run("warm", 165.0),
+                               _run("own HOME", 142.0, load_before=0.4)])
     (own,) = [line for line in text.splitlines() if line.startswith("| warm, own `HOME`")]
     assert own.endswith("**met** |")               # 142 s against the warm aim, 150
     assert "median 165.0 s over 1 runs" in text    # the own-HOME run is not a warm one

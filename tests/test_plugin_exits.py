@@ -36,7 +36,12 @@ def no_real_exit(monkeypatch):
 
 
 
-VALIDATE = ["--quick", "--no-sweep", "--only", "finite", "--timeout", "2", "--variant", "llvm_ad_rgb"]
+def validate_options(timeout: int = 2) -> list[str]:
+    return ["--quick", "--no-sweep", "--only", "finite", "--timeout", str(timeout), "--variant",
+            "llvm_ad_rgb"]
+
+
+VALIDATE = validate_options()
 
 
 @pytest.mark.parametrize("place, action, said", [
@@ -61,8 +66,8 @@ def test_validate_timeout_covers_loading(tmp_path, place):
     loading."""
     plugin = acting_plugin(tmp_path, place, "hang")
     # 1 s, not VALIDATE's 2: the plugin hangs whatever the limit (the limit is waited out)
-    argv = [*VALIDATE[:VALIDATE.index("--timeout")], "--timeout", "1", "--variant", "llvm_ad_rgb"]
-    rc, out, err = run_cli(["validate", plugin.stem, "--plugin", plugin, *argv], seconds=60)
+    rc, out, err = run_cli(["validate", plugin.stem, "--plugin", plugin, *validate_options(1)],
+                           seconds=60)
     assert rc == 2 and "did not finish" in err and "within 1 s" in err, out + err
     assert_no_green(rc, err)
 

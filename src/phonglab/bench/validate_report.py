@@ -42,11 +42,22 @@ def validate_section(d: RunData) -> list[str]:
         tops = [", ".join(f"{t} {v:.1f}" for t, v in
                           sorted((r.get(f"profile_{m}") or {}).items(), key=lambda kv: -kv[1])[:3])
                 or "—" for m in ("default", "quick")]
-        name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
+        name = _name(r)
         workers = (r.get("where") or {}).get("workers", 1)
         points = f"{r['points']}" + (f" ({workers} processes)" if workers > 1 else "")
         L.append(f"| {name} | {r['kind']} | {points} | " + " | ".join(cells + tops) + " |")
     return L + _misses(rows) + _validate_before_after(d, rows) + [""]
+
+
+def _key(r) -> tuple[str, str]:
+    """A row's plugin and variant (one plugin may be timed in several variants)."""
+    return r["plugin"], r.get("variant", "llvm_ad_rgb")
+
+
+def _name(r) -> str:
+    """A row's plugin, with its variant where that is not llvm_ad_rgb."""
+    plugin, variant = _key(r)
+    return plugin + (f" ({variant})" if variant != "llvm_ad_rgb" else "")
 
 
 def _misses(rows) -> list[str]:
@@ -68,8 +79,7 @@ def _misses(rows) -> list[str]:
                         f"{target:g} s: " + " + ".join(f"{t} {v:.1f} s" for t, v in top)
                         + f" ({share:.0%} of the profile)")
         if said:
-            name = r["plugin"] + (f" ({r['variant']})" if r["variant"] != "llvm_ad_rgb" else "")
-            lines.append(f"- {name}, {r['points']} points: " + "; ".join(said))
+            lines.append(f"- {_name(r)}, {r['points']} points: " + "; ".join(said))
     if not lines:
         return []
     return [f"\n{len(lines)} plugins miss a target; in each missed run two topics take "
@@ -83,16 +93,13 @@ def _validate_before_after(d: RunData, rows) -> list[str]:
     before = part_record(d, "validate-before.json")
     if not before:
         return []
-    def key(r):                     # one plugin may be timed in several variants
-        return r["plugin"], r.get("variant", "llvm_ad_rgb")
-
-    after = {key(r): r for r in rows}
+    after = {_key(r): r for r in rows}
     L = [f"\nBefore and after: medians at commit {before['commit']} against this table "
          f"(the same script and machine); the ratio is after / before.\n",
          "| plugin | default before → after (s) | ratio | --quick before → after (s) | ratio |",
          "|---|---|---|---|---|"]
     for b in before["rows"]:
-        a = after.get(key(b))
+        a = after.get(_key(b))
         if a is None:
             continue
         cells = []
@@ -100,7 +107,5 @@ def _validate_before_after(d: RunData, rows) -> list[str]:
             mb = statistics.median(b[f"{mode}_seconds"])
             ma = statistics.median(a[f"{mode}_seconds"])
             cells += [f"{mb:.1f} → {ma:.1f}", f"{ma / mb:.2f}"]
-        variant = key(b)[1]
-        name = b["plugin"] + (f" ({variant})" if variant != "llvm_ad_rgb" else "")
-        L.append(f"| {name} | " + " | ".join(cells) + " |")
+        L.append(f"| {_name(b)} | " + " | ".join(cells) + " |")
     return L

@@ -71,24 +71,22 @@ def sample(phase, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray):
     return probe.to_numpy(wo, n), (w if w.ndim == 2 else w[:, None]), probe.to_numpy(pdf, n)
 
 
-def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray):
-    """(value (N, C), pdf (N,)) of ``phase.eval_pdf`` at (wi, wo) (N, 3) each."""
+def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray, read_value: bool = True):
+    """(value (N, C), pdf (N,)) of ``phase.eval_pdf`` at (wi, wo) (N, 3) each.
+    ``read_value=False``: the value is None, never read back, so Dr.Jit never computes it
+    (half the work of a pdf-only query such as the χ² bins' integrals)."""
     n = len(wi)
     if n == 0:                      # no lanes (every sample dropped): Dr.Jit refuses width 0
-        return np.zeros((0, 3)), np.zeros(0)
+        return (np.zeros((0, 3)) if read_value else None), np.zeros(0)
     v, p = view(phase).eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
-    v = probe.to_numpy(v, n)
-    return (v if v.ndim == 2 else v[:, None]), probe.to_numpy(p, n)
+    if read_value:
+        v = probe.to_numpy(v, n)
+        v = v if v.ndim == 2 else v[:, None]
+    return (v if read_value else None), probe.to_numpy(p, n)
 
 
 def pdf(phase, wi, wo) -> np.ndarray:
-    """pdf (N,) of ``phase.eval_pdf`` at (wi, wo): its value is never read back, so Dr.Jit
-    never computes it (half the work of a pdf-only query such as the χ² bins' integrals)."""
-    n = len(wi)
-    if n == 0:
-        return np.zeros(0)
-    return probe.to_numpy(view(phase).eval_pdf(context(), interaction(wi),
-                                               probe.to_vectors(wo))[1], n)
+    return eval_pdf(phase, wi, wo, read_value=False)[1]
 
 
 def value(phase, wi, wo) -> np.ndarray:
