@@ -49,8 +49,10 @@ from phonglab.engine.outputs import write_json
 
 #: Machines the expected time is computed for.
 N_VALUES = (1, 2, 4, 8, 16, 64)
-#: Keys of a validate report that are wall times (at any depth).
-TIMING_KEYS = ("seconds", "topic_seconds", "wall_seconds")
+#: Keys of a validate report that are wall times (at any depth); ``profile`` is a run's time
+#: per topic split into compilation, execution and the rest, with its kernel counts (a
+#: worker's own kernel cache compiles what the serial run's had).
+TIMING_KEYS = ("seconds", "topic_seconds", "wall_seconds", "profile")
 #: Topics whose rows are timings: only their topic, name and status are compared.
 TIMING_TOPICS = ("cost",)
 #: Durations inside text: ``mi.chi2`` writes "Histogram sum = 1.000000 (25.56 ms)" into the

@@ -327,7 +327,14 @@ def scene_pixels(scene) -> int:
     return int(scene.sensors()[0].film().size()[0])
 
 
-def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
+@pytest.fixture(scope="module")
+def local_runner():
+    """An embedded LocalCluster of two worker processes (phonglab's ``--workers 2``)."""
+    with Runner(workers=2, progress=False) as runner:
+        yield runner
+
+
+def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb, local_runner):
     """A Job whose argument is a loaded Scene (it runs serially, but Dask cannot pickle it for
     a cluster) is one sentence before any job is sent, not Dask's pickling traceback."""
     import mitsuba as mi
@@ -335,11 +342,43 @@ def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb):
     scene = mi.load_dict(mi.cornell_box())
     with Runner(progress=False) as serial:
         assert serial.run([Job(scene_pixels, (scene,), key="s")]) == [256]
-    with Runner(workers=2, progress=False) as runner:
-        with pytest.raises(PhonglabError, match=r"job 's' cannot be sent to a worker "
-                                                r"\(TypeError: cannot pickle 'Scene' object\)"):
-            runner.run([Job(math.factorial, (3,), key="ok"), Job(scene_pixels, (scene,), key="s")])
-        assert runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
+    with pytest.raises(PhonglabError, match=r"job 's' cannot be sent to a worker "
+                                            r"\(TypeError: cannot pickle 'Scene' object\)"):
+        local_runner.run([Job(math.factorial, (3,), key="ok"),
+                          Job(scene_pixels, (scene,), key="s")])
+    assert local_runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
+
+
+def test_local_workers_keep_glibcs_malloc_and_load_an_exr_texture(variant_llvm_rgb,
+                                                                  local_runner, tmp_path):
+    """The embedded workers run without Dask's MALLOC_TRIM_THRESHOLD_ (which made every
+    buffer of 128 KiB an mmap: 11 s of page faults in a 19 s sweep) and with at least two
+    Dr.Jit threads, so a sweep point whose plugin reads an EXR texture returns (at one
+    thread Mitsuba 3.9.1's OpenEXR pool waits forever: tests/repro/exr_one_thread_hang.py;
+    this test failed by its time limit before)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import mitsuba as mi
+    from phonglab.parallel import worker
+    from phonglab.validate import sweep
+
+    exr = tmp_path / "kd.exr"
+    mi.Bitmap(np.full((8, 8, 3), 0.4, dtype=np.float32)).write(str(exr))
+    spec = {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": str(exr)}}
+    options = {"kind": "bsdf", "variant": "llvm_ad_rgb", "plugins": [], "topics": ["finite"],
+               "seed": 0, "quick": True, "known": None, "family": 1, "sizes": None}
+    jobs = [Job(os.getenv, ("MALLOC_TRIM_THRESHOLD_",), key="env"),
+            Job(worker.worker_report, key="report"),
+            Job(sweep.run_point, (spec, {}, options), key="point")]
+    pool = ThreadPoolExecutor(1)
+    try:        # a hung worker must fail the test, not hang it: no wait for the thread
+        env, report, point = pool.submit(local_runner.run, jobs).result(timeout=60)
+    finally:
+        pool.shutdown(wait=False)
+    assert env is None
+    assert report["threads"] >= worker.MIN_THREADS
+    assert [r["status"] for r in point["results"]] == ["pass"] * len(point["results"])
+    assert point["results"]
 
 
 @pytest.mark.slow
@@ -391,22 +430,32 @@ class _Meter:
         self.seconds, self.free, self.used = seconds, free, used
 
 
-@pytest.mark.parametrize("jobs, seconds, free, used, workers", [
-    (10, 6.0, 2, 1.0, 2),    # 60 s of work, two free cores, one used: a cluster of two
-    (10, 6.0, 8, 1.0, 8),    # as many as are free ...
-    (3, 30.0, 8, 1.0, 3),    # ... but no more than the jobs
-    (10, 6.0, 8, 1.4, 5),    # ... and as many copies of this process as the cores hold
-    (10, 6.0, 2, 1.4, 1),    # 2 cores, 1.4 busy (a validate run): no room for a second
-    (10, 1.0, 2, 1.0, 1),    # 10 s: below what a cluster's start pays for
-    (10, 6.0, 1, 1.0, 1),    # another process holds a core (a test runner's worker)
-    (1, 100.0, 2, 1.0, 1),   # one job left: nothing to spread
+@pytest.mark.parametrize("jobs, seconds, free, share, memory, workers", [
+    (10, 6.0, 2, 0.0, 8 << 30, 2),    # 60 s of Python-bound work, two free cores: two
+    (10, 6.0, 2, 0.3, 8 << 30, 2),    # ... 21 s saved of 42 outside the kernels
+    (10, 6.0, 2, 0.5, 8 << 30, 1),    # ... 15 s saved: the kernels already use both cores
+    (3, 10.0, 2, 0.95, 8 << 30, 1),   # a render-bound sweep (path: 95 % in kernels)
+    (10, 6.0, 8, 0.0, 8 << 30, 8),    # as many as are free ...
+    (3, 30.0, 8, 0.0, 8 << 30, 3),    # ... but no more than the jobs
+    (10, 6.0, 8, 0.0, 3 * parallel.WORKER_BYTES, 3),   # ... or than the memory holds
+    (10, 6.0, 8, 0.0, parallel.WORKER_BYTES, 1),       # memory for one: here
+    (10, 3.0, 2, 0.0, 8 << 30, 1),    # 15 s saved: below what a cluster's start pays for
+    (10, 6.0, 1, 0.0, 8 << 30, 1),    # another process holds a core (a test runner's worker)
+    (1, 100.0, 2, 0.0, 8 << 30, 1),   # one job left: nothing to spread
 ])
-def test_automatic_runner_spreads_only_long_work_on_free_cores(jobs, seconds, free, used,
-                                                                workers):
-    where = parallel.auto_workers(jobs, _Meter(seconds, free, used), "points")
+def test_automatic_runner_spreads_only_what_saves_time_on_free_cores(jobs, seconds, free,
+                                                                      share, memory, workers):
+    """n processes save R·(1 − kernel share)·(1 − 1/n) of the serial remainder R; the
+    cores this process kept busy (1.4 for a validate run on 2 cores, Dr.Jit's spinning thread
+    included) are recorded, not a limit."""
+    where = parallel.auto_workers(jobs, _Meter(seconds, free, 1.4), "points", memory=memory,
+                                  kernel_share=share)
     assert where["workers"] == workers
     assert where["free_cores"] == free and where["first_seconds"] == seconds
-    assert where["used_cores"] == used
+    assert where["used_cores"] == 1.4 and where["kernel_share"] == share
+    n = min(free, jobs, memory // parallel.WORKER_BYTES)
+    assert where["predicted_saving_s"] == pytest.approx(
+        jobs * seconds * (1 - share) * (1 - 1 / n), abs=0.05)
     assert "points" in where["reason"]
 
 

@@ -60,11 +60,18 @@ def cluster_section(d: RunData) -> list[str]:
                  f"which are timings, only topic, name and status compared; durations in "
                  f"text, such as `mi.chi2`'s \"(25.56 ms)\" in its messages, masked).\n")
     if cores and cores <= w:
-        L.append(f"On {cores} cores a {w}-worker cluster has no cores to add: serial Dr.Jit "
-                 f"already spreads each kernel over {'both' if cores == 2 else f'all {cores}'} cores, so the cluster cannot beat "
-                 f"it beyond the moments a serial job leaves a core idle (Python, numpy, kernel "
-                 f"compilation), and it pays its start and its per-job cost. The gain comes from "
-                 f"more machines (below).\n")
+        ups = ", ".join(f"{named[n].split(' (')[0]} {fmt_g(r[n]['speedup']['median'], 3)}"
+                        for n in names)
+        L.append(f"On {cores} cores the {w} workers add no cores: serially Dr.Jit runs each "
+                 f"kernel on {'both' if cores == 2 else f'all {cores}'} cores, and each worker "
+                 f"runs Dr.Jit with max(2, {cores} // {w}) threads (at 1 Mitsuba hangs on EXR "
+                 f"files: `tests/repro/exr_one_thread_hang.py`). What the cluster gains "
+                 f"(median speed-ups: {ups}) is the time a serial run leaves a core idle or "
+                 f"spinning (Python and numpy between kernels, while Dr.Jit's second thread "
+                 f"waits for work), less its start and its per-job cost; its workers start "
+                 f"without Dask's `MALLOC_TRIM_THRESHOLD_` (`phonglab.parallel.WORKER_ENVIRON`), "
+                 f"which made them map and unmap every large buffer. More machines add "
+                 f"cores (below).\n")
     o = r["overhead"]
     L += [f"**Per-job overhead**: {o['jobs']} empty jobs per batch, {o['repeats']} batches, "
           f"(wall time of a batch) / jobs.\n",

@@ -131,10 +131,10 @@ def add_parser(sub) -> None:
                         "Dr.Jit kernel; per topic and parameter point, in this process "
                         "(not in --workers processes)")
     # --workers / --scheduler: where a sweep's points and the --all-builtins cases run
-    add_arguments(p, auto="a sweep's points after the given one on as many processes as "
-                          "the free cores hold copies of this one, when they would take 20 s "
-                          "or more here and that is two or more, else here; --all-builtins "
-                          "serially")
+    add_arguments(p, auto="a sweep's points after the given one on one process per free "
+                          "core (two or more), when the time they spend outside Dr.Jit's "
+                          "kernels is predicted to save 20 s or more, else here; "
+                          "--all-builtins serially")
     p.set_defaults(func=run)
 
 

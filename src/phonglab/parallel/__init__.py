@@ -22,14 +22,13 @@ job order, so what is written from them does not depend on which worker was fast
 
 **Automatic** (``auto=True``, ``validate``'s default where no ``--workers`` is given): the
 first job runs here while :class:`CoreMeter` measures how many cores the rest of the
-machine left idle meanwhile and how many this process kept busy; the remaining jobs then go
-to an embedded cluster of :func:`auto_workers` processes when they are predicted (as long as
-the first, each) to take at least :data:`AUTO_MIN_SECONDS` serially and the free cores hold
-at least two such processes, else they run here too.  A cluster's start (~5 s with its
-workers' imports and plugin loads) would double a short sweep, and a process already using
-1.4 of 2 cores (Dr.Jit's kernel threads beside Python: a validate run on 2 cores, measured)
-gains nothing from a second one beside it; under another load (a test runner's workers)
-the cores are not free and nothing starts.
+machine left idle meanwhile; the remaining jobs then go to an embedded cluster of
+:func:`auto_workers` processes (one per free core, as many as the memory holds) when two or
+more cores are free and the processes are predicted to save at least
+:data:`AUTO_MIN_SECONDS` (each job as long as the first; only the time outside Dr.Jit's
+kernels spreads), else they run here too.  A cluster's start (~3 s with its workers'
+imports and plugin loads) would double a short sweep; under another load (a test runner's
+workers) the cores are not free and nothing starts.
 
 Faults: a job whose worker dies (killed, out of memory) is rescheduled on another worker by
 the scheduler (``distributed.scheduler.allowed-failures``, 3 by default, bounds how often);
@@ -54,7 +53,7 @@ from tqdm import tqdm
 
 from ..errors import PhonglabError
 from ..registration import register
-from ..runtime import require_memory
+from ..runtime import available_memory, require_memory
 
 #: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
 CONNECT_TIMEOUT = 5.0
@@ -65,9 +64,19 @@ WORKERS_PER_CORE = 4
 #: Memory of one worker process (Python, Mitsuba, Dr.Jit and kernels; a render process is
 #: ~200 MB, phonglab.engine.render.BASE_BYTES), rounded up.
 WORKER_BYTES = 256 << 20
-#: Serial seconds the remaining jobs of an automatic runner must be predicted to take before a
-#: cluster starts for them (its start costs ~5 s on 2 cores).
+#: Seconds an automatic runner's cluster must be predicted to save before it starts (its
+#: start costs ~3 s on 2 cores; the prediction, :func:`auto_workers`, is an upper bound).
 AUTO_MIN_SECONDS = 20.0
+#: Dask configuration an embedded cluster's workers start with.  Dask's nanny sets
+#: ``MALLOC_TRIM_THRESHOLD_=65536`` in every worker's environment
+#: (``distributed.nanny.pre-spawn-environ``, distributed.yaml), and glibc then stops raising
+#: its mmap threshold (mallopt(3): setting M_TRIM_THRESHOLD disables the dynamic threshold),
+#: so each numpy array or Dr.Jit buffer of 128 KiB or more is a fresh mmap and munmap: a
+#: validate worker took 500,000 page faults in 4 s, 11 s of system time over a roughplastic
+#: ``--quick`` sweep on 2 workers, which ran 19.0 s against 15.2-17.4 s serial; unset (None,
+#: which the nanny leaves out) 13.5-14.2 s.  The others (OMP, MKL and OpenBLAS at one
+#: thread: one process per core) stay.
+WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
@@ -186,32 +195,54 @@ class CoreMeter:
         self.used = own / wall
 
 
-def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs") -> dict:
+def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
+                 memory: int | None = None, kernel_share: float = 0.0) -> dict:
     """How an automatic runner runs ``jobs`` remaining jobs after a first one measured by
-    ``meter`` (each predicted to take as long): on n = min(jobs, ⌊free / max(1, used)⌋)
-    worker processes -- as many copies of this process as the free cores hold, each using
-    the ``used`` cores this one did -- when n ≥ 2 and the serial remainder is at least
-    :data:`AUTO_MIN_SECONDS`, else 1 (here); with the ``reason`` in words, ``free_cores``,
-    ``used_cores`` and ``first_seconds``.  (On 2 cores a validate process keeps ~1.4 busy:
-    a second process only halves each one's speed -- measured, BENCHMARKS.md -- so nothing
-    is spread there.)"""
+    ``meter`` (each predicted to take as long): on n = min(jobs, free cores, the worker
+    processes ``memory`` holds at :data:`WORKER_BYTES` each; default
+    :func:`~phonglab.runtime.available_memory`) worker processes when n ≥ 2 and the time
+    they are predicted to save is at least :data:`AUTO_MIN_SECONDS`, else 1 (here); with the
+    ``reason`` in words, ``free_cores``, ``used_cores``, ``first_seconds`` and
+    ``predicted_saving_s``.
+
+    What more processes parallelize is the time outside Dr.Jit's kernels (Python, numpy,
+    tracing: one core each), not the kernels, which Dr.Jit already runs on every core: of
+    the serial remainder R = jobs · first, n processes save R · (1 − ``kernel_share``) ·
+    (1 − 1/n), ``kernel_share`` the first job's share of kernel execution (its Dr.Jit kernel
+    history).  Measured on 2 cores (BENCHMARKS.md): roughplastic's default sweep (share 0.03,
+    a predicted saving of 40 s) 91.9 s here, 75.1 s on 2 processes; ``path``'s (share 0.95)
+    34-36 s here and 36-40 s on 2 -- the rule keeps it here.  ``used`` (the cores this process
+    kept busy) is recorded, not a limit: a validate process on 2 cores keeps 1.4 busy, but
+    the 0.4 beside its Python thread is Dr.Jit's worker thread spinning between kernels (at
+    one Dr.Jit thread the same run took 4.52 s against 4.91 s, CPU time equal to wall time)."""
     serial, free, used = jobs * meter.seconds, meter.free, meter.used
-    fits = int(free // max(1.0, used))
+    have = available_memory() if memory is None else memory
+    held = jobs if have is None else int(have // WORKER_BYTES)
+    n = max(1, min(free, held, jobs))
+    saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * (1.0 - 1.0 / n)
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
-    elif serial < AUTO_MIN_SECONDS:
-        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, below the "
-                        f"{AUTO_MIN_SECONDS:g} s a cluster's start pays for")
-    elif fits < 2:
-        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but this process "
-                        f"keeps {used:.1f} cores busy and {free} "
-                        f"{'is' if free == 1 else 'are'} free: no room for a second")
+    elif free < 2:
+        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but {free} "
+                        f"{'core is' if free == 1 else 'cores are'} free: no room for a "
+                        f"second process")
+    elif held < 2:
+        n, reason = 1, (f"{jobs} {noun} predicted to take {serial:.0f} s here, but the memory "
+                        f"available holds {held} worker process{'es' if held != 1 else ''} "
+                        f"of {WORKER_BYTES >> 20} MiB")
+    elif saving < AUTO_MIN_SECONDS:
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {kernel_share:.0%} "
+                  f"of it in Dr.Jit's kernels (on every core already): {n} processes would "
+                  f"save {saving:.0f} s, below the {AUTO_MIN_SECONDS:g} s a cluster's start "
+                  f"pays for")
+        n = 1
     else:
-        n = min(fits, jobs)
-        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {free} cores free, "
-                  f"{used:.1f} used by this process: {n} worker processes")
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {kernel_share:.0%} "
+                  f"of it in Dr.Jit's kernels, {free} cores free: {n} worker processes, "
+                  f"predicted to save {saving:.0f} s")
     return {"workers": n, "reason": reason, "free_cores": free,
-            "used_cores": round(used, 2), "first_seconds": round(meter.seconds, 3)}
+            "used_cores": round(used, 2), "first_seconds": round(meter.seconds, 3),
+            "kernel_share": round(kernel_share, 3), "predicted_saving_s": round(saving, 1)}
 
 
 @dataclass
@@ -313,6 +344,7 @@ class Runner:
 
 def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, Any]:
     """(Client, LocalCluster or None), every worker prepared by the phonglab worker plugin."""
+    import dask  # lazy, as distributed
     from distributed import Client, LocalCluster  # lazy: Dask costs ~1 s to import
 
     from .worker import PhonglabWorker  # imports distributed
@@ -324,11 +356,13 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
         # this process handles it and shuts the cluster down, without a traceback per worker.
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+            with dask.config.set(WORKER_ENVIRON):
+                cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1,
+                                       processes=True, dashboard_address=":0",
+                                       silence_logs=logging.CRITICAL)
         finally:
             signal.signal(signal.SIGINT, previous)
-        threads = max(1, (os.cpu_count() or 1) // int(workers))
+        threads = (os.cpu_count() or 1) // int(workers)     # at least MIN_THREADS (worker.py)
         client = Client(cluster)
     else:
         threads = None

@@ -292,7 +292,9 @@ def _run_points(spec, params, pts, loaded, options, runner, progress,
         # other load says whether cores are free for them (phonglab.parallel: automatic)
         with CoreMeter() as meter:
             finished(0, run_loaded(loaded[0], per_point[0]))
-        where = auto_workers(len(pts) - 1, meter, "more points")
+        executed = profile_.total(results[0].meta.get("profile") or {}).get("execute_s", 0.0)
+        where = auto_workers(len(pts) - 1, meter, "more points",
+                             kernel_share=executed / max(meter.seconds, 1e-9))
         if where["workers"] > 1:
             with Runner(workers=where["workers"], variant=runner.variant,
                         progress=runner.progress) as pool:
