@@ -430,33 +430,43 @@ class _Meter:
         self.seconds, self.free, self.used = seconds, free, used
 
 
-@pytest.mark.parametrize("jobs, seconds, free, share, memory, workers", [
-    (10, 6.0, 2, 0.0, 8 << 30, 2),    # 60 s of Python-bound work, two free cores: two
-    (10, 6.0, 2, 0.3, 8 << 30, 2),    # ... 21 s saved of 42 outside the kernels
-    (10, 6.0, 2, 0.5, 8 << 30, 1),    # ... 15 s saved: the kernels already use both cores
-    (3, 10.0, 2, 0.95, 8 << 30, 1),   # a render-bound sweep (path: 95 % in kernels)
-    (10, 6.0, 8, 0.0, 8 << 30, 8),    # as many as are free ...
-    (3, 30.0, 8, 0.0, 8 << 30, 3),    # ... but no more than the jobs
-    (10, 6.0, 8, 0.0, 3 * parallel.WORKER_BYTES, 3),   # ... or than the memory holds
-    (10, 6.0, 8, 0.0, parallel.WORKER_BYTES, 1),       # memory for one: here
-    (10, 3.0, 2, 0.0, 8 << 30, 1),    # 15 s saved: below what a cluster's start pays for
-    (10, 6.0, 1, 0.0, 8 << 30, 1),    # another process holds a core (a test runner's worker)
-    (1, 100.0, 2, 0.0, 8 << 30, 1),   # one job left: nothing to spread
+@pytest.mark.parametrize("jobs, seconds, free, used, share, memory, workers", [
+    (10, 6.0, 2, 1.0, 0.0, 8 << 30, 2),     # 60 s of Python-bound work, two free cores: 30 s
+    (10, 6.0, 2, 1.45, 0.0, 8 << 30, 2),    # a validate process (1.45 cores busy): 16.5 s
+    (10, 3.0, 2, 1.45, 0.0, 8 << 30, 1),    # ... half as long: 8.2 s, below the start's
+    (10, 6.0, 2, 1.0, 0.7, 8 << 30, 1),     # 70 % in kernels, on both cores already: 9 s
+    (3, 10.0, 2, 1.97, 0.95, 8 << 30, 1),   # a render-bound sweep (path)
+    (10, 6.0, 8, 1.0, 0.0, 8 << 30, 8),     # as many as are free ...
+    (3, 30.0, 8, 1.0, 0.0, 8 << 30, 3),     # ... but no more than the jobs
+    (10, 6.0, 8, 1.0, 0.0, 3 * parallel.WORKER_BYTES, 3),   # ... or than the memory holds
+    (10, 6.0, 8, 1.0, 0.0, parallel.WORKER_BYTES, 1),       # memory for one: here
+    (10, 6.0, 1, 1.0, 0.0, 8 << 30, 1),     # another process holds a core (a test runner's)
+    (1, 100.0, 2, 1.0, 0.0, 8 << 30, 1),    # one job left: nothing to spread
 ])
-def test_automatic_runner_spreads_only_what_saves_time_on_free_cores(jobs, seconds, free,
+def test_automatic_runner_spreads_only_what_saves_time_on_free_cores(jobs, seconds, free, used,
                                                                       share, memory, workers):
-    """n processes save R·(1 − kernel share)·(1 − 1/n) of the serial remainder R; the
-    cores this process kept busy (1.4 for a validate run on 2 cores, Dr.Jit's spinning thread
-    included) are recorded, not a limit."""
-    where = parallel.auto_workers(jobs, _Meter(seconds, free, 1.4), "points", memory=memory,
+    """n processes that each keep ``used`` cores busy run g = min(n, free/used) times as fast
+    on the free cores and save R·(1 − kernel share)·(1 − 1/g) of the serial remainder R."""
+    where = parallel.auto_workers(jobs, _Meter(seconds, free, used), "points", memory=memory,
                                   kernel_share=share)
     assert where["workers"] == workers
     assert where["free_cores"] == free and where["first_seconds"] == seconds
-    assert where["used_cores"] == 1.4 and where["kernel_share"] == share
-    n = min(free, jobs, memory // parallel.WORKER_BYTES)
+    assert where["used_cores"] == used and where["kernel_share"] == share
+    n = max(1, min(free, jobs, memory // parallel.WORKER_BYTES))
+    g = min(n, free / max(1.0, used))
     assert where["predicted_saving_s"] == pytest.approx(
-        jobs * seconds * (1 - share) * (1 - 1 / n), abs=0.05)
+        jobs * seconds * (1 - share) * max(0.0, 1 - 1 / g), abs=0.051)
     assert "points" in where["reason"]
+
+
+def test_automatic_runner_predicts_from_the_later_jobs_time():
+    """A later sweep point runs no informational topic: its time, not the first point's,
+    makes the prediction."""
+    meter = _Meter(6.0, 2, 1.0)
+    assert parallel.auto_workers(10, meter, "points", memory=8 << 30)["workers"] == 2
+    where = parallel.auto_workers(10, meter, "points", memory=8 << 30, job_seconds=1.5)
+    assert where["workers"] == 1 and where["job_seconds"] == 1.5
+    assert where["predicted_saving_s"] == pytest.approx(7.5)
 
 
 def test_core_meter_sees_a_core_taken_by_another_process():

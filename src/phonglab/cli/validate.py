@@ -133,7 +133,7 @@ def add_parser(sub) -> None:
     # --workers / --scheduler: where a sweep's points and the --all-builtins cases run
     add_arguments(p, auto="a sweep's points after the given one on one process per free "
                           "core (two or more), when the time they spend outside Dr.Jit's "
-                          "kernels is predicted to save 20 s or more, else here; "
+                          "kernels is predicted to save 10 s or more, else here; "
                           "--all-builtins serially")
     p.set_defaults(func=run)
 

@@ -64,9 +64,10 @@ WORKERS_PER_CORE = 4
 #: Memory of one worker process (Python, Mitsuba, Dr.Jit and kernels; a render process is
 #: ~200 MB, phonglab.engine.render.BASE_BYTES), rounded up.
 WORKER_BYTES = 256 << 20
-#: Seconds an automatic runner's cluster must be predicted to save before it starts (its
-#: start costs ~3 s on 2 cores; the prediction, :func:`auto_workers`, is an upper bound).
-AUTO_MIN_SECONDS = 20.0
+#: Seconds an automatic runner's cluster must be predicted to save before it starts: its
+#: start costs 1-3 s on 2 cores, and the prediction (:func:`auto_workers`) is an upper bound,
+#: 1.2-2.8 times what 2 processes saved on 2 cores (BENCHMARKS.md's validate table).
+AUTO_MIN_SECONDS = 10.0
 #: Dask configuration an embedded cluster's workers start with.  Dask's nanny sets
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` in every worker's environment
 #: (``distributed.nanny.pre-spawn-environ``, distributed.yaml), and glibc then stops raising
@@ -196,30 +197,36 @@ class CoreMeter:
 
 
 def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
-                 memory: int | None = None, kernel_share: float = 0.0) -> dict:
+                 memory: int | None = None, kernel_share: float = 0.0,
+                 job_seconds: float | None = None) -> dict:
     """How an automatic runner runs ``jobs`` remaining jobs after a first one measured by
-    ``meter`` (each predicted to take as long): on n = min(jobs, free cores, the worker
-    processes ``memory`` holds at :data:`WORKER_BYTES` each; default
-    :func:`~phonglab.runtime.available_memory`) worker processes when n ≥ 2 and the time
-    they are predicted to save is at least :data:`AUTO_MIN_SECONDS`, else 1 (here); with the
-    ``reason`` in words, ``free_cores``, ``used_cores``, ``first_seconds`` and
-    ``predicted_saving_s``.
+    ``meter`` (each predicted to take ``job_seconds``, by default as long as the first): on
+    n = min(jobs, free cores, the worker processes ``memory`` holds at :data:`WORKER_BYTES`
+    each; default :func:`~phonglab.runtime.available_memory`) worker processes when n ≥ 2
+    and the time they are predicted to save is at least :data:`AUTO_MIN_SECONDS`, else 1
+    (here); with the ``reason`` in words, ``free_cores``, ``used_cores``, ``first_seconds``,
+    ``kernel_share`` and ``predicted_saving_s``.
 
-    What more processes parallelize is the time outside Dr.Jit's kernels (Python, numpy,
-    tracing: one core each), not the kernels, which Dr.Jit already runs on every core: of
-    the serial remainder R = jobs · first, n processes save R · (1 − ``kernel_share``) ·
-    (1 − 1/n), ``kernel_share`` the first job's share of kernel execution (its Dr.Jit kernel
-    history).  Measured on 2 cores (BENCHMARKS.md): roughplastic's default sweep (share 0.03,
-    a predicted saving of 40 s) 91.9 s here, 75.1 s on 2 processes; ``path``'s (share 0.95)
-    34-36 s here and 36-40 s on 2 -- the rule keeps it here.  ``used`` (the cores this process
-    kept busy) is recorded, not a limit: a validate process on 2 cores keeps 1.4 busy, but
-    the 0.4 beside its Python thread is Dr.Jit's worker thread spinning between kernels (at
-    one Dr.Jit thread the same run took 4.52 s against 4.91 s, CPU time equal to wall time)."""
-    serial, free, used = jobs * meter.seconds, meter.free, meter.used
+    The prediction.  What more processes parallelize is the time outside Dr.Jit's kernels
+    (Python, numpy, tracing), not the kernels, which Dr.Jit already runs on every core; and
+    n processes that each keep ``used`` cores busy (the first job's CPU time over its wall
+    time, Dr.Jit's threads included) share the free cores, so they run g = min(n,
+    free / used) times as fast as one.  Of the serial remainder R = jobs · job_seconds they
+    save R · (1 − ``kernel_share``) · (1 − 1/g), ``kernel_share`` the first job's share of
+    kernel execution (its Dr.Jit kernel history).  An upper bound: a worker also rebuilds
+    what the serial process keeps across jobs (caches, traced kernels).  Measured on 2 cores
+    (a validate process keeps 1.45 busy, g = 1.38; BENCHMARKS.md's validate table): the
+    default sweeps of roughplastic (predicted 25 s) 98.2 -> 81.2 s, principled (33 s) 127.7
+    -> 110.1 s, plastic (14 s) 40.9 -> 36.0 s, roughdielectric (11 s) 59.1 -> 50.0 s on 2
+    processes; ``path`` (kernel share 0.95) took 34-36 s here and 36-40 s on 2, and stays
+    here."""
+    first = meter.seconds if job_seconds is None else job_seconds
+    serial, free, used = jobs * first, meter.free, meter.used
     have = available_memory() if memory is None else memory
     held = jobs if have is None else int(have // WORKER_BYTES)
     n = max(1, min(free, held, jobs))
-    saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * (1.0 - 1.0 / n)
+    g = min(float(n), free / max(1.0, used)) if free else 1.0
+    saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * max(0.0, 1.0 - 1.0 / g)
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
     elif free < 2:
@@ -231,17 +238,18 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
                         f"available holds {held} worker process{'es' if held != 1 else ''} "
                         f"of {WORKER_BYTES >> 20} MiB")
     elif saving < AUTO_MIN_SECONDS:
-        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {kernel_share:.0%} "
-                  f"of it in Dr.Jit's kernels (on every core already): {n} processes would "
-                  f"save {saving:.0f} s, below the {AUTO_MIN_SECONDS:g} s a cluster's start "
-                  f"pays for")
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here ({kernel_share:.0%} "
+                  f"in Dr.Jit's kernels, {used:.1f} cores busy): {n} processes on {free} free "
+                  f"cores would save at most {saving:.0f} s, below the {AUTO_MIN_SECONDS:g} s "
+                  f"a cluster's start pays for")
         n = 1
     else:
-        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here, {kernel_share:.0%} "
-                  f"of it in Dr.Jit's kernels, {free} cores free: {n} worker processes, "
-                  f"predicted to save {saving:.0f} s")
+        reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here ({kernel_share:.0%} "
+                  f"in Dr.Jit's kernels, {used:.1f} cores busy), {free} cores free: {n} "
+                  f"worker processes, predicted to save at most {saving:.0f} s")
     return {"workers": n, "reason": reason, "free_cores": free,
             "used_cores": round(used, 2), "first_seconds": round(meter.seconds, 3),
+            "job_seconds": round(first, 3),
             "kernel_share": round(kernel_share, 3), "predicted_saving_s": round(saving, 1)}
 
 

@@ -292,9 +292,14 @@ def _run_points(spec, params, pts, loaded, options, runner, progress,
         # other load says whether cores are free for them (phonglab.parallel: automatic)
         with CoreMeter() as meter:
             finished(0, run_loaded(loaded[0], per_point[0]))
-        executed = profile_.total(results[0].meta.get("profile") or {}).get("execute_s", 0.0)
+        # each later point: the given one's time less its informational topics (cost),
+        # which the others do not run
+        spent = results[0].meta.get("profile") or {}
+        extra = sum(r.get("seconds", 0.0) for t, r in spent.items() if t not in other_topics)
         where = auto_workers(len(pts) - 1, meter, "more points",
-                             kernel_share=executed / max(meter.seconds, 1e-9))
+                             kernel_share=profile_.total(spent).get("execute_s", 0.0)
+                             / max(meter.seconds, 1e-9),
+                             job_seconds=max(0.0, meter.seconds - extra))
         if where["workers"] > 1:
             with Runner(workers=where["workers"], variant=runner.variant,
                         progress=runner.progress) as pool:
