@@ -66,7 +66,8 @@ WORKERS_PER_CORE = 4
 WORKER_BYTES = 256 << 20
 #: Seconds an automatic runner's cluster must be predicted to save before it starts: its
 #: start costs 1-3 s on 2 cores, and the prediction (:func:`auto_workers`) is an upper bound,
-#: 1.2-2.8 times what 2 processes saved on 2 cores (BENCHMARKS.md's validate table).
+#: 1.2-9 times what 2 processes saved on 2 cores (BENCHMARKS.md's validate table: 25, 33, 14,
+#: 11 and 38 s predicted for 17, 18, 5, 9 and 4 s saved), never below it there.
 AUTO_MIN_SECONDS = 10.0
 #: Dask configuration an embedded cluster's workers start with.  Dask's nanny sets
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` in every worker's environment
