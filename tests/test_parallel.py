@@ -376,7 +376,7 @@ def test_local_workers_keep_glibcs_malloc_and_load_an_exr_texture(variant_llvm_r
     finally:
         pool.shutdown(wait=False)
     assert env is None
-    assert report["threads"] >= worker.MIN_THREADS
+    assert report["threads"] >= parallel.MIN_THREADS
     assert [r["status"] for r in point["results"]] == ["pass"] * len(point["results"])
     assert point["results"]
 

@@ -79,6 +79,10 @@ AUTO_MIN_SECONDS = 10.0
 #: which the nanny leaves out) 13.5-14.2 s.  The others (OMP, MKL and OpenBLAS at one
 #: thread: one process per core) stay.
 WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: The fewest Dr.Jit threads a worker process gets: at one thread Dr.Jit starts no worker
+#: thread and Mitsuba 3.9.1's OpenEXR reads and writes wait forever (:mod:`.worker`,
+#: ``tests/repro/exr_one_thread_hang.py``).
+MIN_THREADS = 2
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
@@ -226,8 +230,8 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
     have = available_memory() if memory is None else memory
     held = jobs if have is None else int(have // WORKER_BYTES)
     n = max(1, min(free, held, jobs))
-    g = min(float(n), free / max(1.0, used)) if free else 1.0
-    saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * max(0.0, 1.0 - 1.0 / g)
+    g = max(1.0, min(n, free / max(1.0, used)))
+    saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * (1.0 - 1.0 / g)
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
     elif free < 2:
@@ -371,7 +375,7 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
                                        silence_logs=logging.CRITICAL)
         finally:
             signal.signal(signal.SIGINT, previous)
-        threads = (os.cpu_count() or 1) // int(workers)     # at least MIN_THREADS (worker.py)
+        threads = max(MIN_THREADS, (os.cpu_count() or 1) // int(workers))
         client = Client(cluster)
     else:
         threads = None

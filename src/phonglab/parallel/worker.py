@@ -28,8 +28,8 @@ safe by the protocol above but without the clean-up; the report's ``kernel_cache
 None.  ``phonglab``'s commands and ``dask worker`` never import Dr.Jit first.
 
 **Threads.**  A LocalCluster of N workers on C cores sets Dr.Jit's thread pool to C // N
-threads per process, but never fewer than :data:`MIN_THREADS`, so N processes do not start
-N·C kernel threads; on a hand-started cluster Dr.Jit keeps its default (all cores of the
+threads per process, but never fewer than :data:`phonglab.parallel.MIN_THREADS`, so N
+processes do not start N·C kernel threads; on a hand-started cluster Dr.Jit keeps its default (all cores of the
 machine) unless ``threads`` is given.  At one thread Dr.Jit starts no worker thread
 (drjit-core's ``jit_llvm_set_thread_count`` counts the caller as one), and Mitsuba 3.9.1's
 OpenEXR reads and writes then wait forever for a task no thread runs (bitmap.cpp:972 runs a
@@ -57,8 +57,6 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
-#: The fewest Dr.Jit threads a worker process gets (the module docstring's **Threads**).
-MIN_THREADS = 2
 #: Root of the per-process kernel-cache slots (``$PHONGLAB_WORKER_CACHE`` overrides it).
 CACHE_ROOT_ENV = "PHONGLAB_WORKER_CACHE"
 _held_lock: int | None = None          # the slot lock this process holds (kept open)
@@ -117,7 +115,7 @@ def prepare_process(variant: str, threads: int | None = None,
 
         register(variant)
         if threads is not None:
-            dr.set_thread_count(max(MIN_THREADS, int(threads)))
+            dr.set_thread_count(int(threads))
     finally:
         if home is None:
             os.environ.pop("HOME", None)

@@ -79,10 +79,10 @@ def eval_pdf(phase, wi: np.ndarray, wo: np.ndarray, read_value: bool = True):
     if n == 0:                      # no lanes (every sample dropped): Dr.Jit refuses width 0
         return (np.zeros((0, 3)) if read_value else None), np.zeros(0)
     v, p = view(phase).eval_pdf(context(), interaction(wi), probe.to_vectors(wo))
-    if read_value:
-        v = probe.to_numpy(v, n)
-        v = v if v.ndim == 2 else v[:, None]
-    return (v if read_value else None), probe.to_numpy(p, n)
+    if not read_value:
+        return None, probe.to_numpy(p, n)
+    v = probe.to_numpy(v, n)
+    return (v if v.ndim == 2 else v[:, None]), probe.to_numpy(p, n)
 
 
 def pdf(phase, wi, wo) -> np.ndarray:
