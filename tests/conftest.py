@@ -10,6 +10,7 @@ the same as the checks and the bench.
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -38,6 +39,18 @@ def any_variant(request):
     if v.startswith("llvm") and not runtime.configure().usable:
         pytest.fail(f"{v} needs a usable libLLVM: {runtime.configure().reason}")
     return phonglab.register(v)
+
+
+@pytest.fixture(autouse=True)
+def sigint_left_as_found():
+    """Every test leaves the SIGINT handler as it found it: phonglab routes Ctrl-C only while
+    Python's own handler is installed (runtime.interrupts_routed), so a test that leaves
+    SIG_IGN behind silently turns the routing off for every later test of its xdist worker
+    (seen once: test_interrupts' routing test found SIG_IGN)."""
+    before = signal.getsignal(signal.SIGINT)
+    yield
+    after = signal.getsignal(signal.SIGINT)
+    assert after is before, f"the test left SIGINT's handler {after!r} (it found {before!r})"
 
 
 @pytest.fixture(scope="session")

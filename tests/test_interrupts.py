@@ -60,8 +60,13 @@ def _load_repro(name: str):
     return module
 
 
+#: Seconds after which the child prints every thread's Python stack and exits 1 (a hang is
+#: then a failing assertion showing where it waits, not a 120-s timeout without a trace).
+HANG_DUMP_S = 60
+
 CTRL_C_INSIDE_A_RENDER = _load_repro("sigint_handler_logs").FIRE_DURING_RENDER + """
-import sys
+import faulthandler, sys
+faulthandler.dump_traceback_later(HANG_DUMP_S, exit=True)
 # As in the console script, no thread exists before cli.main routes SIGINT: Dr.Jit's own
 # threads, started by this import, must not take it either.
 signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
@@ -88,7 +93,7 @@ def render(*args, **kwargs):            # Ctrl-C while Mitsuba's own C handler i
             raise interrupted
 mi.render = render
 sys.exit(cli.main(["render", "cornell_phong", "--spp", "256", "-o", sys.argv[1]]))
-"""
+""".replace("HANG_DUMP_S", str(HANG_DUMP_S))
 
 
 def test_ctrl_c_inside_a_render_never_runs_mitsubas_signal_handler(tmp_path):
