@@ -41,6 +41,19 @@ def any_variant(request):
     return phonglab.register(v)
 
 
+#: pytest-xdist's worker processes share the cores (PYTEST_XDIST_WORKER_COUNT, set by xdist)
+SHARED_CORES = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1
+
+
+@pytest.fixture(autouse=True)
+def kernel_threads_in_the_background():
+    """Where xdist's workers share the cores, each worker's Dr.Jit kernel threads run in the
+    background (runtime.background_kernel_threads: their spin between kernels would take a
+    core from another worker's tests), as in phonglab's own worker processes."""
+    if SHARED_CORES:
+        runtime.background_kernel_threads()
+
+
 @pytest.fixture(autouse=True)
 def sigint_left_as_found():
     """Every test leaves the SIGINT handler as it found it: phonglab routes Ctrl-C only while

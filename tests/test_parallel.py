@@ -28,7 +28,7 @@ import numpy as np
 import psutil
 import pytest
 
-from phonglab import parallel
+from phonglab import parallel, runtime
 from phonglab.bench import csvlog
 from phonglab.bench.config import LOGS, STABILITY_CELLS
 from phonglab.bench.jobs import put_in_order
@@ -327,6 +327,46 @@ def scene_pixels(scene) -> int:
     return int(scene.sensors()[0].film().size()[0])
 
 
+def kernel_thread_classes() -> tuple[int, list[int]]:
+    """(pid, the scheduling policy of each Dr.Jit kernel thread of this process)."""
+    tasks = Path("/proc/self/task").iterdir()
+    return os.getpid(), [os.sched_getscheduler(int(t.name)) for t in tasks
+                         if (t / "comm").read_text().startswith(runtime.KERNEL_THREAD_PREFIX)]
+
+
+def kernels_on_the_pool(until_a_thread_in=None, most: int = 200) -> tuple[int, list[int]]:
+    """Run kernels large enough to be split over Dr.Jit's threads (a kernel thread takes its
+    name when it first runs a block) -- ``most`` of them, or until a kernel thread is in the
+    class ``until_a_thread_in``; then :func:`kernel_thread_classes`."""
+    import drjit as dr
+    import mitsuba as mi
+
+    for i in range(most):
+        dr.eval(dr.sin(dr.arange(mi.Float, 1 << 22) + i))
+        if until_a_thread_in is not None and until_a_thread_in in kernel_thread_classes()[1]:
+            break
+    return kernel_thread_classes()
+
+
+@pytest.mark.skipif(not hasattr(os, "SCHED_IDLE"), reason="Linux's SCHED_IDLE class")
+def test_kernel_threads_go_to_the_background_and_the_caller_stays(variant_llvm_rgb):
+    """runtime.background_kernel_threads puts every Dr.Jit kernel thread in SCHED_IDLE (their
+    spin between kernels then takes no core from another process) and leaves the calling
+    thread in its own class."""
+    import drjit as dr
+
+    before = dr.thread_count()
+    dr.set_thread_count(before + 1)      # a new kernel thread, in its creator's class
+    try:
+        _, classes = kernels_on_the_pool(until_a_thread_in=os.SCHED_OTHER)
+        assert os.SCHED_OTHER in classes
+        assert runtime.background_kernel_threads() == len(classes)
+        assert set(kernel_thread_classes()[1]) == {os.SCHED_IDLE}
+        assert os.sched_getscheduler(0) == os.SCHED_OTHER
+    finally:
+        dr.set_thread_count(before)
+
+
 @pytest.fixture(scope="module")
 def local_runner():
     """An embedded LocalCluster of two worker processes (phonglab's ``--workers 2``)."""
@@ -349,13 +389,14 @@ def test_a_job_that_cannot_reach_a_worker_is_one_sentence(variant_llvm_rgb, loca
     assert local_runner.run([Job(math.factorial, (3,), key="ok")]) == [6]
 
 
-def test_local_workers_keep_glibcs_malloc_and_load_an_exr_texture(variant_llvm_rgb,
-                                                                  local_runner, tmp_path):
+def test_local_workers_malloc_threads_and_an_exr_texture(variant_llvm_rgb, local_runner,
+                                                         tmp_path):
     """The embedded workers run without Dask's MALLOC_TRIM_THRESHOLD_ (which made every
-    buffer of 128 KiB an mmap: 11 s of page faults in a 19 s sweep) and with at least two
+    buffer of 128 KiB an mmap: 11 s of page faults in a 19 s sweep), with at least two
     Dr.Jit threads, so a sweep point whose plugin reads an EXR texture returns (at one
     thread Mitsuba 3.9.1's OpenEXR pool waits forever: tests/repro/exr_one_thread_hang.py;
-    this test failed by its time limit before)."""
+    this test failed by its time limit before), and after a job their kernel threads are in
+    the background (SCHED_IDLE: runtime.background_kernel_threads)."""
     from concurrent.futures import ThreadPoolExecutor
 
     import mitsuba as mi
@@ -377,6 +418,11 @@ def test_local_workers_keep_glibcs_malloc_and_load_an_exr_texture(variant_llvm_r
         pool.shutdown(wait=False)
     assert env is None
     assert report["threads"] >= parallel.MIN_THREADS
+    # after a job the worker's kernel threads are in the background (SCHED_IDLE)
+    local_runner.run([Job(kernels_on_the_pool, (None, 20), key=k) for k in range(4)])
+    later = local_runner.run([Job(kernel_thread_classes, key=k) for k in range(4)])
+    assert any(classes for _, classes in later), later
+    assert all(set(classes) <= {os.SCHED_IDLE} for _, classes in later), later
     assert [r["status"] for r in point["results"]] == ["pass"] * len(point["results"])
     assert point["results"]
 

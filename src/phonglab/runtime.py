@@ -532,3 +532,51 @@ def require_memory(need: int, what: str, fix, *, why: str = "", error=None,
     fix = fix(have) if callable(fix) else fix
     raise (error or PhonglabError)(f"{what} would need about {need / 2**30:.1f} GiB of memory"
                                    f"{why} but {have / 2**30:.1f} GiB is available; {fix}")
+
+
+#: How nanothread names Dr.Jit's kernel worker threads: ``"nt [%u]"`` (nanothread.cpp,
+#: ``pthread_setname_np`` in the worker's start-up), read back from ``/proc/self/task/*/comm``.
+KERNEL_THREAD_PREFIX = "nt ["
+
+
+def background_kernel_threads() -> int:
+    """Put Dr.Jit's kernel worker threads of this process in Linux's ``SCHED_IDLE`` class;
+    return how many there are (0 where the platform has no such class).
+
+    Why: a Dr.Jit worker thread spins for up to 20 ms looking for work after each kernel
+    (nanothread's queue.cpp: ``NANOTHREAD_MAX_IDLE_MS 20.0``, then it parks).  A process alone
+    on the machine loses nothing to that -- the spin takes a core nobody else wants -- but
+    where several phonglab processes share the cores (a LocalCluster's workers, pytest-xdist's
+    workers) each one's spin takes a core from another's Python thread.  In ``SCHED_IDLE``
+    (sched(7)) a thread runs only on a core no normal thread wants: the kernels still use
+    every idle core (the calling thread runs its share of each kernel's blocks in any case,
+    nanothread's ``task_wait``), and the spin no longer competes.  Measured on 2 cores: two
+    processes each validating ``roughconductor`` three times at default sizes took 15.0 and
+    14.4 s side by side, 11.9 and 11.4 s with their workers in the class; one process alone
+    9.9 s either way (10.0, 10.7: noise).  Setting Dr.Jit's thread count to 1 would remove
+    the spin too, but makes Mitsuba 3.9.1 wait forever on OpenEXR files
+    (``tests/repro/exr_one_thread_hang.py``); here the worker still exists and runs OpenEXR's
+    tasks whenever a core is free (the caller sleeps on them).  Cost: where normal threads
+    of other processes fill every core, a kernel runs on the calling thread alone, and an
+    OpenEXR task waits for the class's small share (weight 3 against 1024, sched(7)) -- slow,
+    never stopped.
+
+    The threads start with Dr.Jit's first kernel or :func:`drjit.set_thread_count`; a thread
+    started later needs another call (idempotent, ~0.1 ms).
+    """
+    idle = getattr(os, "SCHED_IDLE", None)
+    tasks = Path("/proc/self/task")
+    if idle is None or not tasks.is_dir():
+        return 0
+    count = 0
+    for task in tasks.iterdir():
+        try:
+            if not (task / "comm").read_text().startswith(KERNEL_THREAD_PREFIX):
+                continue
+            tid = int(task.name)
+            if os.sched_getscheduler(tid) != idle:
+                os.sched_setscheduler(tid, idle, os.sched_param(0))
+            count += 1
+        except (OSError, ValueError):        # a thread that ended meanwhile
+            continue
+    return count

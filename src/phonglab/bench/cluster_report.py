@@ -71,7 +71,10 @@ def cluster_section(d: RunData) -> list[str]:
                  f"spinning (Python and numpy between kernels, while Dr.Jit's second thread "
                  f"waits for work), less its start and its per-job cost; its workers start "
                  f"without Dask's `MALLOC_TRIM_THRESHOLD_` (`phonglab.parallel.WORKER_ENVIRON`), "
-                 f"which made them map and unmap every large buffer. More machines add "
+                 f"which made them map and unmap every large buffer, and run their Dr.Jit "
+                 f"kernel threads in Linux's `SCHED_IDLE` class "
+                 f"(`phonglab.runtime.background_kernel_threads`), whose spin between kernels "
+                 f"then takes no core from the other worker. More machines add "
                  f"cores (below).\n")
     o = r["overhead"]
     L += [f"**Per-job overhead**: {o['jobs']} empty jobs per batch, {o['repeats']} batches, "

@@ -38,6 +38,10 @@ task in the caller only when ``pool_size() == 0``, and ``pool_size()`` counts th
 bitmap texture it loaded.
 Results do not depend on the thread count (measured: the stability cells are bit-identical
 with 1 and 2 Dr.Jit threads; the tests compare serial and distributed runs bit for bit).
+After each job the worker puts Dr.Jit's kernel threads in Linux's ``SCHED_IDLE`` class
+(:func:`phonglab.runtime.background_kernel_threads`): they run kernels on cores no other
+process wants, and their spin between kernels (up to 20 ms after each) no longer takes a core
+from another worker's Python thread.
 
 **Ctrl-C.**  The workers of an embedded LocalCluster ignore SIGINT (``ignore_sigint``): a
 terminal sends it to the whole process group, where each worker would print its own
@@ -56,6 +60,8 @@ from pathlib import Path
 from typing import Any
 
 from distributed import WorkerPlugin
+
+from ..runtime import background_kernel_threads
 
 #: Root of the per-process kernel-cache slots (``$PHONGLAB_WORKER_CACHE`` overrides it).
 CACHE_ROOT_ENV = "PHONGLAB_WORKER_CACHE"
@@ -141,6 +147,11 @@ class PhonglabWorker(WorkerPlugin):
             # An embedded worker: Ctrl-C is its parent's to handle (phonglab.parallel._connect).
             signal.signal(signal.SIGINT, signal.SIG_IGN)
         prepare_process(self.variant, self.threads, self.root)
+
+    def transition(self, key, start, finish, *args, **kwargs) -> None:
+        if finish == "memory":
+            # after each job: the kernel threads its kernels started run in the background
+            background_kernel_threads()
 
 
 def worker_report() -> dict[str, Any] | None:
