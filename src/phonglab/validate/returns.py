@@ -67,10 +67,17 @@ def checked(view: dispatch.Dispatched, word, name, method, args, expects):
     what the Python method returned, say what that was (the method called directly) and refuse
     it."""
     ok, out = call(getattr(view, method), *args)
-    if ok or not dispatch.is_bad_cast(out):
-        return
-    ok, raw = call(getattr(view.plugin, method), *args)
-    refuse(word, name, method, raw if ok else out, expects)
+    try:
+        if ok or not dispatch.is_bad_cast(out):
+            return
+        ok, raw = call(getattr(view.plugin, method), *args)
+        refuse(word, name, method, raw if ok else out, expects)
+    finally:
+        # an exception held here holds its traceback, whose frames hold this one: a cycle
+        # that keeps the plugin instance alive until the garbage collector runs, and Dr.Jit
+        # traces every live instance in each later symbolic call (a render of another
+        # scene then ran the plugin's eval: a hanging one forever)
+        out = raw = None
 
 
 def sequence(out, n: int) -> bool:
