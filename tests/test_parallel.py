@@ -417,7 +417,7 @@ def test_local_workers_malloc_threads_and_an_exr_texture(variant_llvm_rgb, local
     finally:
         pool.shutdown(wait=False)
     assert env is None
-    assert report["threads"] >= parallel.MIN_THREADS
+    assert report["threads"] >= runtime.MIN_KERNEL_THREADS
     # after a job the worker's kernel threads are in the background (SCHED_IDLE)
     local_runner.run([Job(kernels_on_the_pool, (None, 20), key=k) for k in range(4)])
     later = local_runner.run([Job(kernel_thread_classes, key=k) for k in range(4)])

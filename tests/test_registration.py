@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -153,3 +154,26 @@ def test_cuda_without_a_device_falls_back_to_llvm_not_scalar():
     with pytest.warns(runtime.BackendFallbackWarning):
         assert phonglab.register("cuda_ad_mono") == "llvm_ad_mono"
     phonglab.register("llvm_ad_rgb")
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="needs an affinity mask")
+def test_one_core_gets_two_kernel_threads_and_reads_and_writes_exr(tmp_path):
+    """On one core (an affinity mask of one CPU, as a one-CPU container gives) Dr.Jit defaults
+    to one thread, at which Mitsuba 3.9.1 waits forever on an OpenEXR file
+    (tests/repro/exr_one_thread_hang.py).  phonglab.register gives it a second thread, born
+    in the background class (SCHED_IDLE), so a render's EXR output or an EXR texture returns;
+    before, this child hung until its time limit."""
+    code = (
+        "import json, os, numpy as np\n"
+        "import phonglab, drjit as dr, mitsuba as mi\n"
+        "phonglab.register('llvm_ad_rgb')\n"
+        "mi.Bitmap(np.full((8, 8, 3), 0.4, dtype=np.float32)).write('t.exr')\n"
+        "assert list(mi.Bitmap('t.exr').size()) == [8, 8]\n"
+        "print(json.dumps([dr.thread_count(), [os.sched_getscheduler(int(t)) for t in\n"
+        "                  os.listdir('/proc/self/task')]]))\n")
+    done = subprocess.run([PY, "-c", code], capture_output=True, text=True, timeout=60,
+                          cwd=tmp_path, preexec_fn=lambda: os.sched_setaffinity(0, {0}))
+    assert done.returncode == 0, done.stderr[-2000:]
+    threads, classes = json.loads(done.stdout)
+    assert threads == runtime.MIN_KERNEL_THREADS
+    assert os.SCHED_IDLE in classes                 # the added kernel thread

@@ -94,6 +94,7 @@ def register(variant: str | None = None) -> str:
         runtime.set_variant(variant)
     elif mi.variant() is None:
         runtime.set_variant(None)
+    runtime.kernel_threads_floor()
     transactions.install()
     with _lock:
         if not _callback_installed:

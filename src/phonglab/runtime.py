@@ -386,7 +386,9 @@ def set_variant(variant: str | None = None) -> str:
     the way is raised once the variant is set (:func:`deferred_interrupt`).
     """
     with deferred_interrupt():
-        return _set_variant(variant)
+        variant = _set_variant(variant)
+    kernel_threads_floor()
+    return variant
 
 
 def _set_variant(variant: str | None) -> str:
@@ -532,6 +534,45 @@ def require_memory(need: int, what: str, fix, *, why: str = "", error=None,
     fix = fix(have) if callable(fix) else fix
     raise (error or PhonglabError)(f"{what} would need about {need / 2**30:.1f} GiB of memory"
                                    f"{why} but {have / 2**30:.1f} GiB is available; {fix}")
+
+
+#: The fewest Dr.Jit kernel threads phonglab runs with.  At one thread Dr.Jit starts no worker
+#: thread (drjit-core's ``jit_llvm_set_thread_count`` counts the caller as one), and Mitsuba
+#: 3.9.1's OpenEXR reads and writes then wait forever: bitmap.cpp:972 runs an OpenEXR task in
+#: the caller only when ``pool_size() == 0``, and nanothread's ``pool_size()`` counts the
+#: caller, so the task is queued for a worker that does not exist
+#: (``tests/repro/exr_one_thread_hang.py``).  Dr.Jit's default is the cores the process may
+#: run on (nanothread's ``core_count``: the affinity mask), one in a one-CPU container.
+MIN_KERNEL_THREADS = 2
+
+
+def kernel_threads_floor() -> int:
+    """Give Dr.Jit at least :data:`MIN_KERNEL_THREADS` threads; return the count.
+
+    The threads this adds are born in the background (``SCHED_IDLE``, inherited from the
+    short-lived thread that asks for them: nanothread starts its workers with the default
+    ``PTHREAD_INHERIT_SCHED``), because they exist for OpenEXR's tasks only: on one core a
+    normal worker would take half of it from the caller for its spin after each kernel
+    (:func:`background_kernel_threads`).  Where the platform has no such class they are
+    normal threads.
+    """
+    import drjit as dr
+
+    count = dr.thread_count()
+    if count >= MIN_KERNEL_THREADS:
+        return count
+
+    def add():
+        idle = getattr(os, "SCHED_IDLE", None)
+        if idle is not None:
+            with contextlib.suppress(OSError):
+                os.sched_setscheduler(0, idle, os.sched_param(0))    # this thread only
+        dr.set_thread_count(MIN_KERNEL_THREADS)
+
+    helper = threading.Thread(target=add, name="phonglab-kernel-threads")
+    helper.start()
+    helper.join()
+    return dr.thread_count()
 
 
 #: How nanothread names Dr.Jit's kernel worker threads: ``"nt [%u]"`` (nanothread.cpp,

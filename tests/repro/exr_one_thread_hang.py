@@ -13,8 +13,9 @@ caller too, ``dr.set_thread_count(1)`` leaves a pool with no worker at all while
 forever (a debugger shows the main thread in ``IlmThread::Semaphore::wait`` under
 ``Imf::OutputFile::writePixels`` and no nanothread worker).  At 2 threads both calls return.
 What it costs: a process with one Dr.Jit thread (a worker process given ``cores // workers``
-threads on a 2-core machine) hangs on the first EXR texture it loads or image it writes.
-phonglab gives every worker process at least 2 threads (phonglab.parallel.worker).
+threads on a 2-core machine; any process on one core, where Dr.Jit's default is 1) hangs on
+the first EXR texture it loads or image it writes.  phonglab gives every process it sets up
+at least 2 threads (phonglab.runtime.MIN_KERNEL_THREADS, in ``register``/``set_variant``).
 
 The check runs each case in a child process with a time limit (the hang never returns).
 

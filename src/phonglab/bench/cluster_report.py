@@ -3,7 +3,7 @@ on N machines (``scripts/cluster_bench.py``'s ``cluster.json``; docs/cluster.md)
 
 from __future__ import annotations
 
-from ..parallel import MIN_THREADS
+from ..runtime import MIN_KERNEL_THREADS
 from .report_data import RunData, fmt_g, part_record
 
 
@@ -65,7 +65,7 @@ def cluster_section(d: RunData) -> list[str]:
                         for n in names)
         L.append(f"On {cores} cores the {w} workers add no cores: serially Dr.Jit runs each "
                  f"kernel on {'both' if cores == 2 else f'all {cores}'} cores, and each worker "
-                 f"runs Dr.Jit with max({MIN_THREADS}, {cores} // {w}) threads (at 1 Mitsuba hangs on EXR "
+                 f"runs Dr.Jit with max({MIN_KERNEL_THREADS}, {cores} // {w}) threads (at 1 Mitsuba hangs on EXR "
                  f"files: `tests/repro/exr_one_thread_hang.py`). What the cluster gains "
                  f"(median speed-ups: {ups}) is the time a serial run leaves a core idle or "
                  f"spinning (Python and numpy between kernels, while Dr.Jit's second thread "

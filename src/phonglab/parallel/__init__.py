@@ -53,7 +53,7 @@ from tqdm import tqdm
 
 from ..errors import PhonglabError
 from ..registration import register
-from ..runtime import available_memory, require_memory
+from ..runtime import MIN_KERNEL_THREADS, available_memory, require_memory
 
 #: Seconds to wait for a ``--scheduler`` before giving up with one sentence.
 CONNECT_TIMEOUT = 5.0
@@ -79,10 +79,6 @@ AUTO_MIN_SECONDS = 10.0
 #: which the nanny leaves out) 13.5-14.2 s.  The others (OMP, MKL and OpenBLAS at one
 #: thread: one process per core) stay.
 WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
-#: The fewest Dr.Jit threads a worker process gets: at one thread Dr.Jit starts no worker
-#: thread and Mitsuba 3.9.1's OpenEXR reads and writes wait forever (:mod:`.worker`,
-#: ``tests/repro/exr_one_thread_hang.py``).
-MIN_THREADS = 2
 #: The variant jobs run in unless a Runner is told otherwise.
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _resolved: dict[str, str] = {}          # per process: asked-for variant -> the one set
@@ -375,7 +371,7 @@ def _connect(workers: int, scheduler: str | None, variant: str) -> tuple[Any, An
                                        silence_logs=logging.CRITICAL)
         finally:
             signal.signal(signal.SIGINT, previous)
-        threads = max(MIN_THREADS, (os.cpu_count() or 1) // int(workers))
+        threads = max(MIN_KERNEL_THREADS, (os.cpu_count() or 1) // int(workers))
         client = Client(cluster)
     else:
         threads = None

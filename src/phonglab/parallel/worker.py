@@ -28,14 +28,11 @@ safe by the protocol above but without the clean-up; the report's ``kernel_cache
 None.  ``phonglab``'s commands and ``dask worker`` never import Dr.Jit first.
 
 **Threads.**  A LocalCluster of N workers on C cores sets Dr.Jit's thread pool to C // N
-threads per process, but never fewer than :data:`phonglab.parallel.MIN_THREADS`, so N
+threads per process, but never fewer than :data:`phonglab.runtime.MIN_KERNEL_THREADS`, so N
 processes do not start N·C kernel threads; on a hand-started cluster Dr.Jit keeps its default (all cores of the
-machine) unless ``threads`` is given.  At one thread Dr.Jit starts no worker thread
-(drjit-core's ``jit_llvm_set_thread_count`` counts the caller as one), and Mitsuba 3.9.1's
-OpenEXR reads and writes then wait forever for a task no thread runs (bitmap.cpp:972 runs a
-task in the caller only when ``pool_size() == 0``, and ``pool_size()`` counts the caller:
-``tests/repro/exr_one_thread_hang.py``): a 2-worker cluster on 2 cores hung on the first
-bitmap texture it loaded.
+machine) unless ``threads`` is given.  At one thread Mitsuba 3.9.1's OpenEXR reads and
+writes wait forever (:data:`phonglab.runtime.MIN_KERNEL_THREADS` says why): a 2-worker cluster
+on 2 cores hung on the first bitmap texture it loaded.
 Results do not depend on the thread count (measured: the stability cells are bit-identical
 with 1 and 2 Dr.Jit threads; the tests compare serial and distributed runs bit for bit).
 After each job the worker puts Dr.Jit's kernel threads in Linux's ``SCHED_IDLE`` class
