@@ -21,14 +21,18 @@ kind, a polarized BSDF among them.  Targets on 2 cores, warm cache: a BSDF defau
     python scripts/validate_timing.py [--repeats 3] [--json docs/bench/validate.json] [NAME ...]
 
 A NAME is a type name, or ``NAME@VARIANT`` for a variant other than llvm_ad_rgb.
-``--json`` writes the rows for BENCHMARKS.md (``bench/report.py``'s validate section).
+``--json`` writes the rows for BENCHMARKS.md (``bench/report.py``'s validate section), each
+with when its run started and at which commit (``measured``): a few plugins may be timed again
+into the same file.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -115,6 +119,11 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json", metavar="PATH", help="also write the rows as JSON")
     args = ap.parse_args()
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], text=True,
+                            capture_output=True, cwd=Path(__file__).resolve().parents[1]).stdout
+    # one run, one label: when it started and at which commit
+    measured = datetime.datetime.now(datetime.timezone.utc).strftime(
+        "%Y-%m-%d %H:%M UTC at ") + (commit.strip() or "an unknown commit")
     plugins = bsdf_plugins()
     names = args.names or list(plugins) + OTHERS
     rows = []
@@ -153,6 +162,7 @@ def main() -> int:
                   f"{', '.join(f'{t} {s:.1f}' for t, s in top)} |", flush=True)
             rows.append({"plugin": name, "variant": variant, "kind": kind,
                          "where": metas["default"].get("sweep", {}).get("where"),
+                         "where_quick": metas["quick"].get("sweep", {}).get("where"),
                          "given": plugin if isinstance(plugin, dict) else None,
                          "repeats": args.repeats, "exit_codes": sorted(codes),
                          "points": points, "profile_default": profile,
@@ -160,6 +170,7 @@ def main() -> int:
                                            (metas["quick"].get("profile") or {}).items()
                                            if r.get("seconds")},
                          "targets": TARGETS.get(kind),
+                         "measured": measured,
                          **{f"{m}_seconds": v for m, v in times.items()}})
             if args.json:      # written after every plugin: an interrupted run keeps its rows
                 Path(args.json).parent.mkdir(parents=True, exist_ok=True)

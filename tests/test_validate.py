@@ -243,6 +243,23 @@ def test_bench_report_validate_section(tmp_path):
     assert ("- diffuse, 4 points: --quick 5.5 s > 5 s: normalization 3.0 s + chi2 2.5 s"
             " (95% of the profile)") in text
     assert "Before and after" not in text
+    assert "Timed " not in text               # one run: no dates to tell apart
+    # a default run on 2 processes whose two largest topics alone, shared out, exceed 20 s
+    rows = json.loads((tmp_path / "validate.json").read_text())
+    slow = {**rows[0], "plugin": "slowbsdf", "default_seconds": [40.0], "quick_seconds": [1.0],
+            "where": {"workers": 2},
+            "profile_default": {"normalization": 30.0, "chi2": 20.0, "weight": 1.0}}
+    (tmp_path / "validate.json").write_text(json.dumps(rows + [slow]))
+    text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
+    assert ("- slowbsdf, 4 points: default 40.0 s > 20 s: normalization 30.0 s + chi2 20.0 s "
+            "(98% of the profile; 25.0 s alone on 2 processes, above the target)") in text
+    (tmp_path / "validate.json").write_text(json.dumps(rows))
+    rows = json.loads((tmp_path / "validate.json").read_text())
+    rows[1]["measured"] = "2026-12-07 08:02 UTC at abc1234"      # hg timed again later
+    (tmp_path / "validate.json").write_text(json.dumps(rows))
+    text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))
+    assert ("Timed in an earlier run (before the script recorded when): diffuse; "
+            "2026-12-07 08:02 UTC at abc1234: hg.") in text
     (tmp_path / "validate-before.json").write_text(json.dumps({"commit": "abc1234", "rows": [
         {"plugin": "diffuse", "default_seconds": [10.0, 12.0], "quick_seconds": [4.0, 6.0]}]}))
     text = "\n".join(validate_section(SimpleNamespace(out=tmp_path)))

@@ -576,7 +576,9 @@ def kernel_threads_floor() -> int:
 
 
 #: How nanothread names Dr.Jit's kernel worker threads: ``"nt [%u]"`` (nanothread.cpp,
-#: ``pthread_setname_np`` in the worker's start-up), read back from ``/proc/self/task/*/comm``.
+#: ``pthread_setname_np``), read back from ``/proc/self/task/*/comm``.  A worker takes the name
+#: when it first runs (measured: one that has not yet run a kernel's block reads "python"); a
+#: worker that never ran is parked, and parked threads do not spin.
 KERNEL_THREAD_PREFIX = "nt ["
 
 

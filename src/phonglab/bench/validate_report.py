@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import statistics
 
+from ..parallel import AUTO_MIN_SECONDS
 from .report_data import RunData, fmt_met, part_record
 
 
@@ -24,9 +25,9 @@ def validate_section(d: RunData) -> list[str]:
          "dict (its parameters pinned: one point). Topics: seconds of each mode's first run's "
          "profile (`validate --profile`, summed over the sweep's points), the three largest. "
          "Points: the sweep's, and where the automatic runner spread them over worker "
-         "processes (the given point here, the rest on the free cores when they would take "
-         "≥ 20 s: docs/validate.md) the processes; the profile then sums every process's "
-         "time. "
+         "processes (the given point here, the rest on the free cores when they are "
+         f"predicted to save ≥ {AUTO_MIN_SECONDS:g} s: docs/validate.md) the processes; the "
+         "profile then sums every process's time. "
          "Targets on 2 cores: a BSDF ≤ 20 s default and ≤ 5 s `--quick`, an integrator ≤ 45 s "
          "and ≤ 10 s.\n",
          "| plugin | kind | points | default (s) | met | --quick (s) | met | largest topics "
@@ -46,7 +47,20 @@ def validate_section(d: RunData) -> list[str]:
         workers = (r.get("where") or {}).get("workers", 1)
         points = f"{r['points']}" + (f" ({workers} processes)" if workers > 1 else "")
         L.append(f"| {name} | {r['kind']} | {points} | " + " | ".join(cells + tops) + " |")
-    return L + _misses(rows) + _validate_before_after(d, rows) + [""]
+    return L + _when(rows) + _misses(rows) + _validate_before_after(d, rows) + [""]
+
+
+def _when(rows) -> list[str]:
+    """When the rows were timed, where they were not all timed in one run (``measured``:
+    ``scripts/validate_timing.py`` records it; older rows lack it)."""
+    groups: dict = {}
+    for r in rows:
+        groups.setdefault(r.get("measured"), []).append(_name(r))
+    if len(groups) < 2:
+        return []
+    return ["\nTimed " + "; ".join(
+        f"{when or 'in an earlier run (before the script recorded when)'}: {', '.join(names)}"
+        for when, names in sorted(groups.items(), key=lambda kv: kv[0] or "")) + ".\n"]
 
 
 def _key(r) -> tuple[str, str]:
@@ -75,9 +89,17 @@ def _misses(rows) -> list[str]:
             top = sorted(profile.items(), key=lambda kv: -kv[1])[:2]
             share = sum(v for _, v in top) / sum(profile.values())
             shares.append(share)
+            # the profile sums every process's time: spread evenly over the processes, the
+            # two topics alone still take this long
+            where = r.get("where" if mode == "default" else "where_quick")
+            workers = (where or {}).get("workers")
+            alone = sum(v for _, v in top) / workers if workers else 0.0
             said.append(f"{'--quick' if mode == 'quick' else 'default'} {med:.1f} s > "
                         f"{target:g} s: " + " + ".join(f"{t} {v:.1f} s" for t, v in top)
-                        + f" ({share:.0%} of the profile)")
+                        + f" ({share:.0%} of the profile"
+                        + (f"; {alone:.1f} s alone on {workers} process"
+                           f"{'es' if workers > 1 else ''}, above the target"
+                           if alone > target else "") + ")")
         if said:
             lines.append(f"- {_name(r)}, {r['points']} points: " + "; ".join(said))
     if not lines:

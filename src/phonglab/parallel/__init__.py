@@ -220,7 +220,10 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
     default sweeps of roughplastic (predicted 25 s) 98.2 -> 81.2 s, principled (33 s) 127.7
     -> 110.1 s, plastic (14 s) 40.9 -> 36.0 s, roughdielectric (11 s) 59.1 -> 50.0 s on 2
     processes; ``path`` (kernel share 0.95) took 34-36 s here and 36-40 s on 2, and stays
-    here."""
+    here.  Since then the workers' kernel threads run in the background
+    (:func:`phonglab.runtime.background_kernel_threads`: their spin no longer takes the other
+    worker's core), which the bound does not model: roughplastic's sweep on 2 workers 71.8 ->
+    62.9 s (one pair, alternately); the table's 2-process rows took 13-26 % less time."""
     first = meter.seconds if job_seconds is None else job_seconds
     serial, free, used = jobs * first, meter.free, meter.used
     have = available_memory() if memory is None else memory
