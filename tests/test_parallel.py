@@ -478,9 +478,9 @@ class _Meter:
 
 @pytest.mark.parametrize("jobs, seconds, free, used, share, memory, workers", [
     (10, 6.0, 2, 1.0, 0.0, 8 << 30, 2),     # 60 s of Python-bound work, two free cores: 30 s
-    (10, 6.0, 2, 1.45, 0.0, 8 << 30, 2),    # a validate process (1.45 cores busy): 16.5 s
-    (10, 3.0, 2, 1.45, 0.0, 8 << 30, 1),    # ... half as long: 8.2 s, below the start's
-    (10, 6.0, 2, 1.0, 0.7, 8 << 30, 1),     # 70 % in kernels, on both cores already: 9 s
+    (10, 6.0, 2, 1.45, 0.0, 8 << 30, 2),    # a validate process (1.45 cores busy here): 30 s
+    (10, 0.8, 2, 1.45, 0.0, 8 << 30, 1),    # ... a short sweep: 4 s, below the start's
+    (10, 2.0, 2, 1.0, 0.7, 8 << 30, 1),     # 70 % in kernels, on both cores already: 3 s
     (3, 10.0, 2, 1.97, 0.95, 8 << 30, 1),   # a render-bound sweep (path)
     (10, 6.0, 8, 1.0, 0.0, 8 << 30, 8),     # as many as are free ...
     (3, 30.0, 8, 1.0, 0.0, 8 << 30, 3),     # ... but no more than the jobs
@@ -491,15 +491,16 @@ class _Meter:
 ])
 def test_automatic_runner_spreads_only_what_saves_time_on_free_cores(jobs, seconds, free, used,
                                                                       share, memory, workers):
-    """n processes that each keep ``used`` cores busy run g = min(n, free/used) times as fast
-    on the free cores and save R·(1 − kernel share)·(1 − 1/g) of the serial remainder R."""
+    """n worker processes, each keeping one free core busy (their kernel threads in the
+    background), run g = min(n, free) times as fast and save R·(1 − kernel share)·(1 − 1/g)
+    of the serial remainder R."""
     where = parallel.auto_workers(jobs, _Meter(seconds, free, used), "points", memory=memory,
                                   kernel_share=share)
     assert where["workers"] == workers
     assert where["free_cores"] == free and where["first_seconds"] == seconds
     assert where["used_cores"] == used and where["kernel_share"] == share
     n = max(1, min(free, jobs, memory // parallel.WORKER_BYTES))
-    g = min(n, free / max(1.0, used))
+    g = min(n, free)
     assert where["predicted_saving_s"] == pytest.approx(
         jobs * seconds * (1 - share) * max(0.0, 1 - 1 / g), abs=0.051)
     assert "points" in where["reason"]
@@ -510,9 +511,9 @@ def test_automatic_runner_predicts_from_the_later_jobs_time():
     makes the prediction."""
     meter = _Meter(6.0, 2, 1.0)
     assert parallel.auto_workers(10, meter, "points", memory=8 << 30)["workers"] == 2
-    where = parallel.auto_workers(10, meter, "points", memory=8 << 30, job_seconds=1.5)
-    assert where["workers"] == 1 and where["job_seconds"] == 1.5
-    assert where["predicted_saving_s"] == pytest.approx(7.5)
+    where = parallel.auto_workers(10, meter, "points", memory=8 << 30, job_seconds=0.8)
+    assert where["workers"] == 1 and where["job_seconds"] == 0.8
+    assert where["predicted_saving_s"] == pytest.approx(4.0)
 
 
 def test_core_meter_sees_a_core_taken_by_another_process():

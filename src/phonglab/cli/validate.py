@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..parallel import add_arguments, runner_from_args
+from ..parallel import AUTO_MIN_SECONDS, add_arguments, runner_from_args
 from ..settings import parse_sets
 from ..validate import registry
 from ..validate.inputs import ValidateError, check_plugin_file, check_topics
@@ -133,7 +133,8 @@ def add_parser(sub) -> None:
     # --workers / --scheduler: where a sweep's points and the --all-builtins cases run
     add_arguments(p, auto="a sweep's points after the given one on one process per free "
                           "core (two or more), when the time they spend outside Dr.Jit's "
-                          "kernels is predicted to save 10 s or more, else here; "
+                          f"kernels is predicted to save {AUTO_MIN_SECONDS:g} s or more, "
+                          "else here; "
                           "--all-builtins serially")
     p.set_defaults(func=run)
 

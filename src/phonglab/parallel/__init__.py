@@ -66,9 +66,12 @@ WORKERS_PER_CORE = 4
 WORKER_BYTES = 256 << 20
 #: Seconds an automatic runner's cluster must be predicted to save before it starts: its
 #: start costs 1-3 s on 2 cores, and the prediction (:func:`auto_workers`) is an upper bound,
-#: 1.2-9 times what 2 processes saved on 2 cores (BENCHMARKS.md's validate table: 25, 33, 14,
-#: 11 and 38 s predicted for 17, 18, 5, 9 and 4 s saved), never below it there.
-AUTO_MIN_SECONDS = 10.0
+#: 2.5-3.6 times what 2 processes saved on 2 cores in the shortest sweeps that pay (--quick,
+#: 2026-12-07: roughplastic predicted 9 s, 15.7/16.2 s here against 13.3/13.6 s on 2 workers;
+#: principled 4.9 s, 12.5/12.2 against 10.4/10.5; hair 3 s, 9.2 against 8.0 s), so a sweep
+#: predicted to save 5 s saves about 1.5-2 s net of the start (principled, just below, stays
+#: here: 12.0 s).
+AUTO_MIN_SECONDS = 5.0
 #: Dask configuration an embedded cluster's workers start with.  Dask's nanny sets
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` in every worker's environment
 #: (``distributed.nanny.pre-spawn-environ``, distributed.yaml), and glibc then stops raising
@@ -210,26 +213,26 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
 
     The prediction.  What more processes parallelize is the time outside Dr.Jit's kernels
     (Python, numpy, tracing), not the kernels, which Dr.Jit already runs on every core; and
-    n processes that each keep ``used`` cores busy (the first job's CPU time over its wall
-    time, Dr.Jit's threads included) share the free cores, so they run g = min(n,
-    free / used) times as fast as one.  Of the serial remainder R = jobs · job_seconds they
-    save R · (1 − ``kernel_share``) · (1 − 1/g), ``kernel_share`` the first job's share of
-    kernel execution (its Dr.Jit kernel history).  An upper bound: a worker also rebuilds
-    what the serial process keeps across jobs (caches, traced kernels).  Measured on 2 cores
-    (a validate process keeps 1.45 busy, g = 1.38; BENCHMARKS.md's validate table): the
-    default sweeps of roughplastic (predicted 25 s) 98.2 -> 81.2 s, principled (33 s) 127.7
-    -> 110.1 s, plastic (14 s) 40.9 -> 36.0 s, roughdielectric (11 s) 59.1 -> 50.0 s on 2
-    processes; ``path`` (kernel share 0.95) took 34-36 s here and 36-40 s on 2, and stays
-    here.  Since then the workers' kernel threads run in the background
-    (:func:`phonglab.runtime.background_kernel_threads`: their spin no longer takes the other
-    worker's core), which the bound does not model: roughplastic's sweep on 2 workers 71.8 ->
-    62.9 s (one pair, alternately); the table's 2-process rows took 13-26 % less time."""
+    n worker processes each keep one free core busy with their Python thread -- their
+    kernel threads run in the background (:func:`phonglab.runtime.background_kernel_threads`),
+    on cores nothing else wants -- so they run g = min(n, free) times as fast as one.  Of the
+    serial remainder R = jobs · job_seconds they save R · (1 − ``kernel_share``) · (1 − 1/g),
+    ``kernel_share`` the first job's share of kernel execution (its Dr.Jit kernel history).
+    An upper bound: a worker also rebuilds what the serial process keeps across jobs (caches,
+    traced kernels) and the cluster takes 1-3 s to start (:data:`AUTO_MIN_SECONDS` says by how
+    much).  ``used``, the cores the first job kept busy here (its CPU time over its wall
+    time, Dr.Jit's spinning thread included), is reported, no longer a divisor: until
+    2026-12-07 the workers' spin took the other worker's core and g was min(n, free / used)
+    (1.38 for a validate process's 1.45 cores), and the sweeps it spread gained less
+    (roughplastic 98.2 -> 81.2 s on 2 processes then, 68.9 s with the workers' kernel threads
+    in the background; principled 127.7 -> 110.1 -> 85.2 s).  ``path`` (kernel share 0.95)
+    took 34-36 s here and 36-40 s on 2: predicted 1 s, it stays here."""
     first = meter.seconds if job_seconds is None else job_seconds
     serial, free, used = jobs * first, meter.free, meter.used
     have = available_memory() if memory is None else memory
     held = jobs if have is None else int(have // WORKER_BYTES)
     n = max(1, min(free, held, jobs))
-    g = max(1.0, min(n, free / max(1.0, used)))
+    g = max(1.0, min(n, free))
     saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * (1.0 - 1.0 / g)
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
@@ -244,7 +247,7 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
     elif saving < AUTO_MIN_SECONDS:
         reason = (f"{jobs} {noun} predicted to take {serial:.0f} s here ({kernel_share:.0%} "
                   f"in Dr.Jit's kernels, {used:.1f} cores busy): {n} processes on {free} free "
-                  f"cores would save at most {saving:.0f} s, below the {AUTO_MIN_SECONDS:g} s "
+                  f"cores would save at most {saving:.1f} s, below the {AUTO_MIN_SECONDS:g} s "
                   f"a cluster's start pays for")
         n = 1
     else:
