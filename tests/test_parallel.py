@@ -482,9 +482,10 @@ class _Meter:
     (10, 0.8, 2, 1.45, 0.0, 8 << 30, 1),    # ... a short sweep: 4 s, below the start's
     (10, 2.0, 2, 1.0, 0.7, 8 << 30, 1),     # 70 % in kernels, on both cores already: 3 s
     (3, 10.0, 2, 1.97, 0.95, 8 << 30, 1),   # a render-bound sweep (path)
-    (10, 6.0, 8, 1.0, 0.0, 8 << 30, 8),     # as many as are free ...
+    (10, 6.0, 8, 1.0, 0.0, 8 << 30, 5),     # as many as are free, as few as 2 rounds need ...
+    (3, 3.3, 2, 1.4, 0.0, 8 << 30, 1),      # 3 points on 2: 2 rounds, 1.5x: 3.3 s (diffuse)
     (3, 30.0, 8, 1.0, 0.0, 8 << 30, 3),     # ... but no more than the jobs
-    (10, 6.0, 8, 1.0, 0.0, 3 * parallel.WORKER_BYTES, 3),   # ... or than the memory holds
+    (10, 6.0, 8, 1.0, 0.0, 3 * parallel.WORKER_BYTES, 3),   # ... no more than memory holds
     (10, 6.0, 8, 1.0, 0.0, parallel.WORKER_BYTES, 1),       # memory for one: here
     (10, 6.0, 1, 1.0, 0.0, 8 << 30, 1),     # another process holds a core (a test runner's)
     (1, 100.0, 2, 1.0, 0.0, 8 << 30, 1),    # one job left: nothing to spread
@@ -492,15 +493,15 @@ class _Meter:
 def test_automatic_runner_spreads_only_what_saves_time_on_free_cores(jobs, seconds, free, used,
                                                                       share, memory, workers):
     """n worker processes, each keeping one free core busy (their kernel threads in the
-    background), run g = min(n, free) times as fast and save R·(1 − kernel share)·(1 − 1/g)
-    of the serial remainder R."""
+    background), take the jobs in ⌈jobs/n⌉ rounds, g = jobs/⌈jobs/n⌉ times as fast, and
+    save R·(1 − kernel share)·(1 − 1/g) of the serial remainder R."""
     where = parallel.auto_workers(jobs, _Meter(seconds, free, used), "points", memory=memory,
                                   kernel_share=share)
     assert where["workers"] == workers
     assert where["free_cores"] == free and where["first_seconds"] == seconds
     assert where["used_cores"] == used and where["kernel_share"] == share
     n = max(1, min(free, jobs, memory // parallel.WORKER_BYTES))
-    g = min(n, free)
+    g = jobs / math.ceil(jobs / n)
     assert where["predicted_saving_s"] == pytest.approx(
         jobs * seconds * (1 - share) * max(0.0, 1 - 1 / g), abs=0.051)
     assert "points" in where["reason"]

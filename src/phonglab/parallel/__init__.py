@@ -215,7 +215,9 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
     (Python, numpy, tracing), not the kernels, which Dr.Jit already runs on every core; and
     n worker processes each keep one free core busy with their Python thread -- their
     kernel threads run in the background (:func:`phonglab.runtime.background_kernel_threads`),
-    on cores nothing else wants -- so they run g = min(n, free) times as fast as one.  Of the
+    on cores nothing else wants -- so they take the jobs in ⌈jobs / n⌉ rounds, g = jobs /
+    ⌈jobs / n⌉ times as fast as one (3 points on 2 processes: 2 rounds, 1.5; n is then the
+    fewest processes those rounds need: 10 jobs on 8 free cores, 2 rounds of 5).  Of the
     serial remainder R = jobs · job_seconds they save R · (1 − ``kernel_share``) · (1 − 1/g),
     ``kernel_share`` the first job's share of kernel execution (its Dr.Jit kernel history).
     An upper bound: a worker also rebuilds what the serial process keeps across jobs (caches,
@@ -232,7 +234,9 @@ def auto_workers(jobs: int, meter: CoreMeter, noun: str = "jobs",
     have = available_memory() if memory is None else memory
     held = jobs if have is None else int(have // WORKER_BYTES)
     n = max(1, min(free, held, jobs))
-    g = max(1.0, min(n, free))
+    rounds = -(-max(jobs, 1) // n)              # the jobs as n processes take them
+    n = -(-max(jobs, 1) // rounds)              # as few processes as those rounds need
+    g = max(jobs, 1) / rounds
     saving = serial * (1.0 - min(1.0, max(0.0, kernel_share))) * (1.0 - 1.0 / g)
     if jobs < 2:
         n, reason = 1, f"one of the {noun} left"
