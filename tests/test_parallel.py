@@ -329,9 +329,7 @@ def scene_pixels(scene) -> int:
 
 def kernel_thread_classes() -> tuple[int, list[int]]:
     """(pid, the scheduling policy of each Dr.Jit kernel thread of this process)."""
-    tasks = Path("/proc/self/task").iterdir()
-    return os.getpid(), [os.sched_getscheduler(int(t.name)) for t in tasks
-                         if (t / "comm").read_text().startswith(runtime.KERNEL_THREAD_PREFIX)]
+    return os.getpid(), [os.sched_getscheduler(t) for t in runtime.kernel_thread_ids()]
 
 
 def kernels_on_the_pool(until_a_thread_in=None, most: int = 200) -> tuple[int, list[int]]:

@@ -84,7 +84,9 @@ def register(variant: str | None = None) -> str:
     Returns:
         the active variant.
 
-    Idempotent; plugins follow every later ``mi.set_variant`` automatically.
+    Idempotent; plugins follow every later ``mi.set_variant`` automatically.  Dr.Jit gets
+    at least :data:`phonglab.runtime.MIN_KERNEL_THREADS` threads (one hangs Mitsuba's
+    OpenEXR I/O: :func:`phonglab.runtime.kernel_threads_floor`).
     """
     global _callback_installed
     import mitsuba as mi

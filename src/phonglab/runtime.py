@@ -386,9 +386,7 @@ def set_variant(variant: str | None = None) -> str:
     the way is raised once the variant is set (:func:`deferred_interrupt`).
     """
     with deferred_interrupt():
-        variant = _set_variant(variant)
-    kernel_threads_floor()
-    return variant
+        return _set_variant(variant)
 
 
 def _set_variant(variant: str | None) -> str:
@@ -608,18 +606,30 @@ def background_kernel_threads() -> int:
     started later needs another call (idempotent, ~0.1 ms).
     """
     idle = getattr(os, "SCHED_IDLE", None)
-    tasks = Path("/proc/self/task")
-    if idle is None or not tasks.is_dir():
+    if idle is None:
         return 0
     count = 0
-    for task in tasks.iterdir():
+    for tid in kernel_thread_ids():
         try:
-            if not (task / "comm").read_text().startswith(KERNEL_THREAD_PREFIX):
-                continue
-            tid = int(task.name)
             if os.sched_getscheduler(tid) != idle:
                 os.sched_setscheduler(tid, idle, os.sched_param(0))
             count += 1
-        except (OSError, ValueError):        # a thread that ended meanwhile
+        except OSError:                      # a thread that ended meanwhile
             continue
     return count
+
+
+def kernel_thread_ids() -> list[int]:
+    """The thread ids of this process's Dr.Jit kernel threads (named :data:`KERNEL_THREAD_PREFIX`
+    in ``/proc/self/task``; none where there is no such folder)."""
+    tasks = Path("/proc/self/task")
+    if not tasks.is_dir():
+        return []
+    out = []
+    for task in tasks.iterdir():
+        try:
+            if (task / "comm").read_text().startswith(KERNEL_THREAD_PREFIX):
+                out.append(int(task.name))
+        except (OSError, ValueError):        # a thread that ended meanwhile
+            continue
+    return out

@@ -15,7 +15,7 @@ forever (a debugger shows the main thread in ``IlmThread::Semaphore::wait`` unde
 What it costs: a process with one Dr.Jit thread (a worker process given ``cores // workers``
 threads on a 2-core machine; any process on one core, where Dr.Jit's default is 1) hangs on
 the first EXR texture it loads or image it writes.  phonglab gives every process it sets up
-at least 2 threads (phonglab.runtime.MIN_KERNEL_THREADS, in ``register``/``set_variant``).
+at least 2 threads (phonglab.runtime.MIN_KERNEL_THREADS, in ``phonglab.register``).
 
 The check runs each case in a child process with a time limit (the hang never returns).
 
